@@ -1,0 +1,1 @@
+"""Post-processing of vibrofeed H5MD results: transport, flights, singulation."""

@@ -1,0 +1,1 @@
+"""Analytic models of vibratory transport and their cross-check against DEM."""

@@ -1,0 +1,172 @@
+"""The ``vibrofeed`` command line.
+
+Every command reports a problem as one line on stderr starting with
+``vibrofeed: error:`` and exits with a non-zero status; tracebacks are kept
+for bugs (set ``VIBROFEED_DEBUG=1`` to see them for user errors too).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shlex
+import sys
+
+from . import __version__
+
+EXIT_USAGE = 2
+EXIT_FAILED = 1
+EXIT_INTERRUPTED = 130
+
+
+class UserError(Exception):
+    """A problem the user can fix; printed as one line."""
+
+
+def _fail(message: str, code: int = EXIT_FAILED) -> int:
+    print(f"vibrofeed: error: {message}", file=sys.stderr)
+    return code
+
+
+# ---------------------------------------------------------------------------- run
+def cmd_run(args) -> int:
+    from .decks import Deck
+    from .engine.runner import run_deck
+    from .parameters import parse_assignments
+    from .progress import RunProgress
+    from .summary import run_summary
+
+    deck = Deck.find(args.deck)
+    params = parse_assignments(args.param)
+    output = args.output or f"{deck.name}.h5"
+    progress = RunProgress(deck.name, enabled=False if args.quiet else None)
+    try:
+        result = run_deck(deck, params, output, ranks=args.ranks, on_event=progress,
+                          command=shlex.join(["vibrofeed"] + sys.argv[1:]))
+    finally:
+        progress.close()
+    print(run_summary(result))
+    return 0
+
+
+# -------------------------------------------------------------------------- check
+def cmd_check(args) -> int:
+    from .results.check import check_file
+
+    worst = 0
+    reports = [check_file(path, allow_incomplete=args.allow_incomplete) for path in args.files]
+    if args.json:
+        print(json.dumps([{
+            "file": r.path, "ok": r.ok, "frames": r.frames, "parts": r.parts, "status": r.status,
+            "problems": [{"level": p.level, "where": "/" + p.where, "message": p.message}
+                         for p in r.problems]} for r in reports], indent=2))
+    for r in reports:
+        if not args.json:
+            verdict = "OK" if r.ok else "INVALID"
+            print(f"{verdict}: {r.path}: {r.frames} frames, {r.parts} parts, status {r.status or '?'}")
+            for p in r.problems:
+                print(f"  {p}")
+        if not r.ok:
+            worst = EXIT_FAILED
+    return worst
+
+
+# ------------------------------------------------------------------ decks, params
+def cmd_decks(args) -> int:
+    from .decks import Deck, available, decks_dir
+
+    names = available()
+    if not names:
+        return _fail(f"no decks in {decks_dir()}")
+    width = max(map(len, names))
+    for name in names:
+        print(f"{name:<{width}}  {Deck.find(name).title}")
+    return 0
+
+
+def cmd_params(args) -> int:
+    from .decks import Deck
+
+    deck = Deck.find(args.deck)
+    rows = [(v.name, v.default, v.unit, v.description) for v in deck.tunables.values()]
+    if args.json:
+        print(json.dumps([dict(zip(("name", "default", "unit", "description"), r)) for r in rows],
+                         indent=2))
+        return 0
+    print(f"{deck.name}: {deck.title}\n  ({deck.path})\n")
+    w = [max(len(str(r[i])) for r in rows) for i in range(3)]
+    for name, default, unit, text in rows:
+        print(f"  {name:<{w[0]}}  {default:<{w[1]}}  {unit:<{w[2]}}  {text}")
+    return 0
+
+
+# ---------------------------------------------------------------------------- main
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="vibrofeed",
+        description="DEM simulation of vibratory feeding of micro-parts with LIGGGHTS.")
+    parser.add_argument("--version", action="version", version=f"vibrofeed {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    p = sub.add_parser("run", help="run a deck and write an H5MD result",
+                       description="Run a deck through LIGGGHTS and write one H5MD result file "
+                                   "(OUT.h5, with the LIGGGHTS log next to it as OUT.log).")
+    p.add_argument("deck", metavar="DECK", help="deck file, or a deck name from decks/ (see `vibrofeed decks`)")
+    p.add_argument("-p", "--param", action="append", metavar="NAME=VALUE",
+                   help="set a deck parameter (repeatable; see `vibrofeed params DECK`)")
+    p.add_argument("-o", "--output", metavar="OUT.h5", help="result file (default: DECK.h5 here)")
+    p.add_argument("-n", "--ranks", type=int, default=1, metavar="RANKS",
+                   help="MPI ranks for LIGGGHTS (default 1)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=cmd_run)
+
+    p = sub.add_parser("check", help="validate result files against the format",
+                       description="Check that result files follow the vibrofeed H5MD layout "
+                                   "(FORMAT.md). Exit status 1 if any file is invalid.")
+    p.add_argument("files", nargs="+", metavar="FILE.h5")
+    p.add_argument("--allow-incomplete", action="store_true",
+                   help="accept files of runs that were killed or failed (frames are still checked)")
+    p.add_argument("--json", action="store_true", help="print the reports as JSON")
+    p.set_defaults(func=cmd_check)
+
+    p = sub.add_parser("decks", help="list the decks in decks/")
+    p.set_defaults(func=cmd_decks)
+
+    p = sub.add_parser("params", help="list a deck's parameters with defaults and units")
+    p.add_argument("deck", metavar="DECK")
+    p.add_argument("--json", action="store_true")
+    p.set_defaults(func=cmd_params)
+    return parser
+
+
+def main(argv=None) -> int:
+    from .decks import DeckError
+    from .engine.errors import RunError
+    from .parameters import ParameterError
+    from .results.reader import ResultError
+
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    debug = bool(os.environ.get("VIBROFEED_DEBUG"))
+    try:
+        return args.func(args)
+    except KeyboardInterrupt:
+        return _fail("interrupted", EXIT_INTERRUPTED)
+    except (ParameterError, DeckError, UserError) as exc:
+        if debug:
+            raise
+        return _fail(str(exc), EXIT_USAGE)
+    except (RunError, ResultError) as exc:
+        if debug:
+            raise
+        code = _fail(str(exc))
+        partial = getattr(exc, "partial", None)
+        if partial:
+            print(f"vibrofeed: the {partial[1]} frames written before the failure are kept in "
+                  f"{partial[0]} (status: failed)", file=sys.stderr)
+        return code
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,257 @@
+"""Run a deck through LIGGGHTS in a worker process and collect its result.
+
+The parent never loads LIGGGHTS: an engine error ends the worker, and the
+parent turns that end into an :class:`EngineError` naming LIGGGHTS' message
+and the deck line. The worker is started with the MPI launcher variables of
+any surrounding MPI job removed from its environment (``OMPI_*``, ``PMIX_*``,
+``OPAL_*``, ``ORTE_*``), as a singleton or under its own ``mpirun``, so a
+failing run inside a sweep never takes the sweep down with it.
+
+While the run goes, frames land in ``OUT.h5.part``; only a completed run is
+renamed to ``OUT.h5``. A run that fails or is interrupted after writing frames
+leaves ``OUT.h5.part`` with its frames and ``parameters/run@status`` saying
+what happened; one that fails before its first frame leaves nothing.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable, Mapping
+
+from ..decks import Deck
+from ..parameters import ParameterError, resolve
+from ..results import layout as L
+from ..results.writer import mark_file_status
+from .errors import EngineError, RunError, failed_command, find_error
+from .worker import MARK
+
+_LAUNCHER_PREFIXES = ("OMPI_", "PMIX_", "OPAL_", "ORTE_", "PRTE_", "HYDRA_", "PMI_")
+
+
+class OutputError(RunError):
+    """The result cannot be written where asked."""
+
+
+@dataclass
+class RunResult:
+    output: Path
+    log: Path
+    deck: str
+    ranks: int
+    n_steps: int = 0
+    dt: float = 0.0
+    frames: int = 0
+    natoms: int = 0
+    sim_time: float = 0.0
+    wall: float = 0.0
+    parameters: dict = field(default_factory=dict)
+
+    @property
+    def steps_per_second(self) -> float:
+        return self.n_steps / self.wall if self.wall > 0 else float("nan")
+
+
+def clean_environment(env: Mapping[str, str] | None = None) -> dict:
+    """The environment minus the variables of a surrounding MPI launch."""
+    env = dict(os.environ if env is None else env)
+    return {k: v for k, v in env.items() if not k.startswith(_LAUNCHER_PREFIXES)}
+
+
+def worker_command(spec_path: str, ranks: int) -> list[str]:
+    base = [sys.executable, "-m", "vibrofeed.engine.worker", spec_path]
+    if ranks == 1:
+        return base  # an MPI singleton
+    mpirun = shutil.which("mpirun")
+    if mpirun is None:
+        raise RunError("mpirun not found: install openmpi-bin to run on several ranks")
+    cmd = [mpirun, "-n", str(ranks), "--oversubscribe"]
+    if hasattr(os, "geteuid") and os.geteuid() == 0:
+        cmd.append("--allow-run-as-root")  # Open MPI refuses root otherwise
+    return cmd + base
+
+
+def _die_with_parent() -> None:
+    """In the child: get SIGTERM when the parent dies (even by SIGKILL)."""
+    try:
+        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+    except OSError:
+        pass
+
+
+def _prepare_output(output) -> tuple[Path, Path, Path]:
+    out = Path(output).expanduser().resolve()
+    if out.is_dir():
+        raise OutputError(f"output {output} is a directory; give a file name such as {out / 'result.h5'}")
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"cannot create folder {out.parent} for the output: {exc.strerror}") from None
+    part = out.with_name(out.name + ".part")
+    try:
+        with open(part, "wb"):
+            pass
+        part.unlink()
+    except OSError as exc:
+        raise OutputError(f"cannot write {output}: {exc.strerror}") from None
+    log = out.with_suffix(".log") if out.suffix else out.with_name(out.name + ".log")
+    return out, part, log
+
+
+def _frames_in(path: Path) -> tuple[int, int | None, float | None]:
+    """(frames, last step, last time) held by a result file; (0, None, None) if unreadable."""
+    try:
+        import h5py
+
+        with h5py.File(path, "r") as f:
+            step = f[f"{L.PARTS}/position/step"]
+            if len(step) == 0:
+                return 0, None, None
+            return len(step), int(step[-1]), float(f[f"{L.PARTS}/position/time"][-1])
+    except (OSError, KeyError):
+        return 0, None, None
+
+
+def run_deck(deck: Deck, params: Mapping[str, str], output, *, ranks: int = 1,
+             on_event: Callable[[dict], None] | None = None, command: str = "") -> RunResult:
+    """Run ``deck`` with ``params`` (name -> value strings) into ``output``.
+
+    ``on_event`` receives the worker's messages (``run``, ``progress``,
+    ``done``...) as dicts, for progress display. Raises
+    :class:`~vibrofeed.parameters.ParameterError` before starting anything if a
+    parameter is bad, :class:`OutputError` if the output cannot be written,
+    :class:`EngineError` if LIGGGHTS stops with an error, :class:`RunError`
+    for any other failure of the run.
+    """
+    if not isinstance(ranks, int) or ranks < 1:
+        raise ParameterError(f"the number of ranks must be a positive integer, got {ranks!r}")
+    values = resolve(deck, params)
+    out, part, log = _prepare_output(output)
+    for stale in (out, part):
+        stale.unlink(missing_ok=True)
+
+    tmp = Path(tempfile.mkdtemp(prefix=".vibrofeed-", dir=out.parent))
+    screen = tmp / "screen.txt"
+    spec = {
+        "deck": str(deck.path), "deck_name": deck.name, "variables": values,
+        "var_meta": {n: [v.unit, v.description, v.default] for n, v in deck.tunables.items()},
+        "equal_variables": deck.equal_variables,
+        "output": str(part), "log": str(log), "screen": str(screen),
+        "seed": int(float(values["seed"])) if "seed" in values else None,
+        "command": command,
+    }
+    spec_path = tmp / "spec.json"
+    spec_path.write_text(json.dumps(spec))
+    stderr_path = tmp / "stderr.txt"
+
+    result = RunResult(output=out, log=log, deck=deck.name, ranks=ranks, parameters=values)
+    events: list[dict] = []
+    started = time.monotonic()
+    try:
+        with open(stderr_path, "w") as stderr:
+            proc = subprocess.Popen(
+                worker_command(str(spec_path), ranks), stdout=subprocess.PIPE, stderr=stderr,
+                env=clean_environment(), cwd=str(out.parent), text=True,
+                start_new_session=True, preexec_fn=_die_with_parent)
+            try:
+                for line in proc.stdout:
+                    if not line.startswith(MARK):
+                        continue
+                    event = json.loads(line[len(MARK):])
+                    events.append(event)
+                    if on_event is not None:
+                        on_event(event)
+                rc = proc.wait()
+            except KeyboardInterrupt:
+                _stop(proc)
+                if part.exists() and _frames_in(part)[0]:
+                    mark_file_status(part, L.STATUS_INTERRUPTED, "interrupted by the user")
+                else:
+                    part.unlink(missing_ok=True)
+                raise
+        result.wall = time.monotonic() - started
+        done = next((e for e in events if e["event"] == "done"), None)
+        if rc == 0 and done is not None:
+            os.replace(part, out)
+            start = next(e for e in events if e["event"] == "run")
+            result.n_steps, result.dt = start["n_steps"], start["dt"]
+            result.frames, result.natoms = done["frames"], done["natoms"]
+            result.sim_time = result.n_steps * result.dt
+            return result
+        frames, last_step, last_time = _frames_in(part) if part.exists() else (0, None, None)
+        error = _diagnose(rc, events, deck, log, screen, stderr_path, last_step, last_time)
+        if frames:
+            mark_file_status(part, L.STATUS_FAILED, str(error))
+            error.partial = (part, frames)
+        else:
+            part.unlink(missing_ok=True)
+        raise error
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _stop(proc: subprocess.Popen) -> None:
+    try:
+        os.killpg(proc.pid, signal.SIGTERM)
+        proc.wait(timeout=10)
+    except (ProcessLookupError, subprocess.TimeoutExpired):
+        try:
+            os.killpg(proc.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+        proc.wait()
+
+
+def _read(path: Path) -> str:
+    try:
+        return path.read_text(errors="replace")
+    except OSError:
+        return ""
+
+
+def _diagnose(rc, events, deck: Deck, log: Path, screen: Path, stderr: Path,
+              step: int | None, t: float | None) -> RunError:
+    """Turn a worker that stopped early into the error a user should read.
+
+    ``step`` and ``t`` are those of the last frame written, if any.
+    """
+    phase = next((e["event"] for e in reversed(events) if e["event"] in ("deck", "setup", "run")), None)
+    own = next((e for e in events if e["event"] == "error"), None)
+    if own is not None:
+        return RunError(f"deck {deck.name}: {own['message']}")
+    for text in (_read(log), _read(screen)):
+        err = find_error(text)
+        if err is None:
+            continue
+        line = command = None
+        if phase == "deck":
+            cmd = failed_command(text, deck, before=err.line_index)
+            if cmd is not None:
+                line, command = cmd.line, cmd.text
+        return EngineError(err.message, deck=_display(deck.path), line=line, command=command,
+                           phase=phase, step=step, time=t, log=str(log))
+    tail = " ".join(_read(stderr).strip().splitlines()[-3:])
+    if "MPI_ABORT" in tail:
+        return EngineError("LIGGGHTS aborted on one rank (its message is in that rank's output): "
+                           + tail, phase=phase, step=step, time=t, log=str(log))
+    if rc is not None and rc < 0:
+        return RunError(f"the engine was killed by signal {-rc} "
+                        f"({signal.Signals(-rc).name}) during the {phase or 'start'} phase")
+    return RunError(f"the engine worker exited with status {rc} during the {phase or 'start'} phase"
+                    + (f": {tail}" if tail else ""))
+
+
+def _display(path: Path) -> str:
+    try:
+        return str(path.relative_to(Path.cwd()))
+    except ValueError:
+        return str(path)

@@ -1,0 +1,175 @@
+"""The engine worker: one process per MPI rank, driving one LIGGGHTS run.
+
+Started by :mod:`vibrofeed.engine.runner` (``python -m vibrofeed.engine.worker
+SPEC.json``, under its own ``mpirun`` for several ranks), never imported by
+the parent: LIGGGHTS ends this process on an error, and only this process.
+
+The worker executes the deck with ``driver=1``, so the deck sets everything up
+but neither dumps nor runs. It then reads the deck's contract variables
+(``n_steps``, ``output_every``, ``surface_*``: see ``results.layout``), runs
+``output_every`` steps at a time and, between runs, gathers the particles to
+rank 0, which appends a frame to the H5MD file and flushes it.
+
+Rank 0 reports to the parent on stdout, one JSON object per line prefixed
+with ``@vibrofeed``: phases (``deck``, ``setup``, ``run``), progress, the end.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+MARK = "@vibrofeed "
+PER_ATOM = ("id", "type", "radius", "rmass", "x", "v", "omega")
+
+
+class Reporter:
+    """Rank 0's messages to the parent; silent on other ranks."""
+
+    def __init__(self, rank: int):
+        self.rank = rank
+
+    def __call__(self, event: str, **data) -> None:
+        if self.rank == 0:
+            sys.stdout.write(MARK + json.dumps({"event": event, **data}) + "\n")
+            sys.stdout.flush()
+
+
+def engine_version(log_path: str) -> str:
+    try:
+        with open(log_path, errors="replace") as fh:
+            first = fh.readline().strip()
+    except OSError:
+        first = ""
+    return first if first.startswith("LIGGGHTS") else "LIGGGHTS (version line not found in log)"
+
+
+def gather_parts(lmp, comm) -> dict | None:
+    """All particles on rank 0 (None elsewhere), as the writer wants them."""
+    local = lmp.local_atoms(PER_ATOM)
+    pieces = comm.gather(local, root=0)
+    if comm.rank != 0:
+        return None
+    cat = {k: np.concatenate([p[k] for p in pieces]) for k in PER_ATOM}
+    return {
+        "id": cat["id"], "species": cat["type"], "radius": cat["radius"], "mass": cat["rmass"],
+        "position": cat["x"], "velocity": cat["v"], "angular_velocity": cat["omega"],
+    }
+
+
+def surface_state(lmp) -> tuple[list, list]:
+    pos = [lmp.variable(f"surface_{c}") for c in "xyz"]
+    vel = [lmp.variable(f"surface_v{c}") for c in "xyz"]
+    return pos, vel
+
+
+def run(spec: dict) -> int:
+    from mpi4py import MPI
+
+    from ..results import layout as L
+    from ..results.writer import ResultWriter
+    from .library import Liggghts
+
+    comm = MPI.COMM_WORLD
+    report = Reporter(comm.rank)
+    args = ["-log", spec["log"], "-screen", spec["screen"], "-echo", "log", "-nocite"]
+    for name, value in spec["variables"].items():
+        args += ["-var", name, str(value)]
+    args += ["-var", "driver", "1", "-var", "deck_dir", str(Path(spec["deck"]).parent)]
+
+    report("deck")
+    lmp = Liggghts(args, comm=comm)
+    lmp.file(spec["deck"])
+
+    missing = [name for name in L.DECK_CONTRACT if not lmp.has_variable(name)]
+    if missing:
+        report("error", message=f"the deck does not define the equal-style variable(s) "
+                                f"{', '.join(missing)} that vibrofeed reads (see README, Decks)")
+        return 3
+    n_steps = int(round(lmp.variable("n_steps")))
+    every = int(round(lmp.variable("output_every")))
+    dt = lmp.dt
+    if every < 1:
+        report("error", message=f"output_dt is shorter than the timestep ({dt:g} s): "
+                                "no frame would ever be written")
+        return 3
+    if n_steps < 1:
+        report("error", message=f"t_end is shorter than the timestep ({dt:g} s): nothing to run")
+        return 3
+    derived = {}
+    for name in spec["equal_variables"]:
+        if name.startswith("surface_"):
+            continue  # time-dependent, recorded per frame
+        try:
+            derived[name] = lmp.variable(name)
+        except KeyError:
+            pass
+
+    report("setup")
+    lmp.command("thermo_modify flush yes")
+    lmp.command("run 0")
+    # Step and time as the engine counts them (a deck may have run stages before).
+    lmp.command("variable vibrofeed_step equal step")
+    lmp.command("variable vibrofeed_time equal time")
+
+    writer = None
+    if comm.rank == 0:
+        variables = {name: (value, *spec["var_meta"][name]) for name, value in spec["variables"].items()}
+        writer = ResultWriter(
+            spec["output"], deck_name=spec["deck_name"], deck_path=spec["deck"],
+            deck_text=Path(spec["deck"]).read_text(), variables=variables, derived=derived,
+            engine_version=engine_version(spec["log"]), seed=spec.get("seed"),
+            ranks=comm.size, command=spec.get("command", ""), capacity_hint=max(lmp.natoms, 1))
+
+    started = time.monotonic()
+    n_frames = 1 + (n_steps + every - 1) // every
+    report("run", n_steps=n_steps, dt=dt, output_every=every, n_frames=n_frames,
+           natoms=lmp.natoms)
+    done = 0
+    last_report = 0.0
+    while True:
+        parts = gather_parts(lmp, comm)
+        pos, vel = surface_state(lmp)
+        step = int(round(lmp.variable("vibrofeed_step")))
+        t = lmp.variable("vibrofeed_time")
+        if writer is not None:
+            writer.write_frame(step, t, parts, pos, vel)
+        now = time.monotonic()
+        if done == n_steps or now - last_report > 0.2:
+            report("progress", step=done, time=t, frames=writer.frames if writer else 0,
+                   natoms=lmp.natoms, wall=now - started)
+            last_report = now
+        if done >= n_steps:
+            break
+        chunk = min(every, n_steps - done)
+        lmp.command(f"run {chunk} pre no post no")
+        done += chunk
+
+    wall = time.monotonic() - started
+    if writer is not None:
+        writer.finish(L.STATUS_COMPLETE, wall_seconds=wall)
+    report("done", step=done, frames=n_frames, wall=wall, natoms=lmp.natoms)
+    lmp.close()
+    return 0
+
+
+def main(argv=None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    spec = json.loads(Path(argv[0]).read_text())
+    try:
+        return run(spec)
+    except Exception as exc:  # a bug or an I/O failure: tell the parent, then stop all ranks
+        from mpi4py import MPI
+
+        Reporter(MPI.COMM_WORLD.rank)("error", message=f"{type(exc).__name__}: {exc}")
+        if MPI.COMM_WORLD.size > 1:
+            MPI.COMM_WORLD.Abort(1)
+        return 4
+
+
+if __name__ == "__main__":
+    sys.exit(main())

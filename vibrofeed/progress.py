@@ -1,0 +1,37 @@
+"""Progress of a run on a terminal: simulated time, steps/s, ETA."""
+
+from __future__ import annotations
+
+import sys
+
+from tqdm import tqdm
+
+
+class RunProgress:
+    """Feeds the worker's events to a progress bar on stderr (only on a terminal)."""
+
+    def __init__(self, label: str, enabled: bool | None = None, stream=None):
+        self.stream = stream or sys.stderr
+        self.enabled = self.stream.isatty() if enabled is None else enabled
+        self.label = label
+        self.bar = None
+        self.t_end = 0.0
+
+    def __call__(self, event: dict) -> None:
+        if not self.enabled:
+            return
+        kind = event["event"]
+        if kind == "run":
+            self.t_end = event["n_steps"] * event["dt"]
+            self.bar = tqdm(total=event["n_steps"], desc=self.label, unit="step", unit_scale=True,
+                            file=self.stream, dynamic_ncols=True, leave=False)
+        elif kind == "progress" and self.bar is not None:
+            self.bar.update(event["step"] - self.bar.n)
+            self.bar.set_postfix_str(f"t={event['time']:.4g}/{self.t_end:.4g} s", refresh=True)
+        elif kind == "done":
+            self.close()
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+            self.bar = None

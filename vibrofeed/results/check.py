@@ -1,0 +1,217 @@
+"""Validate a result file against the layout in FORMAT.md (``vibrofeed check``)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import h5py
+import numpy as np
+
+from . import layout as L
+from .reader import _text
+
+
+@dataclass(frozen=True)
+class Problem:
+    level: str  # "error" or "warning"
+    where: str  # HDF5 path
+    message: str
+
+    def __str__(self) -> str:
+        return f"{self.level}: /{self.where}: {self.message}"
+
+
+@dataclass
+class Report:
+    path: str
+    problems: list
+    frames: int = 0
+    parts: int = 0
+    status: str = ""
+
+    @property
+    def ok(self) -> bool:
+        return not any(p.level == "error" for p in self.problems)
+
+
+class _Checker:
+    def __init__(self, f: h5py.File, allow_incomplete: bool):
+        self.f = f
+        self.allow_incomplete = allow_incomplete
+        self.problems: list[Problem] = []
+        self.frames = 0
+
+    def error(self, where, message):
+        self.problems.append(Problem("error", where, message))
+
+    def warn(self, where, message):
+        self.problems.append(Problem("warning", where, message))
+
+    def need(self, path, kind=None) -> bool:
+        obj = self.f.get(path)
+        if obj is None:
+            self.error(path, "missing")
+            return False
+        if kind is not None and not isinstance(obj, kind):
+            self.error(path, f"must be a {'group' if kind is h5py.Group else 'dataset'}")
+            return False
+        return True
+
+    def need_text_attr(self, path, name):
+        obj = self.f[path]
+        if name not in obj.attrs:
+            self.error(path, f"attribute {name!r} missing")
+        elif not _text(obj.attrs[name]):
+            self.error(path, f"attribute {name!r} is empty")
+
+    # -- sections -----------------------------------------------------------------
+    def h5md(self):
+        if not self.need("h5md", h5py.Group):
+            return
+        version = self.f["h5md"].attrs.get("version")
+        if version is None or list(np.ravel(version)) != list(L.H5MD_VERSION):
+            self.error("h5md", f"attribute 'version' must be {list(L.H5MD_VERSION)}, got {version}")
+        if self.need("h5md/author", h5py.Group):
+            self.need_text_attr("h5md/author", "name")
+        if self.need("h5md/creator", h5py.Group):
+            self.need_text_attr("h5md/creator", "name")
+            self.need_text_attr("h5md/creator", "version")
+
+    def time_series(self, path, comps, unit, n_parts=None):
+        """Check one time-dependent element; return its value dataset or None."""
+        if not self.need(path, h5py.Group):
+            return None
+        ok = all(self.need(f"{path}/{k}", h5py.Dataset) for k in ("step", "time", "value"))
+        if not ok:
+            return None
+        g = self.f[path]
+        step, time, value = g["step"], g["time"], g["value"]
+        n = len(step)
+        if len(time) != n or value.shape[0] != n:
+            self.error(path, f"step ({n}), time ({len(time)}) and value ({value.shape[0]}) "
+                             "frame counts differ")
+        if step.dtype.kind not in "iu":
+            self.error(f"{path}/step", "must be of integer type")
+        expected_rank = 1 + (n_parts is not None) + (comps > 0)
+        if value.ndim != expected_rank:
+            self.error(f"{path}/value", f"rank {value.ndim}, expected {expected_rank}")
+        elif comps and value.shape[-1] != comps:
+            self.error(f"{path}/value", f"last dimension {value.shape[-1]}, expected {comps}")
+        if unit and _text(value.attrs.get("unit", "")) != unit:
+            self.error(f"{path}/value", f"unit attribute must be {unit!r}")
+        if _text(time.attrs.get("unit", "")) != L.TIME_UNIT:
+            self.error(f"{path}/time", f"unit attribute must be {L.TIME_UNIT!r}")
+        s, t = step[()], time[()]
+        if n > 1 and np.any(np.diff(s) <= 0):
+            self.error(f"{path}/step", "not strictly increasing")
+        if n > 1 and np.any(np.diff(t) < 0):
+            self.error(f"{path}/time", "not monotonically increasing")
+        return value
+
+    def particles(self):
+        if not self.need(L.PARTS, h5py.Group):
+            return 0
+        if self.need(f"{L.PARTS}/box", h5py.Group):
+            box = self.f[f"{L.PARTS}/box"]
+            if int(box.attrs.get("dimension", -1)) != 3:
+                self.error(f"{L.PARTS}/box", "attribute 'dimension' must be 3")
+            boundary = [_text(b) for b in np.ravel(box.attrs.get("boundary", []))]
+            if len(boundary) != 3 or any(b not in ("none", "periodic") for b in boundary):
+                self.error(f"{L.PARTS}/box", f"attribute 'boundary' must be 3 of none/periodic, got {boundary}")
+        values = {}
+        for name, (_, comps, unit) in L.PART_ELEMENTS.items():
+            v = self.time_series(f"{L.PARTS}/{name}", comps, unit, n_parts=True)
+            if v is not None:
+                values[name] = v
+        step0 = self.f.get(f"{L.PARTS}/position/step")
+        if step0 is not None:
+            self.frames = len(step0)
+            for name in values:
+                other = self.f[f"{L.PARTS}/{name}/step"]
+                if len(other) != self.frames or not np.array_equal(other[()], step0[()]):
+                    self.error(f"{L.PARTS}/{name}/step", "differs from position/step")
+        shapes = {v.shape[:2] for v in values.values()}
+        if len(shapes) > 1:
+            self.error(L.PARTS, f"elements disagree on (frames, slots): {sorted(shapes)}")
+            return 0
+        if "id" not in values:
+            return 0
+        ids = values["id"]
+        if ids.fillvalue != L.ID_FILL:
+            self.error(f"{L.PARTS}/id/value", f"fill value must be {L.ID_FILL}, got {ids.fillvalue}")
+        ids = ids[()]
+        for k, row in enumerate(ids):
+            live = row[row != L.ID_FILL]
+            if len(np.unique(live)) != len(live):
+                self.error(f"{L.PARTS}/id/value", f"frame {k}: duplicate ids")
+                break
+            if np.any(live < 0):
+                self.error(f"{L.PARTS}/id/value", f"frame {k}: negative id other than the fill value")
+                break
+        if "position" in values:
+            pos = values["position"][()]
+            empty, live = ids == L.ID_FILL, ids != L.ID_FILL
+            if np.any(np.isfinite(pos[empty])):
+                self.error(f"{L.PARTS}/position/value", "empty slots (id -1) must hold NaN")
+            if np.any(~np.isfinite(pos[live])):
+                self.error(f"{L.PARTS}/position/value", "an existing particle has a non-finite position")
+        live_ids = ids[ids != L.ID_FILL]
+        return len(np.unique(live_ids))
+
+    def surface(self):
+        for name, (_, comps, unit) in L.SURFACE_ELEMENTS.items():
+            path = f"{L.SURFACE}/{name}"
+            v = self.time_series(path, comps, unit)
+            if v is None:
+                continue
+            if v.shape[0] != self.frames:
+                self.error(path, f"{v.shape[0]} frames, particles have {self.frames}")
+            elif self.frames and not np.array_equal(self.f[f"{path}/step"][()],
+                                                    self.f[f"{L.PARTS}/position/step"][()]):
+                self.error(f"{path}/step", "not sampled at the particle frames")
+            if v.shape[0] and np.any(~np.isfinite(v[()])):
+                self.error(f"{path}/value", "non-finite values")
+
+    def parameters(self):
+        if not self.need(L.PARAMETERS, h5py.Group):
+            return ""
+        for name in ("deck", "liggghts_version", "seed"):
+            self.need(f"{L.PARAMETERS}/{name}", h5py.Dataset)
+        if f"{L.PARAMETERS}/deck" in self.f and not _text(self.f[f"{L.PARAMETERS}/deck"][()]).strip():
+            self.error(f"{L.PARAMETERS}/deck", "deck text is empty")
+        if f"{L.PARAMETERS}/liggghts_version" in self.f:
+            if "LIGGGHTS" not in _text(self.f[f"{L.PARAMETERS}/liggghts_version"][()]):
+                self.error(f"{L.PARAMETERS}/liggghts_version", "does not name a LIGGGHTS version")
+        if self.need(L.VARIABLES, h5py.Group):
+            if len(self.f[L.VARIABLES]) == 0:
+                self.error(L.VARIABLES, "no deck variables recorded")
+            for name, ds in self.f[L.VARIABLES].items():
+                if "unit" not in ds.attrs:
+                    self.error(f"{L.VARIABLES}/{name}", "attribute 'unit' missing")
+        self.need(L.DERIVED, h5py.Group)
+        if not self.need(L.RUN, h5py.Group):
+            return ""
+        status = _text(self.f[L.RUN].attrs.get("status", ""))
+        if status not in L.STATUSES:
+            self.error(L.RUN, f"unknown status {status!r}")
+        elif status != L.STATUS_COMPLETE:
+            msg = _text(self.f[L.RUN].attrs.get("message", ""))
+            hint = {L.STATUS_RUNNING: "the run was killed or is still going"}.get(status, msg)
+            text = f"run status is {status!r}" + (f": {hint}" if hint else "")
+            (self.warn if self.allow_incomplete else self.error)(L.RUN, text)
+        return status
+
+
+def check_file(path, allow_incomplete: bool = False) -> Report:
+    """Check a file; ``Report.ok`` is False if any error was found."""
+    try:
+        f = h5py.File(path, "r")
+    except OSError as exc:
+        return Report(str(path), [Problem("error", "", f"cannot open as HDF5: {exc}")])
+    with f:
+        c = _Checker(f, allow_incomplete)
+        c.h5md()
+        parts = c.particles()
+        c.surface()
+        status = c.parameters()
+        return Report(str(path), c.problems, frames=c.frames, parts=parts, status=status)

@@ -1,0 +1,32 @@
+"""The one-line summary printed at the end of ``vibrofeed run``."""
+
+from __future__ import annotations
+
+from .postproc.flights import Flights
+from .postproc.transport import Transport
+from .results.reader import Result
+
+
+def _si(x: float, unit: str) -> str:
+    for factor, prefix in ((1, ""), (1e-3, "m"), (1e-6, "u")):
+        if abs(x) >= factor or factor == 1e-6:
+            return f"{x / factor:.3g} {prefix}{unit}"
+    return f"{x:g} {unit}"
+
+
+def run_summary(run) -> str:
+    """``deck: t simulated in wall (rate) -> file | physics of the parts``."""
+    head = (f"{run.deck}: {run.sim_time:.4g} s simulated in {run.wall:.1f} s "
+            f"({run.steps_per_second / 1e3:.0f}k steps/s, {run.ranks} rank{'s' * (run.ranks > 1)}), "
+            f"{run.frames} frames -> {run.output}")
+    with Result(run.output) as r:
+        n = len(r.part_ids)
+        bits = [f"{n} part{'s' * (n != 1)}"]
+        if n and r.n_frames > 2:
+            tr = Transport().compute(r)
+            bits.append(f"mean speed {_si(tr.mean_velocity, 'm/s')} along x")
+        if n == 1 and r.n_frames > 2:
+            fl = Flights().compute(r)
+            bits.append(f"{fl.n_hops} hops, airborne {fl.airborne_fraction:.0%} of the time, "
+                        f"highest {_si(fl.max_gap, 'm')}")
+    return head + " | " + ", ".join(bits)
