@@ -67,7 +67,18 @@ def clean_environment(env: Mapping[str, str] | None = None) -> dict:
     return {k: v for k, v in env.items() if not k.startswith(_LAUNCHER_PREFIXES)}
 
 
-def worker_command(spec_path: str, ranks: int) -> list[str]:
+def abort_shim() -> Path | None:
+    """The library that flushes LIGGGHTS' output before MPI_Abort (built by CMake).
+
+    Without it the message of an ``error->one`` (e.g. a mesh file that cannot
+    be opened) is lost in an unflushed buffer; runs still work.
+    """
+    env = os.environ.get("VIBROFEED_ABORT_SHIM")
+    path = Path(env) if env else Path(__file__).resolve().parents[2] / "build/native/libvibrofeed_abortflush.so"
+    return path if path.is_file() else None
+
+
+def worker_command(spec_path: str, ranks: int, shim: Path | None = None) -> list[str]:
     base = [sys.executable, "-m", "vibrofeed.engine.worker", spec_path]
     if ranks == 1:
         return base  # an MPI singleton
@@ -77,7 +88,16 @@ def worker_command(spec_path: str, ranks: int) -> list[str]:
     cmd = [mpirun, "-n", str(ranks), "--oversubscribe"]
     if hasattr(os, "geteuid") and os.geteuid() == 0:
         cmd.append("--allow-run-as-root")  # Open MPI refuses root otherwise
+    if shim is not None:
+        cmd += ["-x", f"LD_PRELOAD={shim}"]  # the ranks only, not mpirun itself
     return cmd + base
+
+
+def worker_environment(ranks: int, shim: Path | None) -> dict:
+    env = clean_environment()
+    if shim is not None and ranks == 1:
+        env["LD_PRELOAD"] = f"{shim} {env['LD_PRELOAD']}" if env.get("LD_PRELOAD") else str(shim)
+    return env
 
 
 def _die_with_parent() -> None:
@@ -158,9 +178,10 @@ def run_deck(deck: Deck, params: Mapping[str, str], output, *, ranks: int = 1,
     started = time.monotonic()
     try:
         with open(stderr_path, "w") as stderr:
+            shim = abort_shim()
             proc = subprocess.Popen(
-                worker_command(str(spec_path), ranks), stdout=subprocess.PIPE, stderr=stderr,
-                env=clean_environment(), cwd=str(out.parent), text=True,
+                worker_command(str(spec_path), ranks, shim), stdout=subprocess.PIPE, stderr=stderr,
+                env=worker_environment(ranks, shim), cwd=str(out.parent), text=True,
                 start_new_session=True, preexec_fn=_die_with_parent)
             try:
                 for line in proc.stdout:
@@ -228,13 +249,14 @@ def _diagnose(rc, events, deck: Deck, log: Path, screen: Path, stderr: Path,
     own = next((e for e in events if e["event"] == "error"), None)
     if own is not None:
         return RunError(f"deck {deck.name}: {own['message']}")
-    for text in (_read(log), _read(screen)):
-        err = find_error(text)
-        if err is None:
-            continue
+    log_text, screen_text = _read(log), _read(screen)
+    err, in_log = find_error(log_text), True
+    if err is None:  # error->one writes to the screen only
+        err, in_log = find_error(screen_text), False
+    if err is not None:
         line = command = None
         if phase == "deck":
-            cmd = failed_command(text, deck, before=err.line_index)
+            cmd = failed_command(log_text, deck, before=err.line_index if in_log else None)
             if cmd is not None:
                 line, command = cmd.line, cmd.text
         return EngineError(err.message, deck=_display(deck.path), line=line, command=command,

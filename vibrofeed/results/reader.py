@@ -47,11 +47,12 @@ class Result:
             if required not in self.file:
                 self.file.close()
                 raise ResultError(f"{self.path}: not a vibrofeed result (no /{required})")
-        if self.status != L.STATUS_COMPLETE and not allow_incomplete:
+        status = self.status
+        if status != L.STATUS_COMPLETE and not allow_incomplete:
             msg = self.message
             self.file.close()
             raise IncompleteResult(
-                f"{self.path}: run status is {self.status!r}"
+                f"{self.path}: run status is {status!r}"
                 + (f" ({msg})" if msg else "")
                 + "; open with allow_incomplete=True to read the frames it holds")
 

@@ -1,0 +1,70 @@
+"""LIGGGHTS error messages and the deck line they come from, read off logs."""
+
+from vibrofeed.decks import Deck
+from vibrofeed.engine.errors import EngineError, failed_command, find_error
+
+MESH_ERROR = """Setting up run at Sun Nov 22 06:20:32 2026
+
+ERROR: Mesh (id plate): All 2 mesh elements have been lost / left the domain. 
+Please use 'boundary m m m' or scale/translate/rotate the mesh or change its dynamics
+FYI: center of mass of mesh including scale/tranlate/rotate is 0.000000 / 0.000000 / 0.000000
+     simulation box x from -0.050000 to 0.050000 y  from -0.005000 to 0.005000 z from -0.002000 to 0.010000
+     (gives indication about changes in scale/tranlate/rotate necessary to make simulation run)
+ (./src/multi_node_mesh_parallel_I.h:605)
+"""
+
+
+def test_single_line_error():
+    err = find_error('thermo 10\nERROR: Invalid fix style: "gravityy" (./src/modify.cpp:850)\n')
+    assert err.message == 'Invalid fix style: "gravityy"'
+    assert err.proc is None and err.line_index == 1
+
+
+def test_multi_line_error_is_joined_and_source_location_dropped():
+    err = find_error(MESH_ERROR)
+    assert err.message.startswith("Mesh (id plate): All 2 mesh elements have been lost")
+    assert "boundary m m m" in err.message and "multi_node_mesh" not in err.message
+    assert "\n" not in err.message
+
+
+def test_error_on_one_proc():
+    err = find_error("x\nERROR on proc 1: Particle lost (../src/fix_x.cpp:12)\n")
+    assert err.proc == 1 and err.message == "Particle lost"
+
+
+def test_no_error():
+    assert find_error("LIGGGHTS (Version 3.8.0)\nLoop time of 1 on 1 procs\n") is None
+
+
+def test_failed_command_is_the_last_deck_command_echoed(tmp_path):
+    deck_path = tmp_path / "d.liggghts"
+    deck_path.write_text(
+        "# header\n"
+        "variable freq index 50 # [Hz] f\n"             # 2
+        "units si\n"                                    # 3
+        "fix walls all wall/gran model hertz &\n"       # 4
+        "    tangential history   # comment\n"
+        "fix bad all nope ${freq}\n"                    # 6
+        "run 10\n")                                     # 7
+    log = ("LIGGGHTS (Version)\n"
+           "variable freq index 50 # [Hz] f\n"
+           "units si\n"
+           "fix walls all wall/gran model hertz     tangential history   # comment\n"
+           "fix bad all nope ${freq}\n"
+           "fix bad all nope 50\n"  # LIGGGHTS echoes the substituted line too
+           'ERROR: Invalid fix style: "nope" (./src/modify.cpp:850)\n')
+    deck = Deck(deck_path)
+    err = find_error(log)
+    cmd = failed_command(log, deck, before=err.line_index)
+    assert cmd.line == 6 and cmd.text == "fix bad all nope ${freq}"
+    # the continuation line was matched too, so an error there points at line 4
+    cmd = failed_command(log, deck, before=4)
+    assert cmd.line == 4
+
+
+def test_engine_error_reads_as_one_line():
+    e = EngineError('Invalid fix style: "nope"', deck="d.liggghts", line=6,
+                    command="fix bad all nope ${freq}", phase="deck")
+    assert str(e) == 'LIGGGHTS error: Invalid fix style: "nope" at d.liggghts:6: fix bad all nope ${freq}'
+    e = EngineError("Lost atoms", phase="run", step=100, time=1e-4)
+    assert "during the run" in str(e) and "step 100" in str(e) and "\n" not in str(e)
