@@ -1,0 +1,225 @@
+"""Vertical stick/slip transport model (validation/vertical.py) against closed forms."""
+
+import math
+
+import numpy as np
+import pytest
+
+from vibrofeed.validation.vertical import (
+    G,
+    CallableSurface,
+    Contact,
+    check_feasible,
+    periodic_transport,
+    simulate,
+    sine_drive,
+    two_level_drive,
+    two_level_transport,
+)
+
+M = 0.009  # kg, the experiment's part
+
+
+def contact(fn_mg, mu_s=0.72, mu_k=0.6, g=G):
+    return Contact(mass=M, normal_force=fn_mg * M * G, mu_s=mu_s, mu_k=mu_k, g=g)
+
+
+def constant_velocity(v):
+    """z_s = v t: acceleration identically zero, a single monotone piece."""
+    return CallableSurface(lambda t: v * np.asarray(t), lambda t: v + 0 * np.asarray(t),
+                           lambda t: 0 * np.asarray(t), turning_points=[])
+
+
+def test_stick_band_and_slip_accelerations():
+    c = contact(10.0, mu_s=0.7, mu_k=0.5)
+    assert c.stick_upper == pytest.approx(0.7 * 10 * G - G, rel=1e-14)
+    assert c.stick_lower == pytest.approx(-0.7 * 10 * G - G, rel=1e-14)
+    assert c.slip_acceleration(+1) == pytest.approx(0.5 * 10 * G - G, rel=1e-14)
+    assert c.slip_acceleration(-1) == pytest.approx(-0.5 * 10 * G - G, rel=1e-14)
+
+
+@pytest.mark.parametrize("kwargs", [dict(mu_k=0.8), dict(mass=0.0), dict(normal_force=-1.0),
+                                    dict(mu_s=math.nan)])
+def test_contact_rejects_unphysical_values(kwargs):
+    base = dict(mass=M, normal_force=1.0, mu_s=0.72, mu_k=0.6)
+    base.update(kwargs)
+    with pytest.raises(ValueError):
+        Contact(**base)
+
+
+def test_feasible_case_returns_positive_margins():
+    fn = 5 * M * G
+    margins = check_feasible(M, fn, 0.72, a_max=10 * G)
+    assert margins["normal_force_margin"] == pytest.approx(fn - M * G / 0.72, rel=1e-12)
+    assert margins["acceleration_margin"] == pytest.approx(10 * G - (0.72 * 5 * G + G),
+                                                           rel=1e-12)
+
+
+def test_feasibility_flags_small_normal_force_and_by_how_much():
+    fn = 1.0 * M * G  # below m g / mu_s = 1.389 m g
+    with pytest.raises(ValueError) as err:
+        check_feasible(M, fn, 0.72, a_max=100 * G)
+    msg = str(err.value)
+    assert "normal force too small" in msg and "acceleration" not in msg
+    short = M * G / 0.72 - fn
+    assert f"{short:.3g} N" in msg
+
+
+def test_feasibility_flags_small_peak_acceleration():
+    fn = 5 * M * G  # needs a_max > 0.72*5 g + g = 4.6 g
+    with pytest.raises(ValueError) as err:
+        check_feasible(M, fn, 0.72, a_max=4.0 * G)
+    msg = str(err.value)
+    assert "peak surface acceleration too small" in msg and "normal force" not in msg
+    assert f"{0.6 * G:.3g} m/s^2" in msg  # short by 0.6 g
+
+
+def test_feasibility_reports_both_bounds_when_both_fail():
+    with pytest.raises(ValueError) as err:
+        check_feasible(M, 0.5 * M * G, 0.72, a_max=1.0 * G)
+    assert "normal force too small" in str(err.value)
+    assert "peak surface acceleration too small" in str(err.value)
+
+
+def test_pure_sticking_inside_the_band_gives_no_net_motion():
+    c = contact(5.0)  # band [-4.6 g, +2.6 g]
+    drive = sine_drive(amplitude=0.2e-3, frequency=40.0)  # peak 1.29 g, inside
+    traj = simulate(drive, c, t_end=0.2)
+    assert len(traj.phases) == 1 and traj.phases[0].stuck
+    assert traj.stuck_fraction == 1.0
+    gap = traj.z - drive.position(traj.t)
+    assert np.max(np.abs(gap - gap[0])) < 1e-15
+    assert abs(traj.net_speed(period=1 / 40.0)) < 1e-12
+
+
+def test_part_slides_down_when_normal_force_is_below_mg_over_mu_s():
+    c = contact(1.2, mu_s=0.72, mu_k=0.6)  # 1.2 < 1/0.72
+    with pytest.raises(ValueError, match="normal force too small"):
+        check_feasible(M, c.normal_force, c.mu_s, a_max=50 * G)
+    # Surface at rest: the part falls at mu_k F_n/m - g from the start.
+    traj = simulate(constant_velocity(0.0), c, t_end=0.05, t_eval=[0.0, 0.05])
+    a = 0.6 * 1.2 * G - G
+    assert traj.z[-1] == pytest.approx(0.5 * a * 0.05 ** 2, rel=1e-12)
+    assert traj.stuck_fraction == 0.0
+    # Under a transporting two-level drive it still loses height.
+    drive = two_level_drive(a_up=0.1 * G, t_up=0.02, a_down=20 * G)
+    assert periodic_transport(drive, c, n_periods=4).net_speed < 0
+
+
+def test_initially_slipping_part_follows_exact_parabola_until_caught():
+    c = contact(5.0, mu_k=0.5)  # slip up at 1.5 g
+    v = 0.1
+    traj = simulate(constant_velocity(v), c, t_end=0.02, z0=0.0, v0=0.0)
+    a = 0.5 * 5 * G - G
+    t_catch = v / a
+    assert traj.phases[0].t1 == pytest.approx(t_catch, abs=1e-13)
+    assert not traj.phases[0].stuck and traj.phases[1].stuck
+    z, vv, stuck = traj.sample([t_catch / 2, 0.02])
+    assert z[0] == pytest.approx(0.5 * a * (t_catch / 2) ** 2, rel=1e-12)
+    # Once caught it rides along: z = z(t_catch) + v (t - t_catch).
+    assert z[1] == pytest.approx(0.5 * a * t_catch ** 2 + v * (0.02 - t_catch), rel=1e-12)
+    assert vv[1] == pytest.approx(v, rel=1e-14) and stuck[1]
+
+
+# (a_up, t_up, a_down, F_n [m g], mu_k): from gentle to violent drops,
+# a catch late in the rise, and mu_k = mu_s.
+TWO_LEVEL_CASES = [
+    (0.5 * G, 0.02, 15 * G, 5.0, 0.6),
+    (2.0 * G, 0.01, 40 * G, 5.0, 0.6),
+    (0.2 * G, 0.03, 6.0 * G, 5.0, 0.1),
+    (5.0 * G, 0.004, 30 * G, 10.0, 0.72),
+]
+
+
+@pytest.mark.parametrize("a_up,t_up,a_down,fn_mg,mu_k", TWO_LEVEL_CASES)
+def test_two_level_model_matches_closed_form(a_up, t_up, a_down, fn_mg, mu_k):
+    c = contact(fn_mg, mu_k=mu_k)
+    exact = two_level_transport(a_up, t_up, a_down, c)
+    assert exact.net_speed > 0 and 0 < exact.catch_delay <= t_up
+    got = periodic_transport(two_level_drive(a_up, t_up, a_down), c, n_periods=5)
+    assert got.net_speed == pytest.approx(exact.net_speed, rel=1e-6)
+    assert got.stuck_fraction == pytest.approx(exact.stuck_fraction, rel=1e-6)
+
+
+def test_two_level_catch_time_is_exact():
+    a_up, t_up, a_down = 0.5 * G, 0.02, 15 * G
+    c = contact(5.0)
+    exact = two_level_transport(a_up, t_up, a_down, c)
+    traj = simulate(two_level_drive(a_up, t_up, a_down), c, t_end=2 * exact.period)
+    # stuck (rise) | slip (drop + catch) | stuck | ...
+    assert [p.stuck for p in traj.phases[:3]] == [True, False, True]
+    assert traj.phases[0].t1 == pytest.approx(t_up, abs=1e-13)
+    assert traj.phases[1].t1 == pytest.approx(exact.period + exact.catch_delay, abs=1e-12)
+
+
+def test_two_level_generic_callable_surface_matches_closed_form():
+    """Same drive given as plain callables with breakpoints, sampled cut (no turning points)."""
+    a_up, t_up, a_down = 1.0 * G, 0.015, 25 * G
+    c = contact(6.0)
+    exact = two_level_transport(a_up, t_up, a_down, c)
+    poly = two_level_drive(a_up, t_up, a_down)
+    generic = CallableSurface(poly.position, poly.velocity, poly.acceleration,
+                              breakpoints=[0.0, t_up], period=exact.period)
+    got = periodic_transport(generic, c, n_periods=5)
+    assert got.net_speed == pytest.approx(exact.net_speed, rel=1e-6)
+
+
+def test_two_level_without_slip_has_zero_transport():
+    c = contact(5.0)  # lower band edge -4.6 g
+    a_up, t_up, a_down = 0.5 * G, 0.02, 4.0 * G
+    assert two_level_transport(a_up, t_up, a_down, c).net_speed == 0.0
+    got = periodic_transport(two_level_drive(a_up, t_up, a_down), c, n_periods=3)
+    assert got.net_speed == pytest.approx(0.0, abs=1e-15)
+    assert got.stuck_fraction == pytest.approx(1.0, abs=1e-12)
+
+
+def test_two_level_closed_form_refuses_slip_during_rise():
+    with pytest.raises(ValueError, match="sticking during the rise"):
+        two_level_transport(3.0 * G, 0.01, 30 * G, contact(5.0))  # band top 2.6 g
+
+
+def test_without_gravity_a_mirrored_drive_mirrors_the_part():
+    """g = 0: z -> -z is a symmetry of the model, exactly."""
+    c = Contact(mass=M, normal_force=4 * M * G, mu_s=0.72, mu_k=0.55, g=0.0)
+    up = sine_drive(amplitude=0.5e-3, frequency=60.0, phase=0.3)
+    down = sine_drive(amplitude=0.5e-3, frequency=60.0, phase=0.3 + math.pi)  # = -up
+    t = np.linspace(0, 0.5, 301)
+    a = simulate(up, c, t_end=0.5, t_eval=t)
+    b = simulate(down, c, t_end=0.5, t_eval=t)
+    assert len(a.phases) > 5  # really stick-slip
+    assert np.allclose(a.z, -b.z, rtol=0, atol=1e-15)
+    # and once the start-up transient has died out (~20 periods), a
+    # symmetric drive cannot transport without gravity
+    assert abs(a.net_speed(1 / 60.0, skip_periods=20)) < 1e-9
+
+
+def test_periodic_drive_is_shift_invariant():
+    c = contact(5.0)
+    drive = sine_drive(amplitude=1.0e-3, frequency=50.0)
+    p = 1 / 50.0
+    a = simulate(drive, c, t_end=4 * p, t_eval=np.linspace(0, 4 * p, 50))
+    b = simulate(drive, c, t_start=p, t_end=5 * p, t_eval=np.linspace(p, 5 * p, 50))
+    assert np.allclose(a.z, b.z, rtol=0, atol=1e-13)
+
+
+def test_net_speed_needs_a_whole_period_after_the_transient():
+    traj = simulate(sine_drive(1e-4, 50.0), contact(5.0), t_end=0.03)
+    with pytest.raises(ValueError):
+        traj.net_speed(period=0.02, skip_periods=1)
+
+
+def test_any_object_with_position_velocity_acceleration_is_a_surface():
+    """A plain object (no ``pieces``) with breakpoints is wrapped and gives the closed form."""
+    a_up, t_up, a_down = 0.5 * G, 0.02, 15 * G
+    poly = two_level_drive(a_up, t_up, a_down)
+    exact = two_level_transport(a_up, t_up, a_down, contact(5.0))
+
+    class Motion:
+        position, velocity, acceleration = poly.position, poly.velocity, poly.acceleration
+        breakpoints = (0.0, t_up)
+        period = exact.period
+
+    got = periodic_transport(Motion(), contact(5.0), n_periods=4)
+    assert got.net_speed == pytest.approx(exact.net_speed, rel=1e-6)
+    with pytest.raises(TypeError, match="acceleration"):
+        simulate(object(), contact(5.0), t_end=0.1)
