@@ -24,7 +24,9 @@ RESERVED = {"driver", "deck_dir", "dump_file"}
 
 _INDEX = re.compile(
     r"^\s*variable\s+(?P<name>\w+)\s+index\s+(?P<value>\S+)\s*(?:#\s*(?P<comment>.*))?$")
-_EQUAL = re.compile(r"^\s*variable\s+(?P<name>\w+)\s+equal\s+")
+_EQUAL = re.compile(r"^\s*variable\s+(?P<name>\w+)\s+equal\s+(?P<formula>.*)$")
+_REF = re.compile(r"\bv_(\w+)")
+_CLOCK = re.compile(r"\b(time|step|elapsed|elaplong|dt)\b")
 _UNIT = re.compile(r"^\[(?P<unit>[^\]]*)\]\s*(?P<text>.*)$")
 
 
@@ -112,7 +114,7 @@ class Deck:
             raise DeckError(f"cannot read deck {path}: {exc.strerror}") from exc
         self.name = self.path.stem
         self.variables: dict[str, Variable] = {}
-        self.equal_variables: list[str] = []
+        self.formulas: dict[str, str] = {}  # equal-style variables defined at line start
         for number, line in enumerate(self.text.splitlines(), start=1):
             m = _INDEX.match(line)
             if m:
@@ -122,9 +124,9 @@ class Deck:
                     unit, description = um["unit"].strip(), um["text"].strip()
                 self.variables[m["name"]] = Variable(m["name"], m["value"], unit, description, number)
                 continue
-            m = _EQUAL.match(line)
-            if m and m["name"] not in self.equal_variables:
-                self.equal_variables.append(m["name"])
+            m = _EQUAL.match(strip_comment(line))
+            if m and m["name"] not in self.formulas:
+                self.formulas[m["name"]] = m["formula"].strip()
         if not self.variables:
             raise DeckError(f"{self.path}: declares no tunables ('variable NAME index VALUE # [unit] ...')")
         self.commands = split_commands(self.text)
@@ -157,6 +159,23 @@ class Deck:
         paragraphs = [p for p in self.header.split("\n\n") if p.strip()]
         body = paragraphs[1] if len(paragraphs) > 1 else (paragraphs[0] if paragraphs else "")
         return " ".join(body.split()).split(". ")[0].rstrip(".")
+
+    @property
+    def constants(self) -> list[str]:
+        """Equal-style variables that do not change during a run: those whose
+        formula never reaches ``time`` or ``step``, directly or through other
+        variables. Their values are worth recording once per run."""
+        clock: dict[str, bool] = {}
+
+        def depends(name: str, seen: frozenset = frozenset()) -> bool:
+            if name not in clock:
+                formula = self.formulas.get(name, "")
+                refs = [r for r in _REF.findall(formula) if r in self.formulas and r not in seen]
+                clock[name] = bool(_CLOCK.search(formula)) or any(
+                    depends(r, seen | {name}) for r in refs)
+            return clock[name]
+
+        return [name for name in self.formulas if not depends(name)]
 
     @property
     def tunables(self) -> dict[str, Variable]:

@@ -33,7 +33,20 @@ def test_single_part_variables_parsed(tmp_path):
     assert (freq.unit, freq.default) == ("Hz", "50")
     assert "vibration frequency" in freq.description
     assert deck.variables["rolling"].default == "0"
-    assert "n_steps" in deck.equal_variables and "surface_z" in deck.equal_variables
+    for name in ("n_steps", "dt_used", "t_contact", "ss_x0"):
+        assert name in deck.constants
+    for name in ("sin_x", "tx", "ss_x", "cp_vx"):  # follow `time`, directly or not
+        assert name in deck.formulas and name not in deck.constants
+
+
+def test_constants_follow_references(tmp_path):
+    p = tmp_path / "c.liggghts"
+    p.write_text("variable a index 1 # [m] a\n"
+                 "variable b equal 2*v_a\n"
+                 "variable c equal v_b+time\n"
+                 "variable d equal v_c*2\n"
+                 "variable e equal v_b*3  # time in a comment is not a reference\n")
+    assert Deck(p).constants == ["b", "e"]
 
 
 def test_split_commands_joins_continuations_and_strips_comments():

@@ -164,7 +164,7 @@ def run_deck(deck: Deck, params: Mapping[str, str], output, *, ranks: int = 1,
     spec = {
         "deck": str(deck.path), "deck_name": deck.name, "variables": values,
         "var_meta": {n: [v.unit, v.description, v.default] for n, v in deck.tunables.items()},
-        "equal_variables": deck.equal_variables,
+        "constants": deck.constants,
         "output": str(part), "log": str(log), "screen": str(screen),
         "seed": int(float(values["seed"])) if "seed" in values else None,
         "command": command,

@@ -101,9 +101,7 @@ def run(spec: dict) -> int:
         report("error", message=f"t_end is shorter than the timestep ({dt:g} s): nothing to run")
         return 3
     derived = {}
-    for name in spec["equal_variables"]:
-        if name.startswith("surface_"):
-            continue  # time-dependent, recorded per frame
+    for name in spec["constants"]:  # time-dependent variables are recorded per frame, if at all
         try:
             derived[name] = lmp.variable(name)
         except KeyError:
