@@ -69,7 +69,7 @@ def writer_rate(tmp: Path, n_parts: int, frames: int) -> float:
     parts = {"id": np.arange(1, n_parts + 1), "species": np.ones(n_parts, int),
              "radius": np.full(n_parts, 5e-4), "mass": np.full(n_parts, 1e-6),
              "position": rng.random((n_parts, 3)), "velocity": rng.random((n_parts, 3)),
-             "angular_velocity": rng.random((n_parts, 3))}
+             "angular_velocity": rng.random((n_parts, 3)), "force": rng.random((n_parts, 3))}
     w = ResultWriter(tmp / f"w{n_parts}.h5", deck_name="b", deck_path="b", deck_text="b",
                      variables={}, derived={}, engine_version="LIGGGHTS", seed=1,
                      capacity_hint=n_parts)

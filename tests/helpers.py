@@ -44,9 +44,12 @@ def write_result(path, frames, surface=None, variables=None, status="complete"):
     return path
 
 
-def parts(ids, positions, radius=5e-4):
+def parts(ids, positions, radius=5e-4, velocity=None, force=None, mass=1e-6):
     ids = np.asarray(ids)
-    positions = np.asarray(positions, dtype=float).reshape(len(ids), 3)
-    return {"id": ids, "species": np.ones(len(ids), int), "radius": np.full(len(ids), radius),
-            "mass": np.full(len(ids), 1e-6), "position": positions,
-            "velocity": np.zeros((len(ids), 3)), "angular_velocity": np.zeros((len(ids), 3))}
+    n = len(ids)
+    positions = np.asarray(positions, dtype=float).reshape(n, 3)
+    velocity = np.zeros((n, 3)) if velocity is None else np.asarray(velocity, float).reshape(n, 3)
+    force = np.zeros((n, 3)) if force is None else np.asarray(force, float).reshape(n, 3)
+    return {"id": ids, "species": np.ones(n, int), "radius": np.full(n, radius),
+            "mass": np.full(n, mass), "position": positions, "velocity": velocity,
+            "angular_velocity": np.zeros((n, 3)), "force": force}

@@ -72,6 +72,65 @@ def cmd_check(args) -> int:
     return worst
 
 
+# ------------------------------------------------------------------------ validate
+def _fmt(x: float) -> str:
+    if x != x:
+        return "nan"
+    if x == int(x) and abs(x) < 1e6:
+        return f"{int(x)}"
+    return f"{x:.6g}"
+
+
+def cmd_validate(args) -> int:
+    from .validation import cases as C
+    from .validation.crosscheck import CrossCheck
+
+    if args.list:
+        names = C.available()
+        width = max(map(len, names))
+        for name in names:
+            case = C.find(name)
+            print(f"{name:<{width}}  [{case.kind}] {case.title}")
+        return 0
+    selected = [C.find(n) for n in (args.cases or C.available())]
+    out_dir = args.output
+    rows, figures, failed_cases = [], [], []
+    for case in selected:
+        if not args.json:
+            print(f"== {case.name}: {case.title}", file=sys.stderr)
+
+        def on_run(label, state, case=case):
+            if not args.json:
+                print(f"   {case.name} [{label}]: {state}", file=sys.stderr)
+
+        outcome = CrossCheck(case, out_dir, ranks=args.ranks, jobs=args.jobs, reuse=args.reuse,
+                             on_run=on_run).run()
+        rows += outcome.rows
+        figures += outcome.figures
+        if not outcome.passed:
+            failed_cases.append(case.name)
+    if args.json:
+        print(json.dumps([r.as_dict() for r in rows], indent=2))
+    else:
+        table = [("case", "quantity", "model", "DEM", "rel diff", "tolerance", "")]
+        for r in rows:
+            tol = f"{_fmt(r.tolerance)} {r.unit}".strip() if r.tolerance_type == "abs" \
+                else f"{r.tolerance:.1%}"
+            table.append((r.case, r.quantity, _fmt(r.model), _fmt(r.dem), f"{r.rel_diff:+.2%}",
+                          tol, "pass" if r.passed else "FAIL"))
+        widths = [max(len(row[i]) for row in table) for i in range(len(table[0]))]
+        for k, row in enumerate(table):
+            print("  ".join(c.ljust(w) for c, w in zip(row, widths)).rstrip())
+            if k == 0:
+                print("  ".join("-" * w for w in widths))
+        n_fail = sum(not r.passed for r in rows)
+        print(f"\n{len(rows) - n_fail}/{len(rows)} quantities within tolerance"
+              + (f"; failing cases: {', '.join(failed_cases)}" if failed_cases else ""))
+        for f in figures:
+            print(f"figure: {f}")
+    return EXIT_FAILED if failed_cases else 0
+
+
 # ------------------------------------------------------------------ decks, params
 def cmd_decks(args) -> int:
     from .decks import Deck, available, decks_dir
@@ -130,6 +189,24 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print the reports as JSON")
     p.set_defaults(func=cmd_check)
 
+    p = sub.add_parser("validate", help="run DEM and analytic model on the validation cases",
+                       description="Run each validation case (validation/cases/*.toml) through "
+                                   "LIGGGHTS and through the analytic model on the same parameters, "
+                                   "print model vs DEM with tolerances and write PNG figures. "
+                                   "Exit status 1 if any quantity is out of tolerance.")
+    p.add_argument("cases", nargs="*", metavar="CASE", help="case names (default: all; see --list)")
+    p.add_argument("-o", "--output", default="validation-results", metavar="DIR",
+                   help="folder for DEM results and figures (default: validation-results)")
+    p.add_argument("--list", action="store_true", help="list the cases and exit")
+    p.add_argument("--json", action="store_true",
+                   help="print the table as JSON rows (case, quantity, model, dem, rel_diff, tolerance, passed)")
+    p.add_argument("-j", "--jobs", type=int, default=2, metavar="N",
+                   help="DEM runs at once (default 2)")
+    p.add_argument("-n", "--ranks", type=int, default=1, metavar="RANKS", help="MPI ranks per DEM run")
+    p.add_argument("--reuse", action="store_true",
+                   help="reuse DEM results already in DIR that hold exactly the case's parameters")
+    p.set_defaults(func=cmd_validate)
+
     p = sub.add_parser("decks", help="list the decks in decks/")
     p.set_defaults(func=cmd_decks)
 
@@ -143,6 +220,7 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv=None) -> int:
     from .decks import DeckError
     from .engine.errors import RunError
+    from .validation.cases import CaseError
     from .parameters import ParameterError
     from .results.reader import ResultError
 
@@ -153,7 +231,7 @@ def main(argv=None) -> int:
         return args.func(args)
     except KeyboardInterrupt:
         return _fail("interrupted", EXIT_INTERRUPTED)
-    except (ParameterError, DeckError, UserError) as exc:
+    except (ParameterError, DeckError, CaseError, UserError) as exc:
         if debug:
             raise
         return _fail(str(exc), EXIT_USAGE)

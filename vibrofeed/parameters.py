@@ -59,7 +59,7 @@ RULES: dict[str, Callable[[float], str | None]] = {
     "amp_t": _non_negative,
     "amp_n": _non_negative,
     "phase": _finite,
-    "incline": _between(-90, 90),
+    "incline": _between(-90, 90, lo_open=False, hi_open=False),
     "radius": _positive,
     "density": _positive,
     "youngs": _between(5e6, math.inf, why="LIGGGHTS' Hertz model needs youngsModulus > 5e6 Pa"),

@@ -8,9 +8,9 @@ freely, z_p = z_s(t_l) + v_s(t_l) (t - t_l) - g (t - t_l)^2 / 2, and lands
 where that parabola meets z_s. Below Gamma = 1 it never leaves.
 
 Tolerances, from what separates the DEM from that model:
-- landing time: the soft Hertz contact releases and catches the part within
-  about one contact time t_c (the deck's t_contact, ~1e-5 s here), plus the
-  frame interpolation error g(1+Gamma) dt_f^2 / (8 v_rel) (negligible);
+- lift-off and landing times: the soft Hertz contact releases and catches the
+  part within about one contact time t_c (the deck's t_contact, ~1e-5 s here);
+  the events themselves are reconstructed between frames (postproc.flights);
 - launch velocity: LIGGGHTS moves the mesh by summing v(t_k) dt each step
   (right Riemann sums), an O(w dt) relative error in the plate's motion;
   allowed: 3 w dt;
@@ -72,16 +72,15 @@ def test_above_one_g_the_part_hops_as_free_flight_predicts(tmp_path, gamma):
         radius = r.parameters["radius"]
         z = r.track(1)[1][:, 2] - radius  # height of the part's lowest point
 
-    assert fl.n_hops >= 1
-    # Landing: sharp, compared directly.
-    v_rel = abs(np.gradient(np.array([gap_model(t_land - 1e-6), gap_model(t_land + 1e-6)]), 2e-6)[0])
-    frame_err = G * (1 + gamma) * OUTPUT_DT ** 2 / (8 * v_rel)
-    assert abs(fl.landings[0] - t_land) < t_contact + frame_err, \
+    assert fl.n_hops >= 1 and fl.kinds[0] == "lift-off"
+    assert abs(fl.takeoffs[0] - t_l) < t_contact, \
+        f"lift-off at {fl.takeoffs[0] / T:.5f} T, model {t_l / T:.5f} T"
+    assert abs(fl.landings[0] - t_land) < t_contact, \
         f"landing at {fl.landings[0] / T:.5f} T, model {t_land / T:.5f} T"
-    # Launch: the part leaves tangentially, so fit the free flight (z'' = -g
-    # exactly in the DEM) and evaluate it at the model's launch time.
+    # Launch state: fit the free flight (z'' = -g exactly in the DEM) and
+    # evaluate it at the model's launch time.
     t = fl.time
-    airborne = (t > fl.takeoffs[0]) & (t < fl.landings[0]) & (fl.gap > 5 * fl.tolerance)
+    airborne = (t > fl.takeoffs[0]) & (t < fl.landings[0]) & (fl.gap > 5e-6)
     s = t[airborne] - t_l
     v_fit, z_fit = np.polyfit(s, z[airborne] + G / 2 * s ** 2, 1)
     assert v_fit == pytest.approx(v_l, rel=3 * W * dt)

@@ -34,7 +34,7 @@ def test_override_replaces_default(deck):
     ("restitution", "1.2", "(0.05, 1]"),
     ("poisson", "0.6", "(-1, 0.5]"),
     ("youngs", "1e6", "5e+06"),
-    ("incline", "90", "(-90, 90)"),
+    ("incline", "91", "[-90, 90]"),
     ("rolling", "2", "one of 0, 1"),
     ("seed", "1.5", "integer"),
     ("mu", "-0.1", ">= 0"),

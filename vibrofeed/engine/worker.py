@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 MARK = "@vibrofeed "
-PER_ATOM = ("id", "type", "radius", "rmass", "x", "v", "omega")
+PER_ATOM = ("id", "type", "radius", "rmass", "x", "v", "omega", "f")
 
 
 class Reporter:
@@ -58,6 +58,7 @@ def gather_parts(lmp, comm) -> dict | None:
     return {
         "id": cat["id"], "species": cat["type"], "radius": cat["radius"], "mass": cat["rmass"],
         "position": cat["x"], "velocity": cat["v"], "angular_velocity": cat["omega"],
+        "force": cat["f"],
     }
 
 

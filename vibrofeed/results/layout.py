@@ -29,6 +29,7 @@ PART_ELEMENTS = {
     "position": ("f8", 3, "m"),
     "velocity": ("f8", 3, "m s-1"),
     "angular_velocity": ("f8", 3, "rad s-1"),
+    "force": ("f8", 3, "N"),  # total force on the part at the frame's step (contacts + body forces)
     "radius": ("f8", 0, "m"),
     "mass": ("f8", 0, "kg"),
     "species": ("i4", 0, None),

@@ -136,6 +136,11 @@ class Result:
         return self._part("angular_velocity")
 
     @cached_property
+    def force(self) -> np.ndarray:
+        """(frames, slots, 3) total force on each particle [N]."""
+        return self._part("force")
+
+    @cached_property
     def radius(self) -> np.ndarray:
         return self._part("radius")
 

@@ -1,0 +1,133 @@
+"""Validation cases: one TOML file per case in ``validation/cases/``.
+
+A case names a comparison ``kind`` (see ``crosscheck.KINDS``), the deck and
+its parameters, optionally a ``[sweep]`` (one DEM run per value), the
+comparison settings and the tolerance of each quantity::
+
+    title = "Hopping: lift-off, landings and flight times"
+    kind = "flights"
+    deck = "single_part"
+    notes = "why these tolerances, what limits the DEM"
+
+    [parameters]          # deck parameters of every run
+    amp_t = 0
+    restitution = 0.1
+
+    [sweep]               # one run per value; gamma/gamma_t set amp_n/amp_t
+    gamma = [1.5, 2.5]
+
+    [compare]             # kind-specific settings
+    flights = 3
+
+    [tolerance]           # per quantity: abs (in the quantity's unit) or rel
+    landing_phase = { abs = 0.01 }
+    flight_duration = { rel = 0.02 }
+
+Tolerances live here, not in code; a case file also says why they are what
+they are (``notes``).
+"""
+
+from __future__ import annotations
+
+import itertools
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+CASES_DIR = Path(__file__).resolve().parent / "cases"
+
+# Keys (in [parameters] or [sweep]) that are not deck parameters but set one:
+# Gamma = amp w^2 / g of the normal or tangential sine.
+DERIVED_SWEEP_KEYS = {"gamma": "amp_n", "gamma_t": "amp_t"}
+
+
+class CaseError(ValueError):
+    """A case file is missing or malformed."""
+
+
+@dataclass(frozen=True)
+class Tolerance:
+    value: float
+    kind: str  # "abs" or "rel"
+
+    def passes(self, model: float, dem: float) -> bool:
+        diff = abs(dem - model)
+        if self.kind == "abs":
+            return diff <= self.value
+        return diff <= self.value * abs(model)
+
+
+@dataclass
+class Case:
+    name: str
+    path: Path
+    title: str
+    kind: str
+    deck: str
+    parameters: dict
+    sweep: dict = field(default_factory=dict)
+    compare: dict = field(default_factory=dict)
+    tolerance: dict = field(default_factory=dict)
+    notes: str = ""
+    labels: tuple = ()
+
+    def points(self) -> list[dict]:
+        """The sweep's points: dicts of sweep key -> value (one empty dict if no sweep)."""
+        if not self.sweep:
+            return [{}]
+        keys = list(self.sweep)
+        return [dict(zip(keys, values)) for values in itertools.product(*self.sweep.values())]
+
+    def tolerance_of(self, quantity: str) -> Tolerance:
+        try:
+            return self.tolerance[quantity]
+        except KeyError:
+            raise CaseError(f"case {self.name}: no tolerance for {quantity!r} in [tolerance]") from None
+
+
+def _tolerance(case: str, name: str, spec) -> Tolerance:
+    if not isinstance(spec, dict) or len(spec.keys() & {"abs", "rel"}) != 1:
+        raise CaseError(f"case {case}: tolerance {name} must be {{ abs = x }} or {{ rel = x }}")
+    kind = "abs" if "abs" in spec else "rel"
+    value = float(spec[kind])
+    if value < 0:
+        raise CaseError(f"case {case}: tolerance {name} must be >= 0")
+    return Tolerance(value, kind)
+
+
+def load(path: str | Path) -> Case:
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text())
+    except OSError as exc:
+        raise CaseError(f"cannot read case file {path}: {exc.strerror}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise CaseError(f"case file {path} is not valid TOML: {exc}") from None
+    name = path.stem
+    for key in ("title", "kind", "deck"):
+        if key not in data:
+            raise CaseError(f"case {name}: missing {key!r}")
+    sweep = data.get("sweep", {})
+    for key, values in sweep.items():
+        if not isinstance(values, list) or not values:
+            raise CaseError(f"case {name}: sweep {key} must be a non-empty list")
+    return Case(
+        name=name, path=path, title=data["title"], kind=data["kind"], deck=data["deck"],
+        parameters=dict(data.get("parameters", {})), sweep=dict(sweep),
+        compare=dict(data.get("compare", {})),
+        tolerance={k: _tolerance(name, k, v) for k, v in data.get("tolerance", {}).items()},
+        notes=data.get("notes", "").strip(), labels=tuple(data.get("labels", ())))
+
+
+def available() -> list[str]:
+    return sorted(p.stem for p in CASES_DIR.glob("*.toml"))
+
+
+def find(name: str) -> Case:
+    path = Path(name)
+    if path.suffix == ".toml" and path.is_file():
+        return load(path)
+    candidate = CASES_DIR / f"{name}.toml"
+    if not candidate.is_file():
+        raise CaseError(f"no validation case {name!r}; cases: {', '.join(available())}")
+    return load(candidate)

@@ -1,0 +1,358 @@
+"""Run a validation case: the DEM and the model on the same parameters.
+
+``CrossCheck(case, out_dir).run()`` runs the deck once per sweep point through
+``vibrofeed run`` (in parallel with ``jobs`` > 1), evaluates the model of
+``deck_models`` on the same parameters, and returns one :class:`Row` per
+compared quantity plus the PNG figures it wrote. The comparison itself is the
+case's ``kind``:
+
+``flights``
+    hopping part: lift-off phase, landing times and flight durations of the
+    first flights from a common start (part resting on the plate at t = 0);
+``transport``
+    steady mean conveying speed along the track (any waveform, incline);
+``period``
+    period of the hopping attractor (1, 2, ...) after a transient;
+``vertical``
+    net climbing speed of a part squeezed against a vertical vibrating wall.
+"""
+
+from __future__ import annotations
+
+import math
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from . import deck_models as dm
+from .cases import DERIVED_SWEEP_KEYS, Case, CaseError
+
+
+@dataclass
+class Row:
+    case: str
+    quantity: str
+    model: float
+    dem: float
+    tolerance: float
+    tolerance_type: str  # "abs" or "rel"
+    unit: str = ""
+
+    @property
+    def rel_diff(self) -> float:
+        if self.model == 0:
+            return math.inf if self.dem != 0 else 0.0
+        return (self.dem - self.model) / abs(self.model)
+
+    @property
+    def passed(self) -> bool:
+        diff = abs(self.dem - self.model)
+        limit = self.tolerance if self.tolerance_type == "abs" else self.tolerance * abs(self.model)
+        return bool(diff <= limit)
+
+    def as_dict(self) -> dict:
+        return {"case": self.case, "quantity": self.quantity, "model": self.model,
+                "dem": self.dem, "rel_diff": self.rel_diff, "tolerance": self.tolerance,
+                "tolerance_type": self.tolerance_type, "unit": self.unit, "passed": self.passed}
+
+
+@dataclass
+class Run:
+    """One DEM run of a case: sweep values, full deck parameters, result file."""
+    label: str
+    values: dict
+    params: dict  # name -> string, as given to the deck (defaults included)
+    output: Path
+
+    def number(self, name: str) -> float:
+        return float(self.params[name])
+
+
+@dataclass
+class Outcome:
+    case: Case
+    rows: list = field(default_factory=list)
+    figures: list = field(default_factory=list)
+
+    @property
+    def passed(self) -> bool:
+        return all(r.passed for r in self.rows)
+
+
+def _label(values: dict) -> str:
+    return ",".join(f"{k}={v:g}" if isinstance(v, (int, float)) else f"{k}={v}"
+                    for k, v in values.items()) or "base"
+
+
+class CrossCheck:
+    """Run one case; ``reuse`` skips DEM runs whose complete result already
+    holds exactly the requested parameters."""
+
+    def __init__(self, case: Case, out_dir, ranks: int = 1, jobs: int = 1, reuse: bool = False,
+                 on_run: Callable[[str, str], None] | None = None):
+        if case.kind not in KINDS:
+            raise CaseError(f"case {case.name}: unknown kind {case.kind!r} ({', '.join(KINDS)})")
+        self.case, self.ranks, self.jobs, self.reuse = case, ranks, max(1, jobs), reuse
+        self.dir = Path(out_dir) / case.name
+        self.on_run = on_run or (lambda label, state: None)
+
+    # -- runs ---------------------------------------------------------------------
+    def plan(self) -> list[Run]:
+        from vibrofeed.decks import Deck
+        from vibrofeed.parameters import resolve
+
+        deck = Deck.find(self.case.deck)
+        runs = []
+        for values in self.case.points():
+            merged = {**self.case.parameters, **values}
+            freq = float(merged.get("freq", deck.variables["freq"].default))
+            given = {}
+            for key, value in merged.items():
+                if key in DERIVED_SWEEP_KEYS:  # Gamma given: the deck wants an amplitude
+                    given[DERIVED_SWEEP_KEYS[key]] = repr(dm.amp_from_gamma(float(value), freq))
+                else:
+                    given[key] = str(value)
+            label = _label(values)
+            params = resolve(deck, given)
+            if self.case.kind == "vertical":
+                check_vertical_case(params)
+            runs.append(Run(label, values, params, self.dir / f"{label}.h5"))
+        return runs
+
+    def _dem(self, run: Run) -> None:
+        from vibrofeed.decks import Deck
+        from vibrofeed.engine.runner import run_deck
+
+        if self.reuse and _matches(run.output, run.params):
+            self.on_run(run.label, "reused")
+            return
+        self.on_run(run.label, "running")
+        run_deck(Deck.find(self.case.deck), run.params, run.output, ranks=self.ranks)
+        self.on_run(run.label, "done")
+
+    def run(self) -> Outcome:
+        runs = self.plan()
+        self.dir.mkdir(parents=True, exist_ok=True)
+        with ThreadPoolExecutor(self.jobs) as pool:
+            for future in [pool.submit(self._dem, r) for r in runs]:
+                future.result()  # a failed run raises here, after the others finished
+        outcome = Outcome(self.case)
+        KINDS[self.case.kind](self.case, runs, outcome, self.dir)
+        return outcome
+
+
+def _matches(path: Path, params: dict) -> bool:
+    from vibrofeed.results.reader import Result, ResultError
+
+    if not path.is_file():
+        return False
+    try:
+        with Result(path) as r:
+            recorded = {k: v for k, v in r.parameters.items()}
+    except ResultError:
+        return False
+    for name, value in params.items():
+        have = recorded.get(name)
+        try:
+            same = float(value) == float(have)
+        except (TypeError, ValueError):
+            same = str(value) == str(have)
+        if not same:
+            return False
+    return True
+
+
+def _row(case: Case, quantity: str, label: str, model: float, dem: float, unit: str = "") -> Row:
+    tol = case.tolerance_of(quantity)
+    name = f"{quantity}[{label}]" if label != "base" else quantity
+    return Row(case.name, name, float(model), float(dem), tol.value, tol.kind, unit)
+
+
+# ----------------------------------------------------------------- kind: flights
+def model_flights(events, t_end: float) -> list[tuple[float, float, str]]:
+    """(launch, landing, kind) of the model's flights: a flight starts at a
+    lift-off ('launch') or at an impact the part rebounds from, ends at the
+    next impact."""
+    out, start = [], None
+    for ev in events:
+        if ev.t > t_end:
+            break
+        if ev.kind == "impact":
+            if start is not None:
+                out.append((start[0], ev.t, start[1]))
+            start = (ev.t, "rebound") if ev.info.get("rebound") else None
+        elif ev.kind == "launch":
+            start = (ev.t, "lift-off")
+        elif ev.kind == "rest":
+            start = None
+    return out
+
+
+def _flights(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
+    from vibrofeed.postproc.flights import Flights
+    from vibrofeed.results.reader import Result
+
+    from .part_on_surface import simulate
+    from .plots import plot_flights
+
+    n_compare = int(case.compare.get("flights", 3))
+    min_flight = float(case.compare.get("min_flight", 0.05))  # [periods]
+    realised = case.compare.get("restitution", "nominal") == "realised"
+    panels = []
+    for run in runs:
+        p = dict(run.params)
+        T = 1.0 / run.number("freq")
+        with Result(run.output) as r:
+            fl = Flights().compute(r)
+            t_end = float(r.time[-1])
+            dem_t, dem_gap = fl.time, fl.gap
+        if realised:
+            # The DEM's e: what its contact realises at the first impact.
+            e_dem = fl.restitution(0) if len(fl.landings) else 0.0
+            out.rows.append(_row(case, "restitution", run.label, float(p["restitution"]), e_dem))
+            p["restitution"] = repr(e_dem)
+        traj = simulate(dm.waveform(p), dm.part(p), n_periods=t_end / T,
+                        incline=run.number("incline"), samples_per_period=400)
+        model = [f for f in model_flights(traj.events, t_end) if f[1] - f[0] >= min_flight * T]
+        dem = [(a, b, k) for (a, b), k in zip(fl.flights, fl.kinds) if b - a >= min_flight * T]
+        if not model or not dem:
+            raise CaseError(f"case {case.name} [{run.label}]: no flight longer than "
+                            f"{min_flight} periods (model {len(model)}, DEM {len(dem)})")
+        if "launch_phase" in case.tolerance and model[0][2] == "lift-off":
+            out.rows.append(_row(case, "launch_phase", run.label, model[0][0] / T, dem[0][0] / T, "T"))
+        for k, (m, d) in enumerate(zip(model[:n_compare], dem[:n_compare]), start=1):
+            out.rows.append(_row(case, "landing_time", f"{run.label},#{k}", m[1] / T, d[1] / T, "T"))
+            out.rows.append(_row(case, "flight_duration", f"{run.label},#{k}",
+                                 (m[1] - m[0]) / T, (d[1] - d[0]) / T, "T"))
+        radius = run.number("radius")
+        panels.append(dict(label=run.label, T=T, dem_t=dem_t, dem_gap=dem_gap,
+                           model_t=traj.t, model_gap=traj.z - traj.zs, radius=radius,
+                           surface_t=traj.t, surface_z=traj.zs))
+    out.figures.append(plot_flights(case, panels, fig_dir / "trajectories.png"))
+
+
+# --------------------------------------------------------------- kind: transport
+def _transport(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
+    from vibrofeed.postproc.transport import Transport
+    from vibrofeed.results.reader import Result
+
+    from .part_on_surface import mean_velocity
+    from .plots import plot_speed_curve
+
+    transient = float(case.compare.get("transient_periods", 10))
+    points = []
+    for run in runs:
+        p = run.params
+        T = 1.0 / run.number("freq")
+        with Result(run.output) as r:
+            dem = Transport(start=transient * T).compute(r).mean_velocity
+        model = mean_velocity(dm.waveform(p), dm.part(p), incline=run.number("incline")).velocity
+        out.rows.append(_row(case, "mean_speed", run.label, model, dem, "m/s"))
+        points.append((run, model, dem))
+    axis = case.compare.get("plot_axis") or (next(iter(case.sweep)) if case.sweep else None)
+    if axis is not None:
+        out.figures.append(plot_speed_curve(case, runs, points, axis, fig_dir / "speed.png"))
+
+
+# ------------------------------------------------------------------ kind: period
+def landing_period(landings: np.ndarray, T: float, t_from: float, max_period: int = 8,
+                   tol: float = 0.005) -> int:
+    """Smallest p such that every landing after ``t_from`` (but the last p
+    periods) has a landing p periods later, to ``tol`` periods; 0 if none."""
+    L = np.asarray(landings) / T
+    L = L[L >= t_from / T]
+    if len(L) < 2:
+        return 0
+    for p in range(1, max_period + 1):
+        head = L[L <= L[-1] - p + tol]
+        if len(head) < 2:
+            break
+        if all(np.min(np.abs(L - (x + p))) <= tol for x in head):
+            return p
+    return 0
+
+
+def _period(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
+    from vibrofeed.postproc.flights import Flights
+    from vibrofeed.results.reader import Result
+
+    from .hopping import bifurcation_diagram
+    from .part_on_surface import simulate
+    from .plots import plot_bifurcation
+
+    transient = float(case.compare.get("transient_periods", 20))
+    min_flight = float(case.compare.get("min_flight", 0.05))
+    tol = float(case.compare.get("repeat_tol", 0.005))
+    dem_points = []
+    for run in runs:
+        p = run.params
+        T = 1.0 / run.number("freq")
+        gamma = dm.gamma_from_amp(run.number("amp_n"), run.number("freq"))
+        with Result(run.output) as r:
+            fl = Flights().compute(r)
+            t_end = float(r.time[-1])
+        keep = fl.durations >= min_flight * T
+        dem_landings = fl.flights[keep, 1]
+        traj = simulate(dm.waveform(p), dm.part(p), n_periods=t_end / T, samples_per_period=50)
+        model_landings = np.array([b for a, b, _ in model_flights(traj.events, t_end)
+                                   if b - a >= min_flight * T])
+        model_p = landing_period(model_landings, T, transient * T, tol=tol)
+        dem_p = landing_period(dem_landings, T, transient * T, tol=tol)
+        out.rows.append(_row(case, "period", run.label, model_p, dem_p, "T"))
+        late = fl.flights[keep & (fl.flights[:, 0] >= transient * T)]
+        dem_points.append((gamma, (late[:, 1] - late[:, 0]) / T))
+    gammas = case.compare.get("diagram_gammas")
+    if gammas:
+        grid = np.linspace(gammas[0], gammas[1], int(gammas[2]))
+        e = float(runs[0].params["restitution"])
+        diagram = bifurcation_diagram(grid, e, min_jump=min_flight)
+        out.figures.append(plot_bifurcation(case, grid, diagram, dem_points,
+                                            fig_dir / "bifurcation.png"))
+
+
+# ---------------------------------------------------------------- kind: vertical
+def _vertical(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
+    from vibrofeed.postproc.transport import Transport
+    from vibrofeed.results.reader import Result
+
+    from .plots import plot_vertical
+    from .vertical import periodic_transport, simulate
+
+    transient = float(case.compare.get("transient_periods", 5))
+    panels = []
+    for run in runs:
+        p = run.params
+        T = 1.0 / run.number("freq")
+        surface = dm.along_track(dm.waveform(p))
+        contact = dm.vertical_contact(p)
+        with Result(run.output) as r:
+            dem = Transport(start=transient * T).compute(r)
+            t, x = r.track(int(r.part_ids[0]))
+            xs = r.surface_position[:, 0]
+            t_end = float(r.time[-1])
+        n = max(int(round(t_end / T)), 3)
+        model = periodic_transport(surface, contact, n_periods=n, skip_periods=int(transient))
+        out.rows.append(_row(case, "net_speed", run.label, model.speed, dem.mean_velocity, "m/s"))
+        traj = simulate(surface, contact, t_end=t_end, t_eval=np.linspace(0, t_end, 2000))
+        panels.append(dict(label=run.label, T=T, dem_t=t, dem_x=x[:, 0] - x[0, 0], surface_x=xs,
+                           model_t=traj.t, model_x=traj.z - traj.z[0]))
+    out.figures.append(plot_vertical(case, panels, fig_dir / "trajectories.png"))
+
+
+def check_vertical_case(params: dict) -> None:
+    """Refuse a vertical-transport case the feasibility bounds rule out."""
+    from .vertical import check_feasible
+
+    wf = dm.waveform(params)
+    a_max = float(np.max(np.abs(wf.acceleration(np.linspace(0, wf.period, 4001))[0])))
+    contact = dm.vertical_contact(params)
+    try:
+        check_feasible(contact.mass, contact.normal_force, contact.mu_s, a_max)
+    except ValueError as exc:
+        raise CaseError(f"infeasible vertical transport: {exc}") from None
+
+
+KINDS = {"flights": _flights, "transport": _transport, "period": _period, "vertical": _vertical}

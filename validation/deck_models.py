@@ -1,0 +1,91 @@
+"""The analytic model of a deck run: the same surface motion and contact.
+
+One place translates the deck vocabulary (README, "Decks") into the model
+objects of this package, so the DEM and the model of a validation case are
+driven by the same numbers. The waveform formulas of
+``decks/single_part.liggghts`` and the classes here are checked against each
+other through the engine (tests/engine/test_waveform_decks.py).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Mapping
+
+from .part_on_surface import PartParams
+from .vertical import Contact
+from .waveforms import (CoulombPumpWaveform, PiecewiseConstantAccel, SineWaveform,
+                        SquareWaveAccel, StickSlipWaveform, Waveform)
+
+G = 9.81  # the decks' gravity
+
+SINE, SQUARE, STICK_SLIP, COULOMB_PUMP = 0, 1, 2, 3
+
+
+def _f(p: Mapping, name: str, default=None) -> float:
+    value = p.get(name, default)
+    if value is None:
+        raise KeyError(f"parameter {name!r} is needed")
+    return float(value)
+
+
+def amp_from_gamma(gamma: float, freq: float, g: float = G) -> float:
+    """Displacement amplitude [m] of a sine with peak acceleration gamma g."""
+    return gamma * g / (2 * math.pi * freq) ** 2
+
+
+def gamma_from_amp(amp: float, freq: float, g: float = G) -> float:
+    return amp * (2 * math.pi * freq) ** 2 / g
+
+
+def waveform(p: Mapping) -> Waveform:
+    """The surface waveform of deck parameters ``p`` (freq, amp_t, amp_n,
+    phase, waveform, duty), as the deck moves the plate."""
+    kind = int(_f(p, "waveform", SINE))
+    freq, amp_t, amp_n = _f(p, "freq"), _f(p, "amp_t", 0.0), _f(p, "amp_n", 0.0)
+    phase, duty = _f(p, "phase", 0.0), _f(p, "duty", 0.7)
+    if kind == SINE:
+        return SineWaveform(freq, amp_t, amp_n, phase)
+    if kind == SQUARE:
+        # square-wave acceleration a has displacement amplitude a / (32 f^2)
+        return SquareWaveAccel(freq, 32 * freq ** 2 * amp_t, 32 * freq ** 2 * amp_n, phase)
+    if kind == STICK_SLIP:
+        # zero-mean triangular velocity of peak vp has displacement amplitude vp / (8 f)
+        return StickSlipWaveform.from_peak_speed(freq, 8 * amp_t * freq, duty)
+    if kind == COULOMB_PUMP:
+        T = 1.0 / freq
+        tb = (1 - duty) * T / 2
+        accel = 2 * amp_t / (tb ** 2 * (1 - tb / T) ** 2)
+        return CoulombPumpWaveform(freq, accel * tb ** 2 / T, accel)
+    raise ValueError(f"waveform must be 0, 1, 2 or 3, got {kind}")
+
+
+def part(p: Mapping) -> PartParams:
+    """The model part of a deck run: LIGGGHTS has one friction coefficient,
+    so mu_s = mu_k = mu; e = restitution."""
+    mu = _f(p, "mu")
+    return PartParams(mu_s=mu, mu_k=mu, e=min(_f(p, "restitution"), 0.999), mass=mass(p))
+
+
+def mass(p: Mapping) -> float:
+    return 4.0 / 3.0 * math.pi * _f(p, "radius") ** 3 * _f(p, "density")
+
+
+def vertical_contact(p: Mapping) -> Contact:
+    """The vertical-transport contact of a deck run with incline = 90 and a
+    pressing ``normal_force``: mu_s = mu_k = mu."""
+    mu = _f(p, "mu")
+    return Contact(mass=mass(p), normal_force=_f(p, "normal_force"), mu_s=mu, mu_k=mu, g=G)
+
+
+def along_track(wf: Waveform):
+    """The along-track (x) motion of a waveform as a one-axis surface for the
+    vertical-transport model (x is up the wall when incline = 90)."""
+    from .surface_motion import CallableSurface
+
+    breaks = []
+    if isinstance(wf, PiecewiseConstantAccel):
+        breaks = list(wf.starts)
+    return CallableSurface(lambda t: wf.displacement(t)[0], lambda t: wf.velocity(t)[0],
+                           lambda t: wf.acceleration(t)[0], breakpoints=breaks,
+                           period=wf.period)

@@ -1,0 +1,109 @@
+"""Figures of `vibrofeed validate`: DEM overlaid on the model (PNG)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")  # files only, no display needed
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+DEM_STYLE = dict(color="tab:red", lw=1.2, label="DEM (LIGGGHTS)")
+MODEL_STYLE = dict(color="black", lw=1.0, ls="--", label="model")
+SURFACE_STYLE = dict(color="tab:blue", lw=0.8, alpha=0.7, label="surface")
+
+
+def _save(fig, path: Path) -> Path:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=120, bbox_inches="tight")
+    plt.close(fig)
+    return path
+
+
+def plot_flights(case, panels: list[dict], path: Path) -> Path:
+    """Height of the part's lowest point and of the surface vs time, per sweep point."""
+    fig, axes = plt.subplots(len(panels), 1, figsize=(8, 2.3 * len(panels)), squeeze=False)
+    for ax, p in zip(axes[:, 0], panels):
+        T, um = p["T"], 1e6
+        surf = np.interp(p["dem_t"], p["surface_t"], p["surface_z"])
+        ax.plot(p["surface_t"] / T, p["surface_z"] * um, **SURFACE_STYLE)
+        ax.plot(p["dem_t"] / T, (p["dem_gap"] + surf) * um, **DEM_STYLE)
+        ax.plot(p["model_t"] / T, (p["model_gap"] + p["surface_z"]) * um, **MODEL_STYLE)
+        ax.set_ylabel("height [um]")
+        ax.set_title(p["label"], fontsize=9, loc="left")
+    axes[-1, 0].set_xlabel("t / T")
+    axes[0, 0].legend(fontsize=8, loc="upper right")
+    fig.suptitle(case.title, fontsize=10)
+    return _save(fig, path)
+
+
+def plot_speed_curve(case, runs, points, axis: str, path: Path) -> Path:
+    """Mean conveying speed vs the swept quantity: model curve, DEM points."""
+    from . import deck_models as dm
+    from .part_on_surface import mean_velocity
+
+    xs = np.array([float(r.values[axis]) for r, _, _ in points])
+    fig, ax = plt.subplots(figsize=(6, 4))
+    lo, hi = xs.min(), xs.max()
+    if hi > lo and len(points) > 1:
+        # dense model curve between the swept values, other parameters as the first run
+        base = dict(points[0][0].params)
+        grid = np.linspace(lo, hi, 25)
+        curve = []
+        for x in grid:
+            p = dict(base)
+            if axis in ("gamma", "gamma_t"):
+                target = "amp_n" if axis == "gamma" else "amp_t"
+                p[target] = repr(dm.amp_from_gamma(x, float(p["freq"])))
+            else:
+                p[axis] = repr(x)
+            curve.append(mean_velocity(dm.waveform(p), dm.part(p), incline=float(p["incline"])).velocity)
+        ax.plot(grid, np.array(curve) * 1e3, **MODEL_STYLE)
+    else:
+        ax.plot(xs, np.array([m for _, m, _ in points]) * 1e3, "kx", label="model")
+    tol = case.tolerance_of("mean_speed")
+    dem = np.array([d for _, _, d in points]) * 1e3
+    model = np.array([m for _, m, _ in points]) * 1e3
+    err = tol.value * np.abs(model) if tol.kind == "rel" else np.full_like(model, tol.value * 1e3)
+    ax.errorbar(xs, model, yerr=err, fmt="none", ecolor="gray", capsize=3, label="tolerance")
+    ax.plot(xs, dem, "o", color=DEM_STYLE["color"], label=DEM_STYLE["label"])
+    ax.axhline(0, color="gray", lw=0.5)
+    ax.set_xlabel(axis)
+    ax.set_ylabel("mean speed along the track [mm/s]")
+    ax.set_title(case.title, fontsize=10)
+    ax.legend(fontsize=8)
+    return _save(fig, path)
+
+
+def plot_bifurcation(case, grid, diagram, dem_points, path: Path) -> Path:
+    """Jump lengths (flight durations in periods) vs Gamma: model and DEM."""
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for g, jumps in zip(grid, diagram):
+        ax.plot(np.full(len(jumps), g), jumps, ",", color="black")
+    ax.plot([], [], ".", color="black", label="model")
+    for g, jumps in dem_points:
+        ax.plot(np.full(len(jumps), g), jumps, "o", mfc="none", color=DEM_STYLE["color"], ms=5)
+    ax.plot([], [], "o", mfc="none", color=DEM_STYLE["color"], label=DEM_STYLE["label"])
+    ax.set_xlabel("Gamma = amp_n w^2 / g")
+    ax.set_ylabel("jump length [periods]")
+    ax.set_title(case.title, fontsize=10)
+    ax.legend(fontsize=8)
+    return _save(fig, path)
+
+
+def plot_vertical(case, panels: list[dict], path: Path) -> Path:
+    """Part displacement up the wall vs time: DEM, model and the wall itself."""
+    fig, axes = plt.subplots(len(panels), 1, figsize=(8, 2.5 * len(panels)), squeeze=False)
+    for ax, p in zip(axes[:, 0], panels):
+        T = p["T"]
+        ax.plot(p["dem_t"] / T, p["surface_x"] * 1e3, **SURFACE_STYLE)
+        ax.plot(p["dem_t"] / T, p["dem_x"] * 1e3, **DEM_STYLE)
+        ax.plot(p["model_t"] / T, p["model_x"] * 1e3, **MODEL_STYLE)
+        ax.set_ylabel("up the wall [mm]")
+        ax.set_title(p["label"], fontsize=9, loc="left")
+    axes[-1, 0].set_xlabel("t / T")
+    axes[0, 0].legend(fontsize=8)
+    fig.suptitle(case.title, fontsize=10)
+    return _save(fig, path)
