@@ -214,6 +214,26 @@ class Flights:
         return (float(up) if up is not None else float(t[b + 1])), "rebound"
 
     # -- impacts ----------------------------------------------------------------------
+    def impacts(self) -> np.ndarray:
+        """(n, 3) [time, w_in, e] of every landing: relative normal speed
+        before the impact (< 0) and the restitution realised there."""
+        rows = []
+        for k, t_land in enumerate(self.landings):
+            i = np.searchsorted(self.time, t_land) - 1
+            w_in = self._vz[i] - self._g * (t_land - self.time[i]) - _hermite_velocity(self, i, t_land)
+            rows.append((t_land, w_in, self.restitution(k)))
+        return np.array(rows).reshape(-1, 3)
+
+    def realised_restitution(self) -> float:
+        """The restitution this contact realises: the median over the impacts
+        at least half as fast as the fastest (slow touch-downs at the end of a
+        chattering sequence cannot rebound measurably); NaN without impacts."""
+        imp = self.impacts()
+        if not len(imp):
+            return float("nan")
+        fast = imp[np.abs(imp[:, 1]) >= 0.5 * np.abs(imp[:, 1]).max()]
+        return float(np.median(fast[:, 2]))
+
     def restitution(self, k: int = 0) -> float:
         """Restitution realised at the k-th landing: relative normal speed just
         after the impact over just before (0 if the part does not leave within

@@ -14,7 +14,8 @@ comparison settings and the tolerance of each quantity::
     restitution = 0.1
 
     [sweep]               # one run per value; gamma/gamma_t set amp_n/amp_t
-    gamma = [1.5, 2.5]
+    gamma = [1.5, 2.5]    # several keys: every combination, or with
+                          # zip = true (top level) the i-th values together
 
     [compare]             # kind-specific settings
     flights = 3
@@ -69,14 +70,15 @@ class Case:
     compare: dict = field(default_factory=dict)
     tolerance: dict = field(default_factory=dict)
     notes: str = ""
-    labels: tuple = ()
+    zip_sweep: bool = False
 
     def points(self) -> list[dict]:
         """The sweep's points: dicts of sweep key -> value (one empty dict if no sweep)."""
         if not self.sweep:
             return [{}]
         keys = list(self.sweep)
-        return [dict(zip(keys, values)) for values in itertools.product(*self.sweep.values())]
+        combos = zip(*self.sweep.values()) if self.zip_sweep else itertools.product(*self.sweep.values())
+        return [dict(zip(keys, values)) for values in combos]
 
     def tolerance_of(self, quantity: str) -> Tolerance:
         try:
@@ -111,12 +113,15 @@ def load(path: str | Path) -> Case:
     for key, values in sweep.items():
         if not isinstance(values, list) or not values:
             raise CaseError(f"case {name}: sweep {key} must be a non-empty list")
+    zip_sweep = bool(data.get("zip", False))
+    if zip_sweep and len({len(v) for v in sweep.values()}) > 1:
+        raise CaseError(f"case {name}: with zip = true every sweep list needs the same length")
     return Case(
         name=name, path=path, title=data["title"], kind=data["kind"], deck=data["deck"],
         parameters=dict(data.get("parameters", {})), sweep=dict(sweep),
         compare=dict(data.get("compare", {})),
         tolerance={k: _tolerance(name, k, v) for k, v in data.get("tolerance", {}).items()},
-        notes=data.get("notes", "").strip(), labels=tuple(data.get("labels", ())))
+        notes=data.get("notes", "").strip(), zip_sweep=zip_sweep)
 
 
 def available() -> list[str]:

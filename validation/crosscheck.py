@@ -112,7 +112,7 @@ class CrossCheck:
             given = {}
             for key, value in merged.items():
                 if key in DERIVED_SWEEP_KEYS:  # Gamma given: the deck wants an amplitude
-                    given[DERIVED_SWEEP_KEYS[key]] = repr(dm.amp_from_gamma(float(value), freq))
+                    given[DERIVED_SWEEP_KEYS[key]] = repr(float(dm.amp_from_gamma(float(value), freq)))
                 else:
                     given[key] = str(value)
             label = _label(values)
@@ -171,6 +171,19 @@ def _row(case: Case, quantity: str, label: str, model: float, dem: float, unit: 
     return Row(case.name, name, float(model), float(dem), tol.value, tol.kind, unit)
 
 
+def _realised_restitution(case: Case, run: Run, result, out: Outcome) -> float:
+    """The DEM's e: what its contact realises at the run's impacts (median
+    over the faster half), recorded as a row against the nominal value."""
+    from vibrofeed.postproc.flights import Flights
+
+    e_dem = Flights().compute(result).realised_restitution()
+    if e_dem != e_dem:
+        raise CaseError(f"case {case.name} [{run.label}]: restitution = \"realised\" needs an "
+                        "impact, and the part never lands")
+    out.rows.append(_row(case, "restitution", run.label, run.number("restitution"), e_dem))
+    return e_dem
+
+
 # ----------------------------------------------------------------- kind: flights
 def model_flights(events, t_end: float) -> list[tuple[float, float, str]]:
     """(launch, landing, kind) of the model's flights: a flight starts at a
@@ -210,10 +223,8 @@ def _flights(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
             t_end = float(r.time[-1])
             dem_t, dem_gap = fl.time, fl.gap
         if realised:
-            # The DEM's e: what its contact realises at the first impact.
-            e_dem = fl.restitution(0) if len(fl.landings) else 0.0
-            out.rows.append(_row(case, "restitution", run.label, float(p["restitution"]), e_dem))
-            p["restitution"] = repr(e_dem)
+            with Result(run.output) as r:
+                p["restitution"] = repr(_realised_restitution(case, run, r, out))
         traj = simulate(dm.waveform(p), dm.part(p), n_periods=t_end / T,
                         incline=run.number("incline"), samples_per_period=400)
         model = [f for f in model_flights(traj.events, t_end) if f[1] - f[0] >= min_flight * T]
@@ -245,10 +256,12 @@ def _transport(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None
     transient = float(case.compare.get("transient_periods", 10))
     points = []
     for run in runs:
-        p = run.params
+        p = dict(run.params)
         T = 1.0 / run.number("freq")
         with Result(run.output) as r:
             dem = Transport(start=transient * T).compute(r).mean_velocity
+            if case.compare.get("restitution", "nominal") == "realised":
+                p["restitution"] = repr(_realised_restitution(case, run, r, out))
         model = mean_velocity(dm.waveform(p), dm.part(p), incline=run.number("incline")).velocity
         out.rows.append(_row(case, "mean_speed", run.label, model, dem, "m/s"))
         points.append((run, model, dem))
@@ -286,14 +299,18 @@ def _period(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
     transient = float(case.compare.get("transient_periods", 20))
     min_flight = float(case.compare.get("min_flight", 0.05))
     tol = float(case.compare.get("repeat_tol", 0.005))
-    dem_points = []
+    realised = case.compare.get("restitution", "nominal") == "realised"
+    dem_points, e_values = [], []
     for run in runs:
-        p = run.params
+        p = dict(run.params)
         T = 1.0 / run.number("freq")
         gamma = dm.gamma_from_amp(run.number("amp_n"), run.number("freq"))
         with Result(run.output) as r:
             fl = Flights().compute(r)
             t_end = float(r.time[-1])
+            if realised:
+                p["restitution"] = repr(_realised_restitution(case, run, r, out))
+        e_values.append(float(p["restitution"]))
         keep = fl.durations >= min_flight * T
         dem_landings = fl.flights[keep, 1]
         traj = simulate(dm.waveform(p), dm.part(p), n_periods=t_end / T, samples_per_period=50)
@@ -307,7 +324,7 @@ def _period(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
     gammas = case.compare.get("diagram_gammas")
     if gammas:
         grid = np.linspace(gammas[0], gammas[1], int(gammas[2]))
-        e = float(runs[0].params["restitution"])
+        e = float(np.mean(e_values))
         diagram = bifurcation_diagram(grid, e, min_jump=min_flight)
         out.figures.append(plot_bifurcation(case, grid, diagram, dem_points,
                                             fig_dir / "bifurcation.png"))
@@ -335,7 +352,7 @@ def _vertical(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
             t_end = float(r.time[-1])
         n = max(int(round(t_end / T)), 3)
         model = periodic_transport(surface, contact, n_periods=n, skip_periods=int(transient))
-        out.rows.append(_row(case, "net_speed", run.label, model.speed, dem.mean_velocity, "m/s"))
+        out.rows.append(_row(case, "net_speed", run.label, model.net_speed, dem.mean_velocity, "m/s"))
         traj = simulate(surface, contact, t_end=t_end, t_eval=np.linspace(0, t_end, 2000))
         panels.append(dict(label=run.label, T=T, dem_t=t, dem_x=x[:, 0] - x[0, 0], surface_x=xs,
                            model_t=traj.t, model_x=traj.z - traj.z[0]))

@@ -56,9 +56,9 @@ def plot_speed_curve(case, runs, points, axis: str, path: Path) -> Path:
             p = dict(base)
             if axis in ("gamma", "gamma_t"):
                 target = "amp_n" if axis == "gamma" else "amp_t"
-                p[target] = repr(dm.amp_from_gamma(x, float(p["freq"])))
+                p[target] = repr(float(dm.amp_from_gamma(x, float(p["freq"]))))
             else:
-                p[axis] = repr(x)
+                p[axis] = repr(float(x))
             curve.append(mean_velocity(dm.waveform(p), dm.part(p), incline=float(p["incline"])).velocity)
         ax.plot(grid, np.array(curve) * 1e3, **MODEL_STYLE)
     else:

@@ -81,7 +81,24 @@ def _fmt(x: float) -> str:
     return f"{x:.6g}"
 
 
+def _table(rows) -> list[str]:
+    table = [("case", "quantity", "model", "DEM", "rel diff", "tolerance", "")]
+    for r in rows:
+        tol = f"{_fmt(r.tolerance)} {r.unit}".strip() if r.tolerance_type == "abs" \
+            else f"{r.tolerance:.1%}"
+        table.append((r.case, r.quantity, _fmt(r.model), _fmt(r.dem), f"{r.rel_diff:+.2%}",
+                      tol, "pass" if r.passed else "FAIL"))
+    widths = [max(len(row[i]) for row in table) for i in range(len(table[0]))]
+    lines = []
+    for k, row in enumerate(table):
+        lines.append("  ".join(c.ljust(w) for c, w in zip(row, widths)).rstrip())
+        if k == 0:
+            lines.append("  ".join("-" * w for w in widths))
+    return lines
+
+
 def cmd_validate(args) -> int:
+    from .engine.errors import RunError
     from .validation import cases as C
     from .validation.crosscheck import CrossCheck
 
@@ -93,42 +110,37 @@ def cmd_validate(args) -> int:
             print(f"{name:<{width}}  [{case.kind}] {case.title}")
         return 0
     selected = [C.find(n) for n in (args.cases or C.available())]
-    out_dir = args.output
-    rows, figures, failed_cases = [], [], []
+    say = (lambda *a: None) if args.json else (lambda text: print(text, file=sys.stderr))
+    rows, figures, failed, errors = [], [], [], []
     for case in selected:
-        if not args.json:
-            print(f"== {case.name}: {case.title}", file=sys.stderr)
-
-        def on_run(label, state, case=case):
-            if not args.json:
-                print(f"   {case.name} [{label}]: {state}", file=sys.stderr)
-
-        outcome = CrossCheck(case, out_dir, ranks=args.ranks, jobs=args.jobs, reuse=args.reuse,
-                             on_run=on_run).run()
+        say(f"== {case.name}: {case.title}")
+        check = CrossCheck(case, args.output, ranks=args.ranks, jobs=args.jobs, reuse=args.reuse,
+                           on_run=lambda label, state, c=case: say(f"   {c.name} [{label}]: {state}"))
+        try:
+            outcome = check.run()
+        except (RunError, C.CaseError) as exc:  # one broken case does not stop the others
+            errors.append(f"{case.name}: {exc}")
+            failed.append(case.name)
+            say(f"   {case.name}: error: {exc}")
+            continue
         rows += outcome.rows
         figures += outcome.figures
         if not outcome.passed:
-            failed_cases.append(case.name)
+            failed.append(case.name)
+        if not args.json and len(selected) > 1:
+            say("\n".join("   " + line for line in _table(outcome.rows)))
     if args.json:
         print(json.dumps([r.as_dict() for r in rows], indent=2))
     else:
-        table = [("case", "quantity", "model", "DEM", "rel diff", "tolerance", "")]
-        for r in rows:
-            tol = f"{_fmt(r.tolerance)} {r.unit}".strip() if r.tolerance_type == "abs" \
-                else f"{r.tolerance:.1%}"
-            table.append((r.case, r.quantity, _fmt(r.model), _fmt(r.dem), f"{r.rel_diff:+.2%}",
-                          tol, "pass" if r.passed else "FAIL"))
-        widths = [max(len(row[i]) for row in table) for i in range(len(table[0]))]
-        for k, row in enumerate(table):
-            print("  ".join(c.ljust(w) for c, w in zip(row, widths)).rstrip())
-            if k == 0:
-                print("  ".join("-" * w for w in widths))
+        print("\n".join(_table(rows)))
         n_fail = sum(not r.passed for r in rows)
         print(f"\n{len(rows) - n_fail}/{len(rows)} quantities within tolerance"
-              + (f"; failing cases: {', '.join(failed_cases)}" if failed_cases else ""))
+              + (f"; failing cases: {', '.join(failed)}" if failed else ""))
         for f in figures:
             print(f"figure: {f}")
-    return EXIT_FAILED if failed_cases else 0
+    for e in errors:
+        print(f"vibrofeed: error: case {e}", file=sys.stderr)
+    return EXIT_FAILED if failed else 0
 
 
 # ------------------------------------------------------------------ decks, params

@@ -71,8 +71,8 @@ def test_error_during_the_run_keeps_the_frames_written_before(tmp_path):
 
 
 def test_deck_without_the_driver_contract(tmp_path):
-    deck = deck_copy(tmp_path, lambda t: t.replace("variable surface_vz", "variable surface_vzz"),
+    deck = deck_copy(tmp_path, lambda t: t.replace("variable n_steps ", "variable n_steps_unused "),
                      name="nocontract")
     proc = vibrofeed("run", deck, "-o", tmp_path / "r.h5")
-    assert proc.returncode == 1 and "surface_vz" in proc.stderr and "does not define" in proc.stderr
+    assert proc.returncode == 1 and "n_steps" in proc.stderr and "does not define" in proc.stderr
     assert not (tmp_path / "r.h5").exists() and not (tmp_path / "r.h5.part").exists()

@@ -6,7 +6,7 @@ import pytest
 
 from helpers import parts, vibrofeed, write_result
 
-COMMANDS = ["run", "check", "decks", "params"]
+COMMANDS = ["run", "check", "validate", "decks", "params"]
 
 
 def test_top_level_help_lists_every_command():
@@ -72,3 +72,11 @@ def test_check_exit_status_and_json(tmp_path):
     reports = json.loads(vibrofeed("check", "--json", good, killed).stdout)
     assert [r["ok"] for r in reports] == [True, False]
     assert reports[1]["problems"][0]["where"] == "/parameters/run"
+
+
+def test_validate_list_and_unknown_case():
+    out = vibrofeed("validate", "--list", check=True).stdout
+    for name in ("hop_flights", "subhop_speed", "vertical_two_level"):
+        assert name in out
+    proc = vibrofeed("validate", "no_such_case")
+    assert proc.returncode == 2 and "no validation case 'no_such_case'" in proc.stderr

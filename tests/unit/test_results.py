@@ -158,3 +158,46 @@ def test_check_catches_corruption(tmp_path, corrupt, where):
     report = check_file(path)
     assert not report.ok
     assert any(where in p.where and p.level == "error" for p in report.problems), report.problems
+
+
+def test_frames_reach_the_disk_within_the_delay_even_when_none_follow(tmp_path):
+    import subprocess
+    import sys
+    import time
+
+    from vibrofeed.results.writer import ResultWriter
+
+    w = ResultWriter(tmp_path / "d.h5", deck_name="d", deck_path="d", deck_text="d", variables={},
+                     derived={}, engine_version="LIGGGHTS", seed=1, max_delay=0.2)
+    try:
+        w.write_frame(0, 0.0, parts([1], [[0, 0, 0]]), [0, 0, 0], [0, 0, 0])
+        w.write_frame(1, 1e-5, parts([1], [[0, 0, 1]]), [0, 0, 0], [0, 0, 0])
+        time.sleep(0.6)  # no further frame: the writer's own thread must flush
+        # Read from another process, as a user would while the run goes.
+        code = ("import h5py, sys; f = h5py.File(sys.argv[1], 'r', locking=False); "
+                f"print(len(f['{L.PARTS}/position/step']))")
+        out = subprocess.run([sys.executable, "-c", code, str(tmp_path / "d.h5")],
+                             capture_output=True, text=True, check=True).stdout
+        assert out.strip() == "2"
+    finally:
+        w.finish()
+    with Result(tmp_path / "d.h5") as r:
+        assert r.n_frames == 2 and r.position[1, 0, 2] == 1
+
+
+def test_batched_frames_with_a_growing_particle_axis(tmp_path):
+    from vibrofeed.results.writer import ResultWriter
+
+    w = ResultWriter(tmp_path / "g.h5", deck_name="d", deck_path="d", deck_text="d",
+                     variables={"freq": ("50", "Hz", "f", "50")},
+                     derived={}, engine_version="LIGGGHTS", seed=1, max_delay=60)
+    for k in range(5):  # one more particle each frame, all in one batch
+        ids = list(range(1, k + 2))
+        w.write_frame(k, k * 1e-3, parts(ids, [[i, 0, 0] for i in ids]), [0, 0, 0], [0, 0, 0])
+    w.finish()
+    with Result(tmp_path / "g.h5") as r:
+        assert r.ids.shape == (5, 5)
+        assert r.ids[0].tolist() == [1, -1, -1, -1, -1]
+        assert r.ids[4].tolist() == [1, 2, 3, 4, 5]
+        assert np.isnan(r.position[2, 3:]).all() and r.position[2, 2, 0] == 3
+    assert check_file(tmp_path / "g.h5").ok

@@ -51,10 +51,13 @@ def engine_version(log_path: str) -> str:
 def gather_parts(lmp, comm) -> dict | None:
     """All particles on rank 0 (None elsewhere), as the writer wants them."""
     local = lmp.local_atoms(PER_ATOM)
-    pieces = comm.gather(local, root=0)
-    if comm.rank != 0:
-        return None
-    cat = {k: np.concatenate([p[k] for p in pieces]) for k in PER_ATOM}
+    if comm.size == 1:
+        cat = local
+    else:
+        pieces = comm.gather(local, root=0)
+        if comm.rank != 0:
+            return None
+        cat = {k: np.concatenate([p[k] for p in pieces]) for k in PER_ATOM}
     return {
         "id": cat["id"], "species": cat["type"], "radius": cat["radius"], "mass": cat["rmass"],
         "position": cat["x"], "velocity": cat["v"], "angular_velocity": cat["omega"],

@@ -1,0 +1,45 @@
+"""Two short DEM cross-checks for the default suite (the full set: ctest -L validation).
+
+Each runs one sweep point of a validation case through `vibrofeed validate`,
+with the case file's own parameters and tolerances: a hopping part's lift-off,
+landings and flight times, and the conveying speed of a hopping part.
+"""
+
+import json
+import re
+
+import pytest
+
+from vibrofeed.validation.cases import CASES_DIR
+
+from helpers import vibrofeed
+
+
+def one_point(tmp_path, name, key, value):
+    """A copy of case `name` whose sweep is the single value `key = value`."""
+    text = (CASES_DIR / f"{name}.toml").read_text()
+    text, n = re.subn(r"(?ms)^\[sweep\]\n.*?(?=^\[)", f"[sweep]\n{key} = [{value}]\n\n", text)
+    assert n == 1
+    text = text.replace("zip = true\n", "")
+    path = tmp_path / f"{name}.toml"
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize("name, key, value", [
+    ("hop_flights", "gamma", 2.0),
+    ("hop_speed", "gamma", 1.5),
+])
+def test_quick_cross_check(tmp_path, name, key, value):
+    case = one_point(tmp_path, name, key, value)
+    if name == "hop_speed":  # its sweep moves both amplitudes: pin the tangential one
+        case.write_text(case.read_text().replace("[parameters]\n", f"[parameters]\ngamma_t = {value}\n"))
+    proc = vibrofeed("validate", case, "-o", tmp_path / "out", "--json")
+    rows = json.loads(proc.stdout)
+    assert rows, proc.stderr
+    for row in rows:
+        assert set(row) >= {"case", "quantity", "model", "dem", "rel_diff", "tolerance", "passed"}
+    failed = [r for r in rows if not r["passed"]]
+    assert not failed, failed
+    assert proc.returncode == 0
+    assert list((tmp_path / "out" / name).glob("*.png")), "the overlay figure is written"

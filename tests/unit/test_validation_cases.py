@@ -1,0 +1,125 @@
+"""Validation cases and the cross-check machinery, without the engine."""
+
+import math
+
+import numpy as np
+import pytest
+
+from vibrofeed.validation import cases as C
+from vibrofeed.validation import deck_models as dm
+from vibrofeed.validation.crosscheck import (KINDS, Row, check_vertical_case, landing_period,
+                                             model_flights)
+from vibrofeed.validation.part_on_surface import Event
+
+# The quantities each kind reports (a case needs a tolerance for each it uses).
+QUANTITIES = {"flights": {"landing_time", "flight_duration"}, "transport": {"mean_speed"},
+              "period": {"period"}, "vertical": {"net_speed"}}
+
+
+@pytest.mark.parametrize("name", C.available())
+def test_every_case_file_is_complete(name):
+    case = C.find(name)
+    assert case.kind in KINDS
+    assert case.title and case.notes, "a case says what it checks and why its tolerances"
+    assert QUANTITIES[case.kind] <= set(case.tolerance)
+    if case.compare.get("restitution") == "realised":
+        assert "restitution" in case.tolerance
+    assert case.points(), "at least one run"
+    from vibrofeed.validation.crosscheck import CrossCheck
+    runs = CrossCheck(case, "/nonexistent").plan()  # parameters pass the deck's checks
+    assert len(runs) == len(case.points())
+    assert len({r.label for r in runs}) == len(runs), "one output file per run"
+
+
+def test_at_least_the_required_cases_exist():
+    kinds = {C.find(n).kind for n in C.available()}
+    assert kinds == set(KINDS)
+    phases = {C.find(n).parameters.get("gamma") for n in C.available() if n.startswith("phase_")}
+    assert len(phases) >= 2, "phase optimisation at a small and a large Gamma"
+
+
+def test_sweeps_product_and_zip(tmp_path):
+    p = tmp_path / "c.toml"
+    p.write_text('title = "t"\nkind = "transport"\ndeck = "single_part"\nnotes = "n"\n'
+                 "[sweep]\na = [1, 2]\nb = [3, 4]\n[tolerance]\nmean_speed = { rel = 0.02 }\n")
+    assert C.load(p).points() == [{"a": 1, "b": 3}, {"a": 1, "b": 4}, {"a": 2, "b": 3}, {"a": 2, "b": 4}]
+    p.write_text(p.read_text().replace('notes = "n"', 'notes = "n"\nzip = true'))
+    assert C.load(p).points() == [{"a": 1, "b": 3}, {"a": 2, "b": 4}]
+
+
+@pytest.mark.parametrize("text, fragment", [
+    ('kind = "transport"\ndeck = "x"\n', "missing 'title'"),
+    ('title = "t"\nkind = "transport"\ndeck = "x"\n[tolerance]\nq = 0.1\n', "abs = x"),
+    ('title = "t"\nkind = "transport"\ndeck = "x"\n[tolerance]\nq = { rel = -1 }\n', ">= 0"),
+    ('title = "t"\nkind = "transport"\ndeck = "x"\n[sweep]\na = []\n', "non-empty"),
+    ('title = "t"\nkind = "transport"\ndeck = "x"\nzip = true\n[sweep]\na = [1]\nb = [1, 2]\n', "same length"),
+    ("title = \n", "not valid TOML"),
+])
+def test_malformed_case_files_are_refused(tmp_path, text, fragment):
+    p = tmp_path / "bad.toml"
+    p.write_text(text)
+    with pytest.raises(C.CaseError, match=fragment):
+        C.load(p)
+
+
+def test_unknown_case():
+    with pytest.raises(C.CaseError, match="no validation case 'nope'"):
+        C.find("nope")
+
+
+def test_row_tolerances():
+    assert Row("c", "q", 1.0, 1.019, 0.02, "rel").passed
+    assert not Row("c", "q", 1.0, 1.021, 0.02, "rel").passed
+    assert Row("c", "q", -1.0, -1.019, 0.02, "rel").passed  # relative to |model|
+    assert Row("c", "q", 0.5, 0.509, 0.01, "abs").passed
+    assert not Row("c", "q", 0.5, 0.511, 0.01, "abs").passed
+    assert Row("c", "q", 2, 2, 0, "abs").passed and not Row("c", "q", 2, 1, 0, "abs").passed
+    r = Row("c", "q", 2.0, 2.1, 0.1, "rel")
+    assert r.rel_diff == pytest.approx(0.05)
+    assert set(r.as_dict()) >= {"case", "quantity", "model", "dem", "rel_diff", "tolerance", "passed"}
+
+
+def test_landing_period():
+    T = 0.02
+    one = np.arange(1, 30) * T + 0.3 * T
+    assert landing_period(one, T, 5 * T) == 1
+    # long and short jumps alternate: landings at 0.3 T and 1.1 T of every second period
+    two = np.sort(np.concatenate([np.arange(0, 30, 2) * T + 0.3 * T, np.arange(0, 30, 2) * T + 1.1 * T]))
+    assert landing_period(two, T, 5 * T) == 2
+    rng = np.random.default_rng(3)
+    assert landing_period(np.sort(rng.uniform(0, 30 * T, 40)), T, 5 * T) == 0
+
+
+def test_model_flights_pair_launches_and_impacts():
+    ev = lambda t, kind, **info: Event(t, kind, 0, 0, 0, 0, info)  # noqa: E731
+    events = [ev(0.1, "launch"), ev(0.5, "impact", rebound=True), ev(0.52, "impact", rebound=False),
+              ev(0.52, "stick"), ev(1.1, "launch"), ev(1.5, "impact", rebound=True),
+              ev(1.51, "impact", rebound=True), ev(1.511, "rest"), ev(2.1, "launch")]
+    assert model_flights(events, 3.0) == [(0.1, 0.5, "lift-off"), (0.5, 0.52, "rebound"),
+                                          (1.1, 1.5, "lift-off"), (1.5, 1.51, "rebound")]
+
+
+# The deck's waveform vocabulary: amp is the displacement amplitude for every waveform.
+@pytest.mark.parametrize("waveform", [0, 1, 2, 3])
+def test_deck_waveforms_have_the_requested_amplitude(waveform):
+    p = {"waveform": waveform, "freq": 40, "amp_t": 1e-4, "amp_n": 6e-5, "phase": 30, "duty": 0.7}
+    wf = dm.waveform(p)
+    t = np.linspace(0, wf.period, 20000, endpoint=False)
+    x, z = wf.displacement(t)
+    assert (x.max() - x.min()) / 2 == pytest.approx(1e-4, rel=1e-6)
+    assert abs(x.mean()) < 1e-9 and abs(z.mean()) < 1e-9  # about the mean position
+    if waveform in (0, 1):
+        assert (z.max() - z.min()) / 2 == pytest.approx(6e-5, rel=1e-6)
+
+
+def test_gamma_conversion_round_trip():
+    assert dm.gamma_from_amp(dm.amp_from_gamma(2.5, 60), 60) == pytest.approx(2.5)
+    assert dm.amp_from_gamma(1, 50) == pytest.approx(9.81 / (2 * math.pi * 50) ** 2)
+
+
+def test_infeasible_vertical_case_is_refused_clearly():
+    base = {"freq": "50", "amp_t": "2e-4", "amp_n": "0", "phase": "0", "waveform": "2",
+            "duty": "0.8", "mu": "0.5", "radius": "5e-4", "density": "2330"}
+    check_vertical_case({**base, "normal_force": "6e-5"})  # feasible: no exception
+    with pytest.raises(C.CaseError, match="infeasible vertical transport"):
+        check_vertical_case({**base, "normal_force": "1e-5"})  # below m g / mu
