@@ -27,6 +27,10 @@ def run_summary(run) -> str:
             bits.append(f"mean speed {_si(tr.mean_velocity, 'm/s')} along x")
         if n == 1 and r.n_frames > 2:
             fl = Flights().compute(r)
-            bits.append(f"{fl.n_hops} hops, airborne {fl.airborne_fraction:.0%} of the time, "
+            period = 1.0 / float(r.parameters.get("freq", 1.0))
+            hops = int((fl.durations >= 0.05 * period).sum())  # shorter: rebounds
+            rebounds = fl.n_hops - hops
+            bits.append(f"{hops} hops" + (f" (+{rebounds} short rebounds)" if rebounds else "")
+                        + f", airborne {fl.airborne_fraction:.0%} of the time, "
                         f"highest {_si(fl.max_gap, 'm')}")
     return head + " | " + ", ".join(bits)
