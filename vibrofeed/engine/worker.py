@@ -48,6 +48,37 @@ def engine_version(log_path: str) -> str:
     return first if first.startswith("LIGGGHTS") else "LIGGGHTS (version line not found in log)"
 
 
+_EXIT_HOOKS = []  # keep the ctypes callbacks alive
+
+
+def flush_on_engine_exit(writer) -> None:
+    """Write the writer's pending frames when LIGGGHTS ends the process.
+
+    An engine error calls C exit() (error->all) or MPI_Abort (error->one) from
+    inside a library call: no Python exception, no Python atexit. A C exit
+    handler (glibc's on_exit; atexit itself is not exported) covers the
+    first; the abort shim's hook (native/abort_flush.c, when preloaded)
+    covers the second.
+    """
+    import ctypes
+
+    def flush(*_):
+        try:
+            writer.flush()
+        except Exception:  # the process is ending: never raise into C
+            pass
+
+    on_exit_cb = ctypes.CFUNCTYPE(None, ctypes.c_int, ctypes.c_void_p)(flush)
+    abort_cb = ctypes.CFUNCTYPE(None)(flush)
+    _EXIT_HOOKS.extend([on_exit_cb, abort_cb])
+    libc = ctypes.CDLL("libc.so.6")
+    libc.on_exit(on_exit_cb, None)
+    setter = getattr(ctypes.CDLL(None), "vibrofeed_set_abort_hook", None)
+    if setter is not None:
+        setter.argtypes = [ctypes.CFUNCTYPE(None)]
+        setter(abort_cb)
+
+
 def gather_parts(lmp, comm) -> dict | None:
     """All particles on rank 0 (None elsewhere), as the writer wants them."""
     local = lmp.local_atoms(PER_ATOM)
@@ -126,6 +157,7 @@ def run(spec: dict) -> int:
             deck_text=Path(spec["deck"]).read_text(), variables=variables, derived=derived,
             engine_version=engine_version(spec["log"]), seed=spec.get("seed"),
             ranks=comm.size, command=spec.get("command", ""), capacity_hint=max(lmp.natoms, 1))
+        flush_on_engine_exit(writer)
 
     started = time.monotonic()
     n_frames = 1 + (n_steps + every - 1) // every
