@@ -14,7 +14,10 @@ case's ``kind``:
 ``period``
     period of the hopping attractor (1, 2, ...) after a transient;
 ``vertical``
-    net climbing speed of a part squeezed against a vertical vibrating wall.
+    net climbing speed of a part squeezed against a vertical vibrating wall;
+``replay``
+    measured trials (``trials``) played on a vertical wall in LIGGGHTS and
+    through the vertical-transport model with the same inputs.
 """
 
 from __future__ import annotations
@@ -42,9 +45,10 @@ class Row:
     unit: str = ""
 
     @property
-    def rel_diff(self) -> float:
+    def rel_diff(self) -> float | None:
+        """(dem - model) / |model|; None when the model value is 0."""
         if self.model == 0:
-            return math.inf if self.dem != 0 else 0.0
+            return None
         return (self.dem - self.model) / abs(self.model)
 
     @property
@@ -106,6 +110,8 @@ class CrossCheck:
 
         deck = Deck.find(self.case.deck)
         runs = []
+        if self.case.kind == "replay":
+            return runs
         for values in self.case.points():
             merged = {**self.case.parameters, **values}
             freq = float(merged.get("freq", deck.variables["freq"].default))
@@ -134,6 +140,11 @@ class CrossCheck:
         self.on_run(run.label, "done")
 
     def run(self) -> Outcome:
+        if self.case.kind == "replay":  # runs its own DEM replays, one per trial
+            outcome = Outcome(self.case)
+            self.dir.mkdir(parents=True, exist_ok=True)
+            _replay(self.case, self.jobs, outcome, self.dir, self.on_run)
+            return outcome
         runs = self.plan()
         self.dir.mkdir(parents=True, exist_ok=True)
         with ThreadPoolExecutor(self.jobs) as pool:
@@ -372,4 +383,48 @@ def check_vertical_case(params: dict) -> None:
         raise CaseError(f"infeasible vertical transport: {exc}") from None
 
 
-KINDS = {"flights": _flights, "transport": _transport, "period": _period, "vertical": _vertical}
+# ------------------------------------------------------------------ kind: replay
+def _replay(case: Case, jobs: int, out: Outcome, fig_dir: Path, on_run) -> None:
+    from .plots import plot_replay
+    from .replay_dem import replay_dem
+    from .replay_fit import prepare, replay
+    from .trials import load_trials, trials_dir
+
+    directory = trials_dir()
+    if directory is None:
+        raise CaseError("the measured trials are not available: put them in "
+                        "../shared/data/vertical-transport or set VIBROFEED_TRIALS_DIR")
+    wanted = case.compare.get("trials")
+    trials = [t for t in load_trials(directory) if wanted is None or t.name in wanted]
+    if wanted and len(trials) != len(wanted):
+        found = {t.name for t in trials}
+        raise CaseError(f"case {case.name}: trials not found in {directory}: "
+                        f"{', '.join(n for n in wanted if n not in found)}")
+    mass, mu = float(case.parameters["mass"]), float(case.parameters["mu"])
+    forces_mg = case.compare["normal_force_mg"]
+    g = dm.G
+
+    def one(trial):
+        on_run(trial.name, "running")
+        prep = prepare(trial)
+        force = float(forces_mg[trial.name]) * mass * g
+        model = replay(prep, mass, force, mu, mu)
+        dem = replay_dem(prep, mass, force, mu, fig_dir / f"{trial.name}.h5")
+        on_run(trial.name, "done")
+        return trial, model, dem
+
+    with ThreadPoolExecutor(jobs) as pool:
+        done = list(pool.map(one, trials))
+    for trial, model, dem in done:
+        n = min(len(model.predicted_mm), len(dem.predicted_mm))
+        diff = float(np.mean(np.abs(model.predicted_mm[:n] - dem.predicted_mm[:n])))
+        out.rows.append(_row(case, "mean_difference_mm", trial.name, 0.0, diff, "mm"))
+        out.rows.append(_row(case, "mean_abs_error_mm", trial.name, model.mean_abs_error_mm,
+                             dem.mean_abs_error_mm, "mm"))
+        out.rows.append(_row(case, "final_displacement_mm", trial.name, model.final_predicted_mm,
+                             dem.final_predicted_mm, "mm"))
+    out.figures.append(plot_replay([d for _, _, d in done], fig_dir / "dem_replays.png", engine="dem"))
+
+
+KINDS = {"flights": _flights, "transport": _transport, "period": _period, "vertical": _vertical,
+         "replay": _replay}

@@ -107,3 +107,20 @@ def plot_vertical(case, panels: list[dict], path: Path) -> Path:
     axes[0, 0].legend(fontsize=8)
     fig.suptitle(case.title, fontsize=10)
     return _save(fig, path)
+
+
+def plot_replay(results, path, engine: str = "model") -> Path:
+    """Measured and predicted part position, and the platform, per trial."""
+    path = Path(path)
+    fig, axes = plt.subplots(len(results), 1, figsize=(8, 2.8 * len(results)), squeeze=False)
+    for ax, r in zip(axes[:, 0], results):
+        ax.plot(r.t, r.platform_mm, **{**SURFACE_STYLE, "label": "platform"})
+        ax.plot(r.t, r.measured_mm, color="black", lw=1.2, label="part, measured")
+        ax.plot(r.t, r.predicted_mm, color=DEM_STYLE["color"], lw=1.2, ls="--",
+                label=f"part, predicted ({engine})")
+        ax.set_ylabel("vertical displacement [mm]")
+        ax.set_title(f"{r.name}: F_n = {r.normal_force:.3g} N, mu_k = {r.mu_k:.3g}; "
+                     f"mean abs error {r.mean_abs_error_mm:.3f} mm", fontsize=9, loc="left")
+    axes[-1, 0].set_xlabel("t [s]")
+    axes[0, 0].legend(fontsize=8)
+    return _save(fig, path)

@@ -101,8 +101,9 @@ __all__ = [
     "finite_difference_comparison",
 ]
 
-#: Data set location; the environment variable VIBROFEED_TRIALS_DIR overrides it.
-DEFAULT_TRIALS_DIR = Path("/work/shared/data/vertical-transport")
+#: Data set location, beside the repository (where CI has it); the
+#: environment variable VIBROFEED_TRIALS_DIR overrides it.
+DEFAULT_TRIALS_DIR = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "vertical-transport"
 
 MARKERS = {"p": "platform", "o": "part", "s": "marker"}
 _QUANTITIES = ("x", "z", "vx", "vz", "ax", "az")

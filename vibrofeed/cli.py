@@ -86,7 +86,8 @@ def _table(rows) -> list[str]:
     for r in rows:
         tol = f"{_fmt(r.tolerance)} {r.unit}".strip() if r.tolerance_type == "abs" \
             else f"{r.tolerance:.1%}"
-        table.append((r.case, r.quantity, _fmt(r.model), _fmt(r.dem), f"{r.rel_diff:+.2%}",
+        rel = "-" if r.rel_diff is None else f"{r.rel_diff:+.2%}"
+        table.append((r.case, r.quantity, _fmt(r.model), _fmt(r.dem), rel,
                       tol, "pass" if r.passed else "FAIL"))
     widths = [max(len(row[i]) for row in table) for i in range(len(table[0]))]
     lines = []
@@ -141,6 +142,91 @@ def cmd_validate(args) -> int:
     for e in errors:
         print(f"vibrofeed: error: case {e}", file=sys.stderr)
     return EXIT_FAILED if failed else 0
+
+
+# -------------------------------------------------------------------------- replay
+REPLAY_KEYS = ("mean_abs_error_mm", "max_displacement_mm", "final_measured_mm",
+               "final_predicted_mm", "stuck_fraction")
+
+
+def _positive(name: str, value) -> float:
+    if value is None:
+        raise UserError(f"{name} is required")
+    if not value > 0:
+        raise UserError(f"{name} must be > 0, got {value}")
+    return float(value)
+
+
+def cmd_replay(args) -> int:
+    from .validation.trials import read_trial
+
+    trials = [read_trial(path) for path in args.trials]
+    mass = _positive("--mass", args.mass)
+    mu_s = _positive("--mu-s", args.mu_s)
+    if args.fit:
+        return _replay_fit(args, trials, mass, mu_s)
+    force = _positive("--normal-force", args.normal_force)
+    mu_k = _positive("--mu-k", args.mu_k)
+    if mu_k > mu_s:
+        raise UserError(f"--mu-k ({mu_k}) cannot exceed --mu-s ({mu_s})")
+    if args.engine == "dem" and mu_k != mu_s:
+        raise UserError("the DEM engine has one friction coefficient (LIGGGHTS): give equal "
+                        "--mu-s and --mu-k")
+    g = 9.81
+    if force * mu_s <= mass * g:
+        print(f"vibrofeed: note: --normal-force {force:g} N is below m g / mu_s = "
+              f"{mass * g / mu_s:.4g} N: the part cannot stay stuck on a still wall", file=sys.stderr)
+    results = []
+    for trial in trials:
+        if args.engine == "model":
+            from .validation.replay_fit import replay
+
+            results.append(replay(trial, mass, force, mu_s, mu_k))
+        else:
+            from pathlib import Path
+
+            from .validation.replay_dem import replay_dem
+
+            out = Path(args.output) / f"{trial.name}.h5"
+            results.append(replay_dem(trial, mass, force, mu_k, out, ranks=args.ranks))
+    rows = [{"trial": r.name, "engine": args.engine, **{k: getattr(r, k) for k in REPLAY_KEYS}}
+            for r in results]
+    if args.json:
+        print(json.dumps(rows[0] if len(rows) == 1 else rows, indent=2))
+    else:
+        for r in results:
+            print(f"{r.name} ({args.engine}): mean abs error {r.mean_abs_error_mm:.3f} mm "
+                  f"(largest measured displacement {r.max_displacement_mm:.3f} mm); final "
+                  f"measured {r.final_measured_mm:+.3f} mm, predicted {r.final_predicted_mm:+.3f} mm; "
+                  f"stuck {r.stuck_fraction:.0%} of the time")
+    if args.plot:
+        from .validation.plots import plot_replay
+
+        path = plot_replay(results, args.plot, engine=args.engine)
+        if not args.json:
+            print(f"figure: {path}")
+    return 0
+
+
+def _replay_fit(args, trials, mass: float, mu_s: float) -> int:
+    from .validation.replay_fit import fit_trials
+
+    if len(trials) < 1:
+        raise UserError("--fit needs at least one trial")
+    fit = fit_trials(trials, mass=mass, mu_s=mu_s)
+    rows = [{"trial": t.name, "normal_force": fit.normal_force[t.name],
+             "normal_force_mg": fit.normal_force_mg[t.name],
+             "mean_abs_error_mm": fit.mae_mm[t.name]} for t in trials]
+    if args.json:
+        print(json.dumps({"mass": mass, "mu_s": mu_s, "mu_k": fit.mu_k, "trials": rows,
+                          "mean_abs_error_mm": fit.mean_mae_mm}, indent=2))
+        return 0
+    print(f"fitted kinetic friction mu_k = {fit.mu_k:.4f} (mu_s = {mu_s}, mass {mass} kg)")
+    for row in rows:
+        print(f"  {row['trial']}: normal force {row['normal_force']:.4g} N "
+              f"({row['normal_force_mg']:.3f} m g), mean abs error {row['mean_abs_error_mm']:.3f} mm")
+    print(f"mean of the mean abs errors: {fit.mean_mae_mm:.3f} mm")
+    return 0
 
 
 # ------------------------------------------------------------------ decks, params
@@ -219,6 +305,28 @@ def build_parser() -> argparse.ArgumentParser:
                    help="reuse DEM results already in DIR that hold exactly the case's parameters")
     p.set_defaults(func=cmd_validate)
 
+    p = sub.add_parser("replay", help="replay measured vertical-transport trials",
+                       description="Drive the vertical-transport model (or a LIGGGHTS wall) with the "
+                                   "measured platform motion of trial files and compare the predicted "
+                                   "part position with the measured one; or, with --fit, fit one "
+                                   "kinetic friction coefficient for all trials and one normal force "
+                                   "per trial.")
+    p.add_argument("trials", nargs="+", metavar="TRIAL.csv", help="measured trial files")
+    p.add_argument("--mass", type=float, metavar="KG", help="part mass [kg]")
+    p.add_argument("--normal-force", type=float, metavar="N", help="grasp (normal) force [N]")
+    p.add_argument("--mu-s", type=float, metavar="X", help="static friction coefficient")
+    p.add_argument("--mu-k", type=float, metavar="Y", help="kinetic friction coefficient")
+    p.add_argument("--engine", choices=("model", "dem"), default="model",
+                   help="model (Coulomb stick/slip, seed 000) or dem (LIGGGHTS wall; needs mu_s = mu_k)")
+    p.add_argument("--fit", action="store_true",
+                   help="fit mu_k (shared) and the normal force of each trial (needs --mass, --mu-s)")
+    p.add_argument("--json", action="store_true", help="print the figures as JSON")
+    p.add_argument("--plot", metavar="FILE.png", help="plot measured and predicted part position")
+    p.add_argument("-o", "--output", default="replay-results", metavar="DIR",
+                   help="folder for the DEM engine's result files (default replay-results)")
+    p.add_argument("-n", "--ranks", type=int, default=1, metavar="RANKS", help="MPI ranks (DEM engine)")
+    p.set_defaults(func=cmd_replay)
+
     p = sub.add_parser("decks", help="list the decks in decks/")
     p.set_defaults(func=cmd_decks)
 
@@ -233,6 +341,7 @@ def main(argv=None) -> int:
     from .decks import DeckError
     from .engine.errors import RunError
     from .validation.cases import CaseError
+    from .validation.trials import TrialFileError
     from .parameters import ParameterError
     from .results.reader import ResultError
 
@@ -243,7 +352,7 @@ def main(argv=None) -> int:
         return args.func(args)
     except KeyboardInterrupt:
         return _fail("interrupted", EXIT_INTERRUPTED)
-    except (ParameterError, DeckError, CaseError, UserError) as exc:
+    except (ParameterError, DeckError, CaseError, TrialFileError, UserError) as exc:
         if debug:
             raise
         return _fail(str(exc), EXIT_USAGE)

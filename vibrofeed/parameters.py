@@ -70,7 +70,7 @@ RULES: dict[str, Callable[[float], str | None]] = {
     "rolling": _integer(choices=(0, 1)),
     "tangential_damping": _integer(choices=(0, 1)),
     "limit_force": _integer(choices=(0, 1)),
-    "waveform": _integer(choices=(0, 1, 2, 3)),
+    "waveform": _integer(choices=(0, 1, 2, 3, 4)),
     "duty": _between(0, 1),
     "normal_force": _non_negative,
     "t_end": _positive,

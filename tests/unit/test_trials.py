@@ -18,47 +18,7 @@ from vibrofeed.validation.trials import (
     trials_dir,
 )
 
-DT = 1 / 960.0
-PLACEHOLDER = "\ufffd"  # what the published files hold where a value is missing
-
-
-def platform_truth(t, nu=0):
-    """Smooth, well-resolved platform motion [m] (25 and 70 Hz), derivative nu."""
-    out = 0.0
-    for amp, f, ph in ((0.3e-3, 25.0, 0.0), (0.1e-3, 70.0, 1.0)):
-        w = 2 * np.pi * f
-        out = out + amp * w ** nu * np.sin(w * t + ph + nu * np.pi / 2)
-    return out
-
-
-def write_trial(path, n=300, sigma=5e-6, seed=0, placeholder=PLACEHOLDER, mutate=None):
-    """A file laid out like the published ones: mm units, CRLF, placeholders at the ends."""
-    rng = np.random.default_rng(seed)
-    t = np.arange(n) * DT
-    cols = {"t": t}
-    for m, shift in (("p", 0.0), ("o", 2e-3), ("s", -3e-3)):
-        z = platform_truth(t) + shift + sigma * rng.standard_normal(n)
-        x = 1.5e-3 + sigma * rng.standard_normal(n)
-        cols["x" + m], cols["z" + m] = x * 1e3, z * 1e3
-        for q in ("x", "z"):
-            v = np.gradient(cols[q + m], DT)
-            a = np.gradient(v, DT)
-            v[[0, -1]] = np.nan
-            a[[0, 1, -2, -1]] = np.nan
-            cols["v" + q + m], cols["a" + q + m] = v, a
-    if mutate:
-        mutate(cols)
-    header = list(cols)
-    lines = [",".join(header)]
-    for k in range(len(cols["t"])):
-        row = []
-        for h in header:
-            value = cols[h][k]
-            row.append(placeholder if (isinstance(value, float) and math.isnan(value))
-                       else f"{value:.8f}")
-        lines.append(",".join(row))
-    path.write_bytes(("\r\n".join(lines) + "\r\n").encode("utf-8"))
-    return path
+from helpers import DT, PLACEHOLDER, platform_truth, write_trial
 
 
 def test_reads_synthetic_trial_in_si_units(tmp_path):

@@ -13,7 +13,8 @@ from vibrofeed.validation.part_on_surface import Event
 
 # The quantities each kind reports (a case needs a tolerance for each it uses).
 QUANTITIES = {"flights": {"landing_time", "flight_duration"}, "transport": {"mean_speed"},
-              "period": {"period"}, "vertical": {"net_speed"}}
+              "period": {"period"}, "vertical": {"net_speed"},
+              "replay": {"mean_difference_mm", "mean_abs_error_mm", "final_displacement_mm"}}
 
 
 @pytest.mark.parametrize("name", C.available())
@@ -25,6 +26,10 @@ def test_every_case_file_is_complete(name):
     if case.compare.get("restitution") == "realised":
         assert "restitution" in case.tolerance
     assert case.points(), "at least one run"
+    if case.kind == "replay":  # runs one DEM replay per measured trial instead of a sweep
+        assert case.compare["trials"] and set(case.compare["trials"]) == set(case.compare["normal_force_mg"])
+        assert {"mass", "mu"} <= set(case.parameters)
+        return
     from vibrofeed.validation.crosscheck import CrossCheck
     runs = CrossCheck(case, "/nonexistent").plan()  # parameters pass the deck's checks
     assert len(runs) == len(case.points())
@@ -76,6 +81,7 @@ def test_row_tolerances():
     assert Row("c", "q", 2, 2, 0, "abs").passed and not Row("c", "q", 2, 1, 0, "abs").passed
     r = Row("c", "q", 2.0, 2.1, 0.1, "rel")
     assert r.rel_diff == pytest.approx(0.05)
+    assert Row("c", "q", 0.0, 0.01, 0.02, "abs").rel_diff is None  # JSON null, not Infinity
     assert set(r.as_dict()) >= {"case", "quantity", "model", "dem", "rel_diff", "tolerance", "passed"}
 
 

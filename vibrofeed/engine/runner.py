@@ -15,7 +15,6 @@ what happened; one that fails before its first frame leaves nothing.
 
 from __future__ import annotations
 
-import ctypes
 import json
 import os
 import shutil
@@ -100,12 +99,12 @@ def worker_environment(ranks: int, shim: Path | None) -> dict:
     return env
 
 
-def _die_with_parent() -> None:
-    """In the child: get SIGTERM when the parent dies (even by SIGKILL)."""
-    try:
-        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
-    except OSError:
-        pass
+def _with_parent_death_signal(cmd: list[str]) -> list[str]:
+    """``cmd`` run so that it gets SIGTERM when vibrofeed dies (even by
+    SIGKILL), through util-linux's setpriv: an exec wrapper, unlike a Python
+    preexec_fn, which is not safe to fork from a program with threads."""
+    setpriv = shutil.which("setpriv")
+    return [setpriv, "--pdeathsig", "TERM", "--"] + cmd if setpriv else cmd
 
 
 def _prepare_output(output) -> tuple[Path, Path, Path]:
@@ -142,8 +141,14 @@ def _frames_in(path: Path) -> tuple[int, int | None, float | None]:
 
 
 def run_deck(deck: Deck, params: Mapping[str, str], output, *, ranks: int = 1,
-             on_event: Callable[[dict], None] | None = None, command: str = "") -> RunResult:
+             on_event: Callable[[dict], None] | None = None, command: str = "",
+             before_run: list[str] | None = None, schedule: list[dict] | None = None) -> RunResult:
     """Run ``deck`` with ``params`` (name -> value strings) into ``output``.
+
+    ``before_run``: LIGGGHTS commands issued after the deck, before the first
+    step. ``schedule``: a prescribed run as segments ``{"commands": [...],
+    "steps": n}`` (commands, then n steps with setup, then a frame) instead of
+    the deck's own ``n_steps`` in frames of ``output_every``.
 
     ``on_event`` receives the worker's messages (``run``, ``progress``,
     ``done``...) as dicts, for progress display. Raises
@@ -168,6 +173,8 @@ def run_deck(deck: Deck, params: Mapping[str, str], output, *, ranks: int = 1,
         "output": str(part), "log": str(log), "screen": str(screen),
         "seed": int(float(values["seed"])) if "seed" in values else None,
         "command": command,
+        "before_run": list(before_run or ()),
+        "schedule": schedule,
     }
     spec_path = tmp / "spec.json"
     spec_path.write_text(json.dumps(spec))
@@ -180,9 +187,9 @@ def run_deck(deck: Deck, params: Mapping[str, str], output, *, ranks: int = 1,
         with open(stderr_path, "w") as stderr:
             shim = abort_shim()
             proc = subprocess.Popen(
-                worker_command(str(spec_path), ranks, shim), stdout=subprocess.PIPE, stderr=stderr,
-                env=worker_environment(ranks, shim), cwd=str(out.parent), text=True,
-                start_new_session=True, preexec_fn=_die_with_parent)
+                _with_parent_death_signal(worker_command(str(spec_path), ranks, shim)),
+                stdout=subprocess.PIPE, stderr=stderr, env=worker_environment(ranks, shim),
+                cwd=str(out.parent), text=True, start_new_session=True)
             try:
                 for line in proc.stdout:
                     if not line.startswith(MARK):

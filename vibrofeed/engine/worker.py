@@ -17,6 +17,7 @@ with ``@vibrofeed``: phases (``deck``, ``setup``, ``run``), progress, the end.
 from __future__ import annotations
 
 import json
+import os
 import sys
 import time
 from pathlib import Path
@@ -143,6 +144,7 @@ def run(spec: dict) -> int:
             pass
 
     report("setup")
+    lmp.commands(spec.get("before_run", ()))
     lmp.command("thermo_modify flush yes")
     lmp.command("run 0")
     # Step and time as the engine counts them (a deck may have run stages before).
@@ -159,13 +161,32 @@ def run(spec: dict) -> int:
             ranks=comm.size, command=spec.get("command", ""), capacity_hint=max(lmp.natoms, 1))
         flush_on_engine_exit(writer)
 
+    # The run, as (commands, steps) segments with a frame after each. A plain
+    # deck: output_every steps at a time, no commands, resuming without setup.
+    # A schedule (prescribed motion): each segment first redefines variables,
+    # then runs with setup, because LIGGGHTS re-creates a redefined variable at
+    # a new index and movers find it again only at setup.
+    schedule = spec.get("schedule")
+    if schedule:
+        segments, total = [], 0
+        for seg in schedule:  # a segment ends after "steps" steps, or at time "until"
+            steps = int(seg["steps"]) if "steps" in seg else int(round(float(seg["until"]) / dt)) - total
+            if steps < 1:
+                report("error", message=f"schedule segment {len(segments)} is shorter than "
+                                        f"the timestep ({dt:g} s)")
+                return 3
+            total += steps
+            segments.append((seg.get("commands", ()), steps, True))
+    else:
+        segments = [((), min(every, n_steps - k), False) for k in range(0, n_steps, every)]
+    n_steps = sum(steps for _, steps, _ in segments)
+    n_frames = 1 + len(segments)
     started = time.monotonic()
-    n_frames = 1 + (n_steps + every - 1) // every
     report("run", n_steps=n_steps, dt=dt, output_every=every, n_frames=n_frames,
            natoms=lmp.natoms)
     done = 0
     last_report = 0.0
-    while True:
+    for k in range(len(segments) + 1):
         parts = gather_parts(lmp, comm)
         pos, vel = surface_state(lmp)
         step = int(round(lmp.variable("vibrofeed_step")))
@@ -173,15 +194,16 @@ def run(spec: dict) -> int:
         if writer is not None:
             writer.write_frame(step, t, parts, pos, vel)
         now = time.monotonic()
-        if done == n_steps or now - last_report > 0.2:
+        if k == len(segments) or now - last_report > 0.2:
             report("progress", step=done, time=t, frames=writer.frames if writer else 0,
                    natoms=lmp.natoms, wall=now - started)
             last_report = now
-        if done >= n_steps:
+        if k == len(segments):
             break
-        chunk = min(every, n_steps - done)
-        lmp.command(f"run {chunk} pre no post no")
-        done += chunk
+        commands, steps, setup = segments[k]
+        lmp.commands(commands)
+        lmp.command(f"run {steps} post no" if setup else f"run {steps} pre no post no")
+        done += steps
 
     wall = time.monotonic() - started
     if writer is not None:
@@ -205,5 +227,18 @@ def main(argv=None) -> int:
         return 4
 
 
+def _exit(code: int) -> None:
+    """Leave without running C exit handlers: the frame-flushing handler of
+    ``flush_on_engine_exit`` is for LIGGGHTS ending the process mid-run, and
+    after Python has finalised calling it would crash."""
+    from mpi4py import MPI
+
+    sys.stdout.flush()
+    sys.stderr.flush()
+    if not MPI.Is_finalized():
+        MPI.Finalize()
+    os._exit(code)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    _exit(main())
