@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 from scipy.interpolate import PPoly
 
-from .replay_fit import EDGE_FRAMES, ReplayResult, prepare
+from .replay_fit import EDGE_FRAMES, ReplayResult, compare_with_measurement, prepare
 from .trials import Trial
 
 PART_RADIUS = 0.01  # m
@@ -114,24 +114,7 @@ def replay_dem(trial: Trial, mass: float, normal_force: float, mu: float, output
         v = r.track(int(r.part_ids[0]), "velocity")[1][:, 0]
         vs = r.surface_velocity[:, 0]
         xs = r.surface_position[:, 0]
-    k0 = edge_frames
-    n = len(t_dem)
-    measured = (tr.part.z[k0:k0 + n] - tr.part.z[k0]) * 1e3
-    predicted = (x - x[0]) * 1e3
     # Stuck: moving with the wall, to 1 % of the wall's largest speed.
     stuck = np.abs(v - vs) <= 1e-2 * np.abs(vs).max()
-    return ReplayResult(
-        name=tr.name,
-        mean_abs_error_mm=float(np.mean(np.abs(predicted - measured))),
-        max_displacement_mm=float(np.max(np.abs(measured))),
-        final_measured_mm=float(measured[-1]),
-        final_predicted_mm=float(predicted[-1]),
-        stuck_fraction=float(stuck.mean()),
-        normal_force=float(normal_force),
-        mu_k=float(mu),
-        t=t_dem - t_dem[0],
-        measured_mm=measured,
-        predicted_mm=predicted,
-        platform_mm=xs * 1e3,
-        stuck=stuck,
-    )
+    return compare_with_measurement(tr, edge_frames, t_dem - t_dem[0], x - x[0], xs, stuck,
+                                    stuck.mean(), float(normal_force), float(mu))

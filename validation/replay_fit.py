@@ -129,23 +129,35 @@ def replay(trial: Trial | PreparedTrial, mass: float, normal_force: float, mu_s:
     z0 = float(tr.part.z[k0])
     traj = simulate(prep.surface, contact, t_end=float(t[-1]), t_start=float(t[0]),
                     z0=z0, t_eval=t)
-    measured = (tr.part.z[k0:k1] - z0) * 1e3
-    predicted = (traj.z - z0) * 1e3
-    platform = (prep.surface.position(t) - prep.surface.position(t[0])) * 1e3
+    platform = prep.surface.position(t) - prep.surface.position(t[0])
+    return compare_with_measurement(tr, k0, t - t[0], traj.z - z0, platform, traj.stuck,
+                                    traj.stuck_fraction, normal_force, mu_k)
+
+
+def compare_with_measurement(trial: Trial, k0: int, t, predicted, platform, stuck,
+                             stuck_fraction: float, normal_force: float, mu_k: float) -> ReplayResult:
+    """The figures of a prediction of a trial's part from frame ``k0`` on.
+
+    ``t`` [s] from frame k0; ``predicted`` and ``platform``: displacements [m]
+    from their values at frame k0, one per frame; ``stuck``: per-frame flags.
+    """
+    n = len(t)
+    measured = (trial.part.z[k0:k0 + n] - trial.part.z[k0]) * 1e3
+    predicted = np.asarray(predicted) * 1e3
     return ReplayResult(
-        name=tr.name,
+        name=trial.name,
         mean_abs_error_mm=float(np.mean(np.abs(predicted - measured))),
         max_displacement_mm=float(np.max(np.abs(measured))),
         final_measured_mm=float(measured[-1]),
         final_predicted_mm=float(predicted[-1]),
-        stuck_fraction=float(traj.stuck_fraction),
+        stuck_fraction=float(stuck_fraction),
         normal_force=normal_force,
         mu_k=mu_k,
-        t=t - t[0],
+        t=np.asarray(t),
         measured_mm=measured,
         predicted_mm=predicted,
-        platform_mm=platform,
-        stuck=traj.stuck,
+        platform_mm=np.asarray(platform) * 1e3,
+        stuck=np.asarray(stuck),
     )
 
 
