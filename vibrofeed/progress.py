@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import sys
 
 from tqdm import tqdm
@@ -23,8 +24,13 @@ class RunProgress:
         kind = event["event"]
         if kind == "run":
             self.t_end = event["n_steps"] * event["dt"]
+            try:  # a terminal that reports no size (0 columns) gets a fixed width
+                sized = os.get_terminal_size(self.stream.fileno()).columns > 0
+            except (OSError, ValueError, AttributeError):
+                sized = False
             self.bar = tqdm(total=event["n_steps"], desc=self.label, unit="step", unit_scale=True,
-                            file=self.stream, dynamic_ncols=True, leave=False)
+                            file=self.stream, dynamic_ncols=sized, ncols=None if sized else 100,
+                            leave=False)
         elif kind == "progress" and self.bar is not None:
             self.bar.update(event["step"] - self.bar.n)
             self.bar.set_postfix_str(f"t={event['time']:.4g}/{self.t_end:.4g} s", refresh=True)
