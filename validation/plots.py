@@ -24,7 +24,8 @@ def _save(fig, path: Path) -> Path:
 
 def plot_flights(case, panels: list[dict], path: Path) -> Path:
     """Height of the part's lowest point and of the surface vs time, per sweep point."""
-    fig, axes = plt.subplots(len(panels), 1, figsize=(8, 2.3 * len(panels)), squeeze=False)
+    fig, axes = plt.subplots(len(panels), 1, figsize=(8, 2.3 * len(panels)), squeeze=False,
+                             layout="constrained")
     for ax, p in zip(axes[:, 0], panels):
         T, um = p["T"], 1e6
         surf = np.interp(p["dem_t"], p["surface_t"], p["surface_z"])
@@ -95,7 +96,8 @@ def plot_bifurcation(case, grid, diagram, dem_points, path: Path) -> Path:
 
 def plot_vertical(case, panels: list[dict], path: Path) -> Path:
     """Part displacement up the wall vs time: DEM, model and the wall itself."""
-    fig, axes = plt.subplots(len(panels), 1, figsize=(8, 2.5 * len(panels)), squeeze=False)
+    fig, axes = plt.subplots(len(panels), 1, figsize=(8, 2.5 * len(panels)), squeeze=False,
+                             layout="constrained")
     for ax, p in zip(axes[:, 0], panels):
         T = p["T"]
         ax.plot(p["dem_t"] / T, p["surface_x"] * 1e3, **SURFACE_STYLE)
@@ -112,7 +114,8 @@ def plot_vertical(case, panels: list[dict], path: Path) -> Path:
 def plot_replay(results, path, engine: str = "model") -> Path:
     """Measured and predicted part position, and the platform, per trial."""
     path = Path(path)
-    fig, axes = plt.subplots(len(results), 1, figsize=(8, 2.8 * len(results)), squeeze=False)
+    fig, axes = plt.subplots(len(results), 1, figsize=(8, 2.8 * len(results)), squeeze=False,
+                             layout="constrained")
     for ax, r in zip(axes[:, 0], results):
         ax.plot(r.t, r.platform_mm, **{**SURFACE_STYLE, "label": "platform"})
         ax.plot(r.t, r.measured_mm, color="black", lw=1.2, label="part, measured")
