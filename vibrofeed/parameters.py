@@ -127,11 +127,23 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
     return values
 
 
+# A run asking for more frames than this is almost always a unit slip (output_dt
+# in ms or us); with the automatic timestep it would also force dt = output_dt
+# and run for hours before anyone noticed. Runs that really need it split t_end.
+MAX_FRAMES = 1_000_000
+
+
 def _check_relations(p: Mapping[str, float]) -> None:
     """Limits that involve several parameters."""
-    if "output_dt" in p and "t_end" in p and p["output_dt"] > p["t_end"]:
-        raise ParameterError(
-            f"output_dt={p['output_dt']:g} s is longer than the run, t_end={p['t_end']:g} s")
+    if "output_dt" in p and "t_end" in p:
+        if p["output_dt"] > p["t_end"]:
+            raise ParameterError(
+                f"output_dt={p['output_dt']:g} s is longer than the run, t_end={p['t_end']:g} s")
+        frames = p["t_end"] / p["output_dt"]
+        if frames > MAX_FRAMES:
+            raise ParameterError(
+                f"t_end={p['t_end']:g} s with output_dt={p['output_dt']:g} s would write "
+                f"{frames:.3g} frames (limit {MAX_FRAMES:.0e}); raise output_dt or shorten t_end")
     dt = p.get("dt", 0.0)
     if dt > 0:
         if "output_dt" in p and p["output_dt"] < dt:

@@ -80,6 +80,13 @@ def test_output_interval_longer_than_run(deck):
         resolve(deck, {"t_end": "0.01", "output_dt": "0.02"})
 
 
+def test_too_many_frames_is_refused(deck):
+    # 0.01 s at 1 ns would be 1e7 frames and, with the automatic timestep, 1e7 steps
+    with pytest.raises(ParameterError, match="would write 1e\\+07 frames"):
+        resolve(deck, {"t_end": "0.01", "output_dt": "1e-9"})
+    resolve(deck, {"t_end": "0.01", "output_dt": "1e-8"})  # 1e6 frames: allowed
+
+
 def test_parse_assignments():
     assert parse_assignments(["a=1", " b = x "]) == {"a": "1", "b": "x"}
     for bad in (["a"], ["=1"], ["a="]):
