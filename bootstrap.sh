@@ -24,6 +24,18 @@ APT_PACKAGES=(liggghts libliggghts-dev openmpi-bin libopenmpi-dev
 
 say() { printf '\033[1m[bootstrap]\033[0m %s\n' "$*"; }
 
+# Installer output (apt, pip, cmake) goes to setup.log; it is shown only when a
+# step fails, so the few lines a newcomer needs are not buried in it.
+LOG="$ROOT/setup.log"
+: > "$LOG"
+quietly() {
+  if ! "$@" >> "$LOG" 2>&1; then
+    echo "bootstrap: '$*' failed; the last lines of $LOG:" >&2
+    tail -n 40 "$LOG" >&2
+    exit 1
+  fi
+}
+
 # ------------------------------------------------------------ Debian packages
 missing=()
 for pkg in "${APT_PACKAGES[@]}"; do
@@ -38,8 +50,8 @@ if ((${#missing[@]})); then
     SUDO=(sudo)
   fi
   export DEBIAN_FRONTEND=noninteractive
-  "${SUDO[@]}" apt-get update -q
-  "${SUDO[@]}" apt-get install -y -q --no-install-recommends "${missing[@]}"
+  quietly "${SUDO[@]}" apt-get update -q
+  quietly "${SUDO[@]}" apt-get install -y -q --no-install-recommends "${missing[@]}"
 fi
 
 # ------------------------------------------------------------ Python venv
@@ -48,24 +60,22 @@ STAMP=.venv/.vibrofeed-installed
 WANT=$(sha256sum pyproject.toml | cut -d' ' -f1)
 if [[ ! -x .venv/bin/python ]]; then
   say "creating .venv"
-  "$PY" -m venv .venv
+  quietly "$PY" -m venv .venv
 fi
 if [[ ! -f $STAMP || $(cat "$STAMP") != "$WANT" ]]; then
   say "installing vibrofeed and its Python dependencies into .venv (mpi4py is compiled: a few minutes)"
-  .venv/bin/python -m pip install -q --upgrade pip
+  quietly .venv/bin/python -m pip install --upgrade pip
   # mpi4py from source, against the system Open MPI that LIGGGHTS uses.
-  .venv/bin/python -m pip install -q --no-binary mpi4py -e ".[test]"
+  quietly .venv/bin/python -m pip install --no-binary mpi4py -e ".[test]"
   echo "$WANT" > "$STAMP"
 fi
 
 # ------------------------------------------------------------ CMake build dir
 if [[ ! -f build/CMakeCache.txt ]]; then
   say "configuring build/"
-  cmake -S . -B build -DPython3_EXECUTABLE="$ROOT/.venv/bin/python" > build.configure.log 2>&1 \
-    || { cat build.configure.log >&2; exit 1; }
-  rm -f build.configure.log
+  quietly cmake -S . -B build -DPython3_EXECUTABLE="$ROOT/.venv/bin/python"
 fi
-cmake --build build > /dev/null
+quietly cmake --build build
 
 # ------------------------------------------------------------ the job
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1

@@ -1,1 +1,23 @@
-"""Post-processing of vibrofeed H5MD results: transport, flights, singulation."""
+"""Post-processing of vibrofeed H5MD results: one analysis shape for all.
+
+Every analysis is built with the result it reads and its settings, runs over
+a selection of frames and answers in ``results``::
+
+    from vibrofeed.postproc import Flights, Transport
+
+    tr = Transport(result, start=0.1).run()         # mean speed over whole periods
+    fl = Flights(result).run(start=100)             # hops of one part, from frame 100
+    tr.results.mean_velocity, fl.results.landings
+
+- :mod:`.base`: :class:`AnalysisBase` and :class:`Results`, the shape;
+- :mod:`.transport`: :class:`Transport`, conveying speed along the track;
+- :mod:`.flights`: :class:`Flights`, lift-offs, landings and impacts of one part.
+"""
+
+from __future__ import annotations
+
+from .base import AnalysisBase, Results
+from .flights import Flights
+from .transport import Transport
+
+__all__ = ["AnalysisBase", "Results", "Transport", "Flights"]

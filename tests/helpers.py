@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
+import hashlib
+import math
 import os
 import subprocess
 import sys
 from pathlib import Path
-
-import math
 
 import numpy as np
 
@@ -34,7 +34,7 @@ def write_result(path, frames, surface=None, variables=None, status="complete"):
     w = ResultWriter(path, deck_name="synthetic", deck_path="synthetic.liggghts",
                      deck_text="# synthetic\n", variables=variables, derived={"dt_used": 1e-6},
                      engine_version="LIGGGHTS (Version LIGGGHTS-PUBLIC 3.8.0, synthetic)",
-                     seed=1)
+                     seed=1, run_id=hashlib.sha256(str(path).encode()).hexdigest())
     for k, (step, t, parts) in enumerate(frames):
         sp = np.zeros(3) if surface is None else surface[k][0]
         sv = np.zeros(3) if surface is None else surface[k][1]
@@ -56,6 +56,31 @@ def parts(ids, positions, radius=5e-4, velocity=None, force=None, mass=1e-6):
             "mass": np.full(n, mass), "position": positions, "velocity": velocity,
             "angular_velocity": np.zeros((n, 3)), "force": force}
 
+
+
+def write_conveyor(path, times, lifetimes, speeds, amp=0.0, freq=50.0, seed=0, radius=5e-4):
+    """A many-part result whose answers are known by construction.
+
+    Part ``k + 1`` exists from frame ``lifetimes[k][0]`` to frame
+    ``lifetimes[k][1]`` (inclusive) and moves along x as ``k * 1e-3 +
+    speeds[k] * t + amp * sin(2 pi freq t)``; y = k * 1e-3, z = radius. The
+    parts are listed in a shuffled order at each frame, as LIGGGHTS hands them
+    over, and freed slots are reused by later parts.
+    """
+    rng = np.random.default_rng(seed)
+    lifetimes, speeds = np.asarray(lifetimes), np.asarray(speeds, dtype=float)
+    w = 2 * np.pi * freq
+    frames = []
+    for j, t in enumerate(times):
+        alive = np.nonzero((lifetimes[:, 0] <= j) & (j <= lifetimes[:, 1]))[0]
+        alive = rng.permutation(alive)
+        pos = np.column_stack([alive * 1e-3 + speeds[alive] * t + amp * np.sin(w * t),
+                               alive * 1e-3, np.full(len(alive), radius)])
+        vel = np.column_stack([speeds[alive] + amp * w * np.cos(w * t),
+                               np.zeros(len(alive)), np.zeros(len(alive))])
+        frames.append((j, float(t), parts(alive + 1, pos, radius=radius, velocity=vel)))
+    variables = {"freq": (repr(float(freq)), "Hz", "vibration frequency", "50")}
+    return write_result(path, frames, variables=variables)
 
 # -- measured-trial files (vertical transport) ---------------------------------------
 DT = 1 / 960.0

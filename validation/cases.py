@@ -35,15 +35,13 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ..errors import CaseError
+
 CASES_DIR = Path(__file__).resolve().parent / "cases"
 
 # Keys (in [parameters] or [sweep]) that are not deck parameters but set one:
 # Gamma = amp w^2 / g of the normal or tangential sine.
 DERIVED_SWEEP_KEYS = {"gamma": "amp_n", "gamma_t": "amp_t"}
-
-
-class CaseError(ValueError):
-    """A case file is missing or malformed."""
 
 
 @dataclass(frozen=True)

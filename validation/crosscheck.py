@@ -22,16 +22,16 @@ case's ``kind``:
 
 from __future__ import annotations
 
-import math
-from concurrent.futures import ThreadPoolExecutor
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 
+from ..errors import CaseError
 from . import deck_models as dm
-from .cases import DERIVED_SWEEP_KEYS, Case, CaseError
+from .cases import DERIVED_SWEEP_KEYS, Case
+from .models.constants import G
 
 
 @dataclass
@@ -70,6 +70,7 @@ class Run:
     values: dict
     params: dict  # name -> string, as given to the deck (defaults included)
     output: Path
+    request: object = None  # the engine.batch.RunRequest that computes it
 
     def number(self, name: str) -> float:
         return float(self.params[name])
@@ -92,8 +93,9 @@ def _label(values: dict) -> str:
 
 
 class CrossCheck:
-    """Run one case; ``reuse`` skips DEM runs whose complete result already
-    holds exactly the requested parameters."""
+    """Run one case: its DEM runs through the batch executor (``jobs`` at a
+    time, each isolated), then the comparison of its kind. ``reuse`` keeps DEM
+    results whose run id (deck, includes, parameters, version) matches."""
 
     def __init__(self, case: Case, out_dir, ranks: int = 1, jobs: int = 1, reuse: bool = False,
                  on_run: Callable[[str, str], None] | None = None):
@@ -105,13 +107,15 @@ class CrossCheck:
 
     # -- runs ---------------------------------------------------------------------
     def plan(self) -> list[Run]:
+        """The case's DEM runs (replay cases: one per measured trial)."""
         from vibrofeed.decks import Deck
+        from vibrofeed.engine.batch import RunRequest
         from vibrofeed.parameters import resolve
 
+        if self.case.kind == "replay":
+            return _replay_runs(self.case, self.dir, self.ranks, self.reuse)
         deck = Deck.find(self.case.deck)
         runs = []
-        if self.case.kind == "replay":
-            return runs
         for values in self.case.points():
             merged = {**self.case.parameters, **values}
             freq = float(merged.get("freq", deck.variables["freq"].default))
@@ -125,55 +129,25 @@ class CrossCheck:
             params = resolve(deck, given)
             if self.case.kind == "vertical":
                 check_vertical_case(params)
-            runs.append(Run(label, values, params, self.dir / f"{label}.h5"))
+            output = self.dir / f"{label}.h5"
+            request = RunRequest(deck, params, output, label=label, ranks=self.ranks,
+                                 reuse=self.reuse)
+            runs.append(Run(label, values, params, output, request))
         return runs
 
-    def _dem(self, run: Run) -> None:
-        from vibrofeed.decks import Deck
-        from vibrofeed.engine.runner import run_deck
-
-        if self.reuse and _matches(run.output, run.params):
-            self.on_run(run.label, "reused")
-            return
-        self.on_run(run.label, "running")
-        run_deck(Deck.find(self.case.deck), run.params, run.output, ranks=self.ranks)
-        self.on_run(run.label, "done")
-
     def run(self) -> Outcome:
-        if self.case.kind == "replay":  # runs its own DEM replays, one per trial
-            outcome = Outcome(self.case)
-            self.dir.mkdir(parents=True, exist_ok=True)
-            _replay(self.case, self.jobs, outcome, self.dir, self.on_run)
-            return outcome
+        from vibrofeed.engine.batch import run_many
+
         runs = self.plan()
         self.dir.mkdir(parents=True, exist_ok=True)
-        with ThreadPoolExecutor(self.jobs) as pool:
-            for future in [pool.submit(self._dem, r) for r in runs]:
-                future.result()  # a failed run raises here, after the others finished
+        outcomes = run_many([r.request for r in runs], jobs=self.jobs,
+                            on_state=lambda request, state: self.on_run(request.label, state))
+        for o in outcomes:
+            if not o.ok:  # after the others finished
+                raise o.error
         outcome = Outcome(self.case)
         KINDS[self.case.kind](self.case, runs, outcome, self.dir)
         return outcome
-
-
-def _matches(path: Path, params: dict) -> bool:
-    from vibrofeed.results.reader import Result, ResultError
-
-    if not path.is_file():
-        return False
-    try:
-        with Result(path) as r:
-            recorded = {k: v for k, v in r.parameters.items()}
-    except ResultError:
-        return False
-    for name, value in params.items():
-        have = recorded.get(name)
-        try:
-            same = float(value) == float(have)
-        except (TypeError, ValueError):
-            same = str(value) == str(have)
-        if not same:
-            return False
-    return True
 
 
 def _row(case: Case, quantity: str, label: str, model: float, dem: float, unit: str = "") -> Row:
@@ -187,7 +161,7 @@ def _realised_restitution(case: Case, run: Run, result, out: Outcome) -> float:
     over the faster half), recorded as a row against the nominal value."""
     from vibrofeed.postproc.flights import Flights
 
-    e_dem = Flights().compute(result).realised_restitution()
+    e_dem = Flights(result).run().results.realised_restitution
     if e_dem != e_dem:
         raise CaseError(f"case {case.name} [{run.label}]: restitution = \"realised\" needs an "
                         "impact, and the part never lands")
@@ -219,7 +193,7 @@ def _flights(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
     from vibrofeed.postproc.flights import Flights
     from vibrofeed.results.reader import Result
 
-    from .part_on_surface import simulate
+    from .models.part_on_surface import simulate
     from .plots import plot_flights
 
     n_compare = int(case.compare.get("flights", 3))
@@ -230,7 +204,7 @@ def _flights(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
         p = dict(run.params)
         T = 1.0 / run.number("freq")
         with Result(run.output) as r:
-            fl = Flights().compute(r)
+            fl = Flights(r).run().results
             t_end = float(r.time[-1])
             dem_t, dem_gap = fl.time, fl.gap
         if realised:
@@ -261,7 +235,7 @@ def _transport(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None
     from vibrofeed.postproc.transport import Transport
     from vibrofeed.results.reader import Result
 
-    from .part_on_surface import mean_velocity
+    from .models.part_on_surface import mean_velocity
     from .plots import plot_speed_curve
 
     transient = float(case.compare.get("transient_periods", 10))
@@ -270,7 +244,7 @@ def _transport(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None
         p = dict(run.params)
         T = 1.0 / run.number("freq")
         with Result(run.output) as r:
-            dem = Transport(start=transient * T).compute(r).mean_velocity
+            dem = Transport(r, start=transient * T).run().results.mean_velocity
             if case.compare.get("restitution", "nominal") == "realised":
                 p["restitution"] = repr(_realised_restitution(case, run, r, out))
         model = mean_velocity(dm.waveform(p), dm.part(p), incline=run.number("incline")).velocity
@@ -303,8 +277,8 @@ def _period(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
     from vibrofeed.postproc.flights import Flights
     from vibrofeed.results.reader import Result
 
-    from .hopping import bifurcation_diagram
-    from .part_on_surface import simulate
+    from .models.hopping import bifurcation_diagram
+    from .models.part_on_surface import simulate
     from .plots import plot_bifurcation
 
     transient = float(case.compare.get("transient_periods", 20))
@@ -317,7 +291,7 @@ def _period(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
         T = 1.0 / run.number("freq")
         gamma = dm.gamma_from_amp(run.number("amp_n"), run.number("freq"))
         with Result(run.output) as r:
-            fl = Flights().compute(r)
+            fl = Flights(r).run().results
             t_end = float(r.time[-1])
             if realised:
                 p["restitution"] = repr(_realised_restitution(case, run, r, out))
@@ -346,18 +320,18 @@ def _vertical(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
     from vibrofeed.postproc.transport import Transport
     from vibrofeed.results.reader import Result
 
+    from .models.vertical import periodic_transport, simulate
     from .plots import plot_vertical
-    from .vertical import periodic_transport, simulate
 
     transient = float(case.compare.get("transient_periods", 5))
     panels = []
     for run in runs:
         p = run.params
         T = 1.0 / run.number("freq")
-        surface = dm.along_track(dm.waveform(p))
+        surface = dm.waveform(p)
         contact = dm.vertical_contact(p)
         with Result(run.output) as r:
-            dem = Transport(start=transient * T).compute(r)
+            dem = Transport(r, start=transient * T).run().results
             t, x = r.track(int(r.part_ids[0]))
             xs = r.surface_position[:, 0]
             t_end = float(r.time[-1])
@@ -372,7 +346,7 @@ def _vertical(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
 
 def check_vertical_case(params: dict) -> None:
     """Refuse a vertical-transport case the feasibility bounds rule out."""
-    from .vertical import check_feasible
+    from .models.vertical import check_feasible
 
     wf = dm.waveform(params)
     a_max = float(np.max(np.abs(wf.acceleration(np.linspace(0, wf.period, 4001))[0])))
@@ -384,11 +358,8 @@ def check_vertical_case(params: dict) -> None:
 
 
 # ------------------------------------------------------------------ kind: replay
-def _replay(case: Case, jobs: int, out: Outcome, fig_dir: Path, on_run) -> None:
-    from .plots import plot_replay
-    from .replay_dem import replay_dem
-    from .replay_fit import prepare, replay
-    from .trials import load_trials, trials_dir
+def _trials(case: Case):
+    from .replay.trials import load_trials, trials_dir
 
     directory = trials_dir()
     if directory is None:
@@ -400,30 +371,50 @@ def _replay(case: Case, jobs: int, out: Outcome, fig_dir: Path, on_run) -> None:
         found = {t.name for t in trials}
         raise CaseError(f"case {case.name}: trials not found in {directory}: "
                         f"{', '.join(n for n in wanted if n not in found)}")
+    return trials
+
+
+def _replay_force(case: Case, trial) -> float:
+    return float(case.compare["normal_force_mg"][trial.name]) * float(case.parameters["mass"]) * G
+
+
+def _replay_runs(case: Case, out_dir: Path, ranks: int, reuse: bool) -> list[Run]:
+    """One LIGGGHTS replay per measured trial; ``values`` holds the trial."""
+    from .replay.dem import replay_request
+    from .replay.fit import prepare
+
     mass, mu = float(case.parameters["mass"]), float(case.parameters["mu"])
-    forces_mg = case.compare["normal_force_mg"]
-    g = dm.G
-
-    def one(trial):
-        on_run(trial.name, "running")
+    runs = []
+    for trial in _trials(case):
         prep = prepare(trial)
-        force = float(forces_mg[trial.name]) * mass * g
-        model = replay(prep, mass, force, mu, mu)
-        dem = replay_dem(prep, mass, force, mu, fig_dir / f"{trial.name}.h5")
-        on_run(trial.name, "done")
-        return trial, model, dem
+        output = out_dir / f"{trial.name}.h5"
+        request = replay_request(prep, mass, _replay_force(case, trial), mu, output, ranks=ranks,
+                                 reuse=reuse)
+        runs.append(Run(trial.name, {"trial": prep}, dict(request.params), output, request))
+    return runs
 
-    with ThreadPoolExecutor(jobs) as pool:
-        done = list(pool.map(one, trials))
-    for trial, model, dem in done:
+
+def _replay(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
+    from .plots import plot_replay
+    from .replay.dem import replay_result
+    from .replay.fit import replay
+
+    mass, mu = float(case.parameters["mass"]), float(case.parameters["mu"])
+    dems = []
+    for run in runs:
+        prep = run.values["trial"]
+        force = _replay_force(case, prep.trial)
+        model = replay(prep, mass, force, mu, mu)
+        dem = replay_result(prep, run.output, force, mu)
+        dems.append(dem)
         n = min(len(model.predicted_mm), len(dem.predicted_mm))
         diff = float(np.mean(np.abs(model.predicted_mm[:n] - dem.predicted_mm[:n])))
-        out.rows.append(_row(case, "mean_difference_mm", trial.name, 0.0, diff, "mm"))
-        out.rows.append(_row(case, "mean_abs_error_mm", trial.name, model.mean_abs_error_mm,
+        out.rows.append(_row(case, "mean_difference_mm", run.label, 0.0, diff, "mm"))
+        out.rows.append(_row(case, "mean_abs_error_mm", run.label, model.mean_abs_error_mm,
                              dem.mean_abs_error_mm, "mm"))
-        out.rows.append(_row(case, "final_displacement_mm", trial.name, model.final_predicted_mm,
+        out.rows.append(_row(case, "final_displacement_mm", run.label, model.final_predicted_mm,
                              dem.final_predicted_mm, "mm"))
-    out.figures.append(plot_replay([d for _, _, d in done], fig_dir / "dem_replays.png", engine="dem"))
+    out.figures.append(plot_replay(dems, fig_dir / "dem_replays.png", engine="dem"))
 
 
 KINDS = {"flights": _flights, "transport": _transport, "period": _period, "vertical": _vertical,

@@ -10,14 +10,18 @@ other through the engine (tests/engine/test_waveform_decks.py).
 from __future__ import annotations
 
 import math
-from typing import Mapping
+from collections.abc import Mapping
 
-from .part_on_surface import PartParams
-from .vertical import Contact
-from .waveforms import (CoulombPumpWaveform, PiecewiseConstantAccel, SineWaveform,
-                        SquareWaveAccel, StickSlipWaveform, Waveform)
-
-G = 9.81  # the decks' gravity
+from .models.constants import G
+from .models.part_on_surface import PartParams
+from .models.surface import (
+    CoulombPumpWaveform,
+    SineWaveform,
+    SquareWaveAccel,
+    StickSlipWaveform,
+    SurfaceMotion,
+)
+from .models.vertical import Contact
 
 SINE, SQUARE, STICK_SLIP, COULOMB_PUMP = 0, 1, 2, 3
 
@@ -38,9 +42,10 @@ def gamma_from_amp(amp: float, freq: float, g: float = G) -> float:
     return amp * (2 * math.pi * freq) ** 2 / g
 
 
-def waveform(p: Mapping) -> Waveform:
-    """The surface waveform of deck parameters ``p`` (freq, amp_t, amp_n,
-    phase, waveform, duty), as the deck moves the plate."""
+def waveform(p: Mapping) -> SurfaceMotion:
+    """The surface motion of deck parameters ``p`` (freq, amp_t, amp_n,
+    phase, waveform, duty), as the deck moves the plate. Both the
+    part-on-surface and the vertical model take it as it is."""
     kind = int(_f(p, "waveform", SINE))
     freq, amp_t, amp_n = _f(p, "freq"), _f(p, "amp_t", 0.0), _f(p, "amp_n", 0.0)
     phase, duty = _f(p, "phase", 0.0), _f(p, "duty", 0.7)
@@ -76,16 +81,3 @@ def vertical_contact(p: Mapping) -> Contact:
     pressing ``normal_force``: mu_s = mu_k = mu."""
     mu = _f(p, "mu")
     return Contact(mass=mass(p), normal_force=_f(p, "normal_force"), mu_s=mu, mu_k=mu, g=G)
-
-
-def along_track(wf: Waveform):
-    """The along-track (x) motion of a waveform as a one-axis surface for the
-    vertical-transport model (x is up the wall when incline = 90)."""
-    from .surface_motion import CallableSurface
-
-    breaks = []
-    if isinstance(wf, PiecewiseConstantAccel):
-        breaks = list(wf.starts)
-    return CallableSurface(lambda t: wf.displacement(t)[0], lambda t: wf.velocity(t)[0],
-                           lambda t: wf.acceleration(t)[0], breakpoints=breaks,
-                           period=wf.period)

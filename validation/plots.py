@@ -1,29 +1,40 @@
-"""Figures of `vibrofeed validate`: DEM overlaid on the model (PNG)."""
+"""Figures of `vibrofeed validate` and `vibrofeed replay`: DEM overlaid on the model (PNG).
+
+matplotlib is imported by the functions that draw, so importing this module
+(or the cross-check) costs nothing until a figure is made.
+"""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")  # files only, no display needed
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import numpy as np
 
 DEM_STYLE = dict(color="tab:red", lw=1.2, label="DEM (LIGGGHTS)")
 MODEL_STYLE = dict(color="black", lw=1.0, ls="--", label="model")
 SURFACE_STYLE = dict(color="tab:blue", lw=0.8, alpha=0.7, label="surface")
 
 
+def _pyplot():
+    """matplotlib.pyplot on the file-only backend (no display needed)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
 def _save(fig, path: Path) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=120, bbox_inches="tight")
-    plt.close(fig)
+    _pyplot().close(fig)
     return path
 
 
 def plot_flights(case, panels: list[dict], path: Path) -> Path:
     """Height of the part's lowest point and of the surface vs time, per sweep point."""
+    plt = _pyplot()
     fig, axes = plt.subplots(len(panels), 1, figsize=(8, 2.3 * len(panels)), squeeze=False,
                              layout="constrained")
     for ax, p in zip(axes[:, 0], panels):
@@ -43,7 +54,9 @@ def plot_flights(case, panels: list[dict], path: Path) -> Path:
 def plot_speed_curve(case, runs, points, axis: str, path: Path) -> Path:
     """Mean conveying speed vs the swept quantity: model curve, DEM points."""
     from . import deck_models as dm
-    from .part_on_surface import mean_velocity
+    from .models.part_on_surface import mean_velocity
+
+    plt = _pyplot()
 
     xs = np.array([float(r.values[axis]) for r, _, _ in points])
     fig, ax = plt.subplots(figsize=(6, 4))
@@ -80,6 +93,7 @@ def plot_speed_curve(case, runs, points, axis: str, path: Path) -> Path:
 
 def plot_bifurcation(case, grid, diagram, dem_points, path: Path) -> Path:
     """Jump lengths (flight durations in periods) vs Gamma: model and DEM."""
+    plt = _pyplot()
     fig, ax = plt.subplots(figsize=(7, 4.5))
     for g, jumps in zip(grid, diagram):
         ax.plot(np.full(len(jumps), g), jumps, ",", color="black")
@@ -96,6 +110,7 @@ def plot_bifurcation(case, grid, diagram, dem_points, path: Path) -> Path:
 
 def plot_vertical(case, panels: list[dict], path: Path) -> Path:
     """Part displacement up the wall vs time: DEM, model and the wall itself."""
+    plt = _pyplot()
     fig, axes = plt.subplots(len(panels), 1, figsize=(8, 2.5 * len(panels)), squeeze=False,
                              layout="constrained")
     for ax, p in zip(axes[:, 0], panels):
@@ -113,6 +128,7 @@ def plot_vertical(case, panels: list[dict], path: Path) -> Path:
 
 def plot_replay(results, path, engine: str = "model") -> Path:
     """Measured and predicted part position, and the platform, per trial."""
+    plt = _pyplot()
     path = Path(path)
     fig, axes = plt.subplots(len(results), 1, figsize=(8, 2.8 * len(results)), squeeze=False,
                              layout="constrained")

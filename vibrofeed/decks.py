@@ -7,7 +7,12 @@ in a trailing comment::
 
 :class:`Deck` reads those declarations (the deck stays an ordinary LIGGGHTS
 input file) and its header comment, and splits the deck into commands with
-the line each starts on, so an engine error can be pinned to a deck line.
+the file and line each starts on, so an engine error can be pinned to a deck
+line. It follows the deck's ``include`` commands into the shared blocks of
+``decks/include/`` (a path must start with ``${deck_dir}/`` or be absolute:
+LIGGGHTS opens a relative path from its working directory, which is not the
+deck's folder), so commands, formulas and sources cover every file a run
+reads. Includes inside an ``if`` are not followed.
 """
 
 from __future__ import annotations
@@ -17,6 +22,8 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
+from .errors import DeckError
+
 DECK_SUFFIX = ".liggghts"
 
 # Set by vibrofeed itself, never by a user's -p.
@@ -24,14 +31,12 @@ RESERVED = {"driver", "deck_dir", "dump_file"}
 
 _INDEX = re.compile(
     r"^\s*variable\s+(?P<name>\w+)\s+index\s+(?P<value>\S+)\s*(?:#\s*(?P<comment>.*))?$")
-_EQUAL = re.compile(r"^\s*variable\s+(?P<name>\w+)\s+equal\s+(?P<formula>.*)$")
+_EQUAL = re.compile(r"^variable\s+(?P<name>\w+)\s+equal\s+(?P<formula>.+)$")
+_INCLUDE = re.compile(r"^include\s+(?P<path>\S+)$")
 _REF = re.compile(r"\bv_(\w+)")
 _CLOCK = re.compile(r"\b(time|step|elapsed|elaplong|dt)\b")
 _UNIT = re.compile(r"^\[(?P<unit>[^\]]*)\]\s*(?P<text>.*)$")
-
-
-class DeckError(ValueError):
-    """A deck cannot be found or does not follow the deck conventions."""
+_DECK_DIR = "${deck_dir}"
 
 
 def decks_dir() -> Path:
@@ -43,6 +48,7 @@ def decks_dir() -> Path:
 
 
 def available() -> list[str]:
+    """Names of the decks in :func:`decks_dir` (its include/ blocks are not decks)."""
     return sorted(p.stem for p in decks_dir().glob(f"*{DECK_SUFFIX}"))
 
 
@@ -67,6 +73,7 @@ class Variable:
 class Command:
     line: int  # 1-based line where the command starts
     text: str  # joined continuation lines, comment stripped, whitespace collapsed
+    file: Path | None = None  # the deck or the included file holding it
 
 
 def strip_comment(line: str) -> str:
@@ -84,55 +91,130 @@ def normalize(command: str) -> str:
     return " ".join(strip_comment(command).split())
 
 
-def split_commands(text: str) -> list[Command]:
-    """Commands of a deck as LIGGGHTS reads them ('&' joins lines)."""
+def split_commands(text: str, file: Path | None = None) -> list[Command]:
+    """Commands of a deck as LIGGGHTS reads them: a line ending in '&' is joined
+    to the next one as it is (no space added, indent kept), so a formula may be
+    wrapped with '&' and an unindented continuation."""
     commands, buf, start = [], "", 0
     for number, raw in enumerate(text.splitlines(), start=1):
         line = strip_comment(raw).rstrip()
         if not buf:
             start = number
         if line.endswith("&"):
-            buf += line[:-1] + " "
+            buf += line[:-1]
             continue
         buf += line
         if buf.strip():
-            commands.append(Command(start, normalize(buf)))
+            commands.append(Command(start, normalize(buf), file))
         buf = ""
     if buf.strip():
-        commands.append(Command(start, normalize(buf)))
+        commands.append(Command(start, normalize(buf), file))
     return commands
 
 
+def _shown(path: Path) -> str:
+    """``path`` as an error message shows it: relative to the working directory
+    when it is below it, else absolute."""
+    try:
+        return str(path.relative_to(Path.cwd()))
+    except ValueError:
+        return str(path)
+
+
+def read_text(path: Path, what: str = "deck") -> str:
+    """The text of a deck (or of a file it includes, ``what`` = "included
+    file"); DeckError if it cannot be read or is not text."""
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise DeckError(f"cannot read {what} {path}: {exc.strerror}") from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError:
+        text = None
+    if text is None or "\0" in text:
+        noun = "deck" if what == "deck" else "file"
+        raise DeckError(f"{path} is not a text {noun} (LIGGGHTS input files are UTF-8 text)")
+    return text
+
+
 class Deck:
-    """A deck file and the tunables it declares."""
+    """A deck file, the files it includes, and the tunables it declares.
+
+    Attributes: ``path``, ``name``, ``text`` (the deck's own text),
+    ``sources`` (``{path relative to the deck's folder: text}`` of the deck and
+    every file it includes, in the order LIGGGHTS reads them), ``commands``
+    (every command in execution order, includes expanded, each with its file
+    and line), ``variables`` (the tunables: the index variables the deck
+    itself declares; included blocks only use them), ``formulas`` (equal-style
+    variables defined as commands of their own, in the deck or a block; the
+    first definition counts).
+    """
 
     def __init__(self, path: str | os.PathLike):
         self.path = Path(path).resolve()
-        try:
-            self.text = self.path.read_text()
-        except OSError as exc:
-            raise DeckError(f"cannot read deck {path}: {exc.strerror}") from exc
+        self.text = read_text(Path(path))  # errors name the path as given
         self.name = self.path.stem
+        self.sources: dict[str, str] = {self.path.name: self.text}
         self.variables: dict[str, Variable] = {}
-        self.formulas: dict[str, str] = {}  # equal-style variables defined at line start
+        self.formulas: dict[str, str] = {}
+        self.commands = self._expand(self.path, self.text, (self.path,))
         for number, line in enumerate(self.text.splitlines(), start=1):
             m = _INDEX.match(line)
-            if m:
+            if m and m["name"] not in self.variables:  # LIGGGHTS keeps an index variable's first value
                 unit, description = "", (m["comment"] or "").strip()
                 um = _UNIT.match(description)
                 if um:
                     unit, description = um["unit"].strip(), um["text"].strip()
                 self.variables[m["name"]] = Variable(m["name"], m["value"], unit, description, number)
-                continue
-            m = _EQUAL.match(strip_comment(line))
+        for c in self.commands:
+            m = _EQUAL.match(c.text)
             if m and m["name"] not in self.formulas:
-                self.formulas[m["name"]] = m["formula"].strip()
+                self.formulas[m["name"]] = m["formula"]
         if not self.variables:
             raise DeckError(f"{self.path}: declares no tunables ('variable NAME index VALUE # [unit] ...')")
-        self.commands = split_commands(self.text)
+
+    def _expand(self, path: Path, text: str, chain: tuple[Path, ...]) -> list[Command]:
+        """The commands of ``text`` (from ``path``) with its includes expanded."""
+        out = []
+        for cmd in split_commands(text, path):
+            out.append(cmd)
+            m = _INCLUDE.match(cmd.text)
+            if not m:
+                continue
+            target = self._include_target(m["path"], cmd, path)
+            if target in chain:
+                raise DeckError(f"{_shown(path)}:{cmd.line}: {target.name} includes itself")
+            key = self._relative(target)
+            included = self.sources.get(key)
+            if included is None:
+                if not target.is_file():
+                    raise DeckError(f"{_shown(path)}:{cmd.line}: included file {m['path']} "
+                                    f"not found (looked for {target})")
+                included = self.sources[key] = read_text(target, "included file")
+            out.extend(self._expand(target, included, chain + (target,)))
+        return out
+
+    def _include_target(self, spec: str, cmd: Command, path: Path) -> Path:
+        resolved = spec.replace(_DECK_DIR, str(self.path.parent))
+        where = f"{_shown(path)}:{cmd.line}"
+        if "$" in resolved:
+            raise DeckError(f"{where}: cannot follow 'include {spec}': only {_DECK_DIR} is resolved "
+                            "in an include path")
+        if not spec.startswith(_DECK_DIR) and not Path(spec).is_absolute():
+            raise DeckError(f"{where}: 'include {spec}': start the path with {_DECK_DIR}/ "
+                            "(LIGGGHTS opens a relative path from its working directory)")
+        return Path(resolved).resolve()
+
+    def _relative(self, path: Path) -> str:
+        """``path`` relative to the deck's folder (as in :attr:`sources`), else absolute."""
+        try:
+            return path.relative_to(self.path.parent).as_posix()
+        except ValueError:
+            return str(path)
 
     @classmethod
-    def find(cls, spec: str | os.PathLike) -> "Deck":
+    def find(cls, spec: str | os.PathLike) -> Deck:
         """A deck by path, or by name from the project's decks folder."""
         p = Path(spec)
         if p.is_file():
@@ -182,9 +264,12 @@ class Deck:
         """The variables a user may set (reserved ones excluded)."""
         return {k: v for k, v in self.variables.items() if k not in RESERVED}
 
-    def command_at(self, line: int) -> Command | None:
+    def command_at(self, line: int, file: str | os.PathLike | None = None) -> Command | None:
+        """The command starting at ``line`` of the deck, or of ``file`` (a path
+        relative to the deck's folder, as in :attr:`sources`, or absolute)."""
+        target = self.path if file is None else (self.path.parent / file).resolve()
         for c in self.commands:
-            if c.line == line:
+            if c.line == line and c.file == target:
                 return c
         return None
 

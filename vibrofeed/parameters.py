@@ -9,13 +9,18 @@ from __future__ import annotations
 
 import difflib
 import math
-from typing import Callable, Mapping
+from collections.abc import Callable, Mapping
 
 from .decks import RESERVED, Deck
+from .errors import ParameterError
 
-
-class ParameterError(ValueError):
-    """A run parameter is unknown, malformed or non-physical."""
+# A feeder's stroke is micrometres (piezo micro-feeders) to a few millimetres
+# (bowl feeders); a larger amplitude is almost always a unit slip (metres).
+MAX_AMPLITUDE = 0.01  # m
+# A track moving faster than this (amp * 2 pi freq) throws parts metres high:
+# the simulation box and its neighbour bins would grow beyond what LIGGGHTS
+# can allocate ("Domain too large for neighbor bins"). Real feeders: < 0.5 m/s.
+MAX_SURFACE_SPEED = 2.0  # m/s
 
 
 def _positive(x):
@@ -56,8 +61,10 @@ def _integer(lo=None, choices=None):
 # name -> check(value) returning an error text or None
 RULES: dict[str, Callable[[float], str | None]] = {
     "freq": _positive,
-    "amp_t": _non_negative,
-    "amp_n": _non_negative,
+    "amp_t": _between(0, MAX_AMPLITUDE, lo_open=False, hi_open=False,
+                      why="a feeder's stroke is um to mm; amplitudes are in metres"),
+    "amp_n": _between(0, MAX_AMPLITUDE, lo_open=False, hi_open=False,
+                      why="a feeder's stroke is um to mm; amplitudes are in metres"),
     "phase": _finite,
     "incline": _between(-90, 90, lo_open=False, hi_open=False),
     "radius": _positive,
@@ -135,6 +142,14 @@ MAX_FRAMES = 1_000_000
 
 def _check_relations(p: Mapping[str, float]) -> None:
     """Limits that involve several parameters."""
+    for amp in ("amp_n", "amp_t"):
+        if amp in p and "freq" in p:
+            speed = 2 * math.pi * p["freq"] * p[amp]
+            if speed > MAX_SURFACE_SPEED:
+                raise ParameterError(
+                    f"{amp}={p[amp]:g} m at freq={p['freq']:g} Hz moves the surface at "
+                    f"{speed:.3g} m/s peak (limit {MAX_SURFACE_SPEED:g} m/s: real feeders stay "
+                    f"below 0.5 m/s); lower {amp} or freq")
     if "output_dt" in p and "t_end" in p:
         if p["output_dt"] > p["t_end"]:
             raise ParameterError(

@@ -2,8 +2,7 @@
 
 from __future__ import annotations
 
-from .postproc.flights import Flights
-from .postproc.transport import Transport
+from .postproc import Flights, Transport
 from .results.reader import Result
 
 
@@ -23,10 +22,10 @@ def run_summary(run) -> str:
         n = len(r.part_ids)
         bits = [f"{n} part{'s' * (n != 1)}"]
         if n and r.n_frames > 2:
-            tr = Transport().compute(r)
+            tr = Transport(r).run().results
             bits.append(f"mean speed {_si(tr.mean_velocity, 'm/s')} along x")
         if n == 1 and r.n_frames > 2:
-            fl = Flights().compute(r)
+            fl = Flights(r).run().results
             period = 1.0 / float(r.parameters.get("freq", 1.0))
             hops = int((fl.durations >= 0.05 * period).sum())  # shorter: rebounds
             rebounds = fl.n_hops - hops

@@ -91,3 +91,18 @@ def test_sigkill_of_vibrofeed_itself(tmp_path):
         Path(f"/proc/{worker}/status").read_text().find("zombie") >= 0
     # Nobody was left to record the end: the file still says "running".
     assert_valid_partial(part, seen, "running")
+
+
+def test_ctrl_c_marks_the_file_interrupted_and_exits_130(tmp_path):
+    proc, out, part = start_run(tmp_path)
+    try:
+        seen = wait_for_frames(part, 20, proc)
+        proc.send_signal(signal.SIGINT)  # what Ctrl-C sends
+        proc.wait(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    err = proc.stderr.read().decode()
+    assert proc.returncode == 130 and err.strip() == "vibrofeed: error: interrupted"
+    assert not out.exists()
+    assert_valid_partial(part, seen, "interrupted")

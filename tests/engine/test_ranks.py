@@ -9,9 +9,8 @@ show up at the scale of the motion itself.
 
 import numpy as np
 
-from vibrofeed.results.reader import Result
-
 from helpers import vibrofeed
+from vibrofeed.results.reader import Result
 
 
 def test_one_and_two_ranks_agree(tmp_path):

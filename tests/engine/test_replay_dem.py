@@ -1,19 +1,17 @@
 """The DEM engine of `vibrofeed replay` agrees with the model on the same inputs.
 
 Target (issue): mean |z_DEM - z_model| <= 0.02 mm. The DEM plays the
-platform's spline on a near-rigid, exactly Coulomb wall (validation/replay_dem.py).
+platform's spline on a near-rigid, exactly Coulomb wall (validation/replay/dem.py).
 """
 
 import json
 
 import numpy as np
-import pytest
-
-from vibrofeed.validation.replay_dem import replay_dem
-from vibrofeed.validation.replay_fit import MEASURED_NORMAL_FORCE_MG, prepare, replay
-from vibrofeed.validation.trials import load_trials, read_trial, trials_dir
 
 from helpers import vibrofeed, write_trial
+from vibrofeed.validation.replay.dem import replay_dem
+from vibrofeed.validation.replay.fit import MEASURED_NORMAL_FORCE_MG, prepare, replay
+from vibrofeed.validation.replay.trials import load_trials, read_trial
 
 MASS, G, MU = 0.009, 9.81, 0.6
 
@@ -48,12 +46,7 @@ def test_cli_dem_engine(tmp_path):
     assert abs(dem["mean_abs_error_mm"] - model["mean_abs_error_mm"]) <= 0.02
 
 
-REAL = trials_dir()
-
-
-@pytest.mark.skipif(REAL is None, reason="measured trials absent: put them in "
-                    "../shared/data/vertical-transport or set VIBROFEED_TRIALS_DIR")
-def test_measured_trial_5(tmp_path):
-    trial = next(t for t in load_trials(REAL) if t.number == 5)  # low grasp, long slips
+def test_measured_trial_5(tmp_path, measured_trials_dir):
+    trial = next(t for t in load_trials(measured_trials_dir) if t.number == 5)  # low grasp, long slips
     model, dem, diff = compare(trial, MEASURED_NORMAL_FORCE_MG[5] * MASS * G, tmp_path)
     assert diff <= 0.02

@@ -1,21 +1,31 @@
-"""Engine errors reach the user as one line naming the LIGGGHTS message and the deck line."""
+"""Engine errors reach the user as one line naming the LIGGGHTS message and the deck
+(or included file) line."""
 
 import shutil
 
 import h5py
-import pytest
-
-from vibrofeed.results.check import check_file
 
 from helpers import DECKS, vibrofeed
+from vibrofeed.results.check import check_file
 
 
-def deck_copy(tmp_path, edit, name="broken", meshes=True):
+def deck_copy(tmp_path, edit=None, name="broken", meshes=True, include_edit=None):
+    """single_part.liggghts, changed by ``edit``, in ``tmp_path`` with its
+    include/ blocks (``include_edit``: ``(block name, edit)`` changes one) and,
+    unless ``meshes`` is false, its meshes."""
     text = (DECKS / "single_part.liggghts").read_text()
-    new = edit(text)
-    assert new != text, "the edit did not apply"
+    new = text if edit is None else edit(text)
+    if edit is not None:
+        assert new != text, "the edit did not apply"
     path = tmp_path / f"{name}.liggghts"
     path.write_text(new)
+    shutil.copytree(DECKS / "include", tmp_path / "include")
+    if include_edit is not None:
+        block = tmp_path / "include" / include_edit[0]
+        before = block.read_text()
+        after = include_edit[1](before)
+        assert after != before, "the edit of the include did not apply"
+        block.write_text(after)
     if meshes:
         shutil.copytree(DECKS / "meshes", tmp_path / "meshes")
     return path
@@ -41,13 +51,34 @@ def test_error_in_a_deck_command_names_message_and_line(tmp_path):
     assert out.with_suffix(".log").exists()  # the LIGGGHTS log is kept for diagnosis
 
 
+def test_error_in_an_included_block_names_that_file_and_line(tmp_path):
+    deck = deck_copy(tmp_path, include_edit=(
+        "contact.liggghts", lambda t: t.replace("property/global coefficientFriction",
+                                                "property/globall coefficientFriction")))
+    proc = vibrofeed("run", deck, "-o", tmp_path / "r.h5")
+    assert proc.returncode == 1
+    err = proc.stderr.strip()
+    assert err.count("\n") == 0 and "Traceback" not in err
+    assert 'Invalid fix style: "property/globall"' in err
+    line = line_of(tmp_path / "include" / "contact.liggghts", "property/globall")
+    assert f"include/contact.liggghts:{line}: fix m4 all property/globall coefficientFriction" in err
+
+
 def test_missing_mesh_file(tmp_path):
-    deck = tmp_path / "nomesh.liggghts"
-    deck.write_text((DECKS / "single_part.liggghts").read_text())  # no meshes/ next to it
+    deck = deck_copy(tmp_path, name="nomesh", meshes=False)  # no meshes/ next to it
     proc = vibrofeed("run", deck, "-o", tmp_path / "r.h5")
     assert proc.returncode == 1
     assert "plate.stl" in proc.stderr
     assert f"nomesh.liggghts:{line_of(deck, 'fix             plate all mesh/surface')}:" in proc.stderr
+
+
+def test_missing_include_is_refused_before_the_engine_starts(tmp_path):
+    deck = tmp_path / "alone.liggghts"
+    deck.write_text((DECKS / "single_part.liggghts").read_text())  # no include/ next to it
+    proc = vibrofeed("run", deck, "-o", tmp_path / "r.h5")
+    assert proc.returncode == 2 and proc.stderr.count("\n") == 1
+    assert f"alone.liggghts:{line_of(deck, 'include/surface_motion.liggghts')}: included file" in proc.stderr
+    assert "not found" in proc.stderr and not (tmp_path / "r.log").exists()
 
 
 def test_error_during_the_run_keeps_the_frames_written_before(tmp_path):

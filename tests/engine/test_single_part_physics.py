@@ -1,6 +1,7 @@
 """Physical smoke test: a part on a plate vibrating normal to itself.
 
-Rigid-body theory (seed 001, 2.3, with the README's corrections): on a plate
+Rigid-body theory (Khan & Sarma, §2.3, with the corrected launch condition and flight
+trajectory noted in the project's sources): on a plate
 moving as z_s = A sin(w t), a part in contact leaves the plate when the
 plate's downward acceleration first exceeds g, at w t_l = asin(1/Gamma),
 Gamma = A w^2 / g, with the plate's height and velocity there; it then flies
@@ -22,12 +23,11 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
+from helpers import vibrofeed
 from vibrofeed.postproc.flights import Flights
 from vibrofeed.results.reader import Result
+from vibrofeed.validation.models.constants import G
 
-from helpers import vibrofeed
-
-G = 9.81
 FREQ = 50.0
 W = 2 * np.pi * FREQ
 T = 1 / FREQ
@@ -45,7 +45,7 @@ def run_plate(tmp_path, gamma):
 
 def test_below_one_g_the_part_never_leaves_the_plate(tmp_path):
     with run_plate(tmp_path, 0.8) as r:
-        fl = Flights().compute(r)
+        fl = Flights(r).run().results
         # In contact the gap is minus the elastic overlap: it never turns positive.
         assert fl.gap[1:].max() <= 1e-12
         assert fl.n_hops == 0
@@ -67,7 +67,7 @@ def test_above_one_g_the_part_hops_as_free_flight_predicts(tmp_path, gamma):
     apex = gap_model(grid[:k]).max()
 
     with run_plate(tmp_path, gamma) as r:
-        fl = Flights().compute(r)
+        fl = Flights(r).run().results
         t_contact, dt = r.derived["t_contact"], r.derived["dt_used"]
         radius = r.parameters["radius"]
         z = r.track(1)[1][:, 2] - radius  # height of the part's lowest point

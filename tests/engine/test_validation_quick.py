@@ -10,9 +10,8 @@ import re
 
 import pytest
 
-from vibrofeed.validation.cases import CASES_DIR
-
 from helpers import vibrofeed
+from vibrofeed.validation.cases import CASES_DIR
 
 
 def one_point(tmp_path, name, key, value):

@@ -8,10 +8,9 @@ import subprocess
 import numpy as np
 import pytest
 
+from helpers import DECKS, vibrofeed
 from vibrofeed.results.reader import Result
 from vibrofeed.validation import deck_models as dm
-
-from helpers import DECKS, vibrofeed
 
 WAVEFORMS = {0: "sine", 1: "square", 2: "stick-slip", 3: "Coulomb pump"}
 PARAMS = {"freq": "50", "amp_t": "1e-4", "amp_n": "8e-5", "phase": "60", "duty": "0.7"}
@@ -33,11 +32,16 @@ def test_mesh_is_where_the_surface_is_recorded(tmp_path, waveform):
     marker = "# ------------------------------------------------------------------ run"
     deck.write_text(text.replace(marker, extra + marker))
     shutil.copytree(DECKS / "meshes", tmp_path / "meshes")
+    shutil.copytree(DECKS / "include", tmp_path / "include")
     args = ["liggghts", "-in", str(deck), "-var", "deck_dir", str(tmp_path), "-var", "t_end", "0.004",
             "-var", "waveform", str(waveform), "-log", "log", "-nocite"]
     for k, v in PARAMS.items():
         args += ["-var", k, v]
     subprocess.run(args, cwd=tmp_path, check=True, capture_output=True)
+    # check/timestep/gran reports the timestep's fractions of the Rayleigh and
+    # Hertz times in the thermo output, for a user running by hand
+    log = (tmp_path / "log").read_text()
+    assert "ts[1]" in log and "ts[2]" in log
     reference = read_stl_vertices(DECKS / "meshes" / "plate.stl")
     surface = np.loadtxt(tmp_path / "surface.txt")
     assert len(surface) >= 5
@@ -67,7 +71,7 @@ def test_recorded_surface_is_the_model_waveform(tmp_path, waveform):
         dt = r.derived["dt_used"]
         params = {k: str(v) for k, v in r.parameters.items()}
     wf = dm.waveform(params)
-    (x, z), (vx, vz) = wf.displacement(t), wf.velocity(t)
+    (x, z), (vx, vz) = wf.position(t), wf.velocity(t)
     if waveform in (2, 3):
         z = vz = np.zeros_like(t)  # in-plane waveforms
     amp = max(float(PARAMS["amp_t"]), float(PARAMS["amp_n"]))

@@ -3,15 +3,17 @@
 from vibrofeed.decks import Deck
 from vibrofeed.engine.errors import EngineError, failed_command, find_error
 
-MESH_ERROR = """Setting up run at Sun Nov 22 06:20:32 2026
-
-ERROR: Mesh (id plate): All 2 mesh elements have been lost / left the domain. 
-Please use 'boundary m m m' or scale/translate/rotate the mesh or change its dynamics
-FYI: center of mass of mesh including scale/tranlate/rotate is 0.000000 / 0.000000 / 0.000000
-     simulation box x from -0.050000 to 0.050000 y  from -0.005000 to 0.005000 z from -0.002000 to 0.010000
-     (gives indication about changes in scale/tranlate/rotate necessary to make simulation run)
- (./src/multi_node_mesh_parallel_I.h:605)
-"""
+MESH_ERROR = (  # as LIGGGHTS prints it, the trailing space of its first line included
+    "Setting up run at Sun Nov 22 06:20:32 2026\n"
+    "\n"
+    "ERROR: Mesh (id plate): All 2 mesh elements have been lost / left the domain. \n"
+    "Please use 'boundary m m m' or scale/translate/rotate the mesh or change its dynamics\n"
+    "FYI: center of mass of mesh including scale/tranlate/rotate is 0.000000 / 0.000000 / 0.000000\n"
+    "     simulation box x from -0.050000 to 0.050000 y  from -0.005000 to 0.005000 "
+    "z from -0.002000 to 0.010000\n"
+    "     (gives indication about changes in scale/tranlate/rotate necessary to make simulation run)\n"
+    " (./src/multi_node_mesh_parallel_I.h:605)\n"
+)
 
 
 def test_single_line_error():
@@ -68,3 +70,43 @@ def test_engine_error_reads_as_one_line():
     assert str(e) == 'LIGGGHTS error: Invalid fix style: "nope" at d.liggghts:6: fix bad all nope ${freq}'
     e = EngineError("Lost atoms", phase="run", step=100, time=1e-4)
     assert "during the run" in str(e) and "step 100" in str(e) and "\n" not in str(e)
+
+
+def test_failed_command_in_an_included_file(tmp_path):
+    (tmp_path / "include").mkdir()
+    block = tmp_path / "include" / "block.liggghts"
+    block.write_text("# block\n"
+                     "units si\n"                                  # 2: also in the deck
+                     "variable y equal &\n"                        # 3
+                     "1+2\n"
+                     "fix bad all nope\n")                         # 5
+    deck_path = tmp_path / "d.liggghts"
+    deck_path.write_text("variable freq index 50 # [Hz] f\n"        # 1
+                         "include ${deck_dir}/include/block.liggghts\n"  # 2
+                         "units si\n"                              # 3
+                         "run 10\n")                               # 4
+    deck = Deck(deck_path)
+    log = ("LIGGGHTS (Version)\n"
+           "variable freq index 50 # [Hz] f\n"
+           "include ${deck_dir}/include/block.liggghts\n"
+           f"include {tmp_path}/include/block.liggghts\n"
+           "units si\n"
+           "variable y equal 1+2\n"
+           "fix bad all nope\n"
+           'ERROR: Invalid fix style: "nope" (./src/modify.cpp:850)\n')
+    err = find_error(log)
+    cmd = failed_command(log, deck, before=err.line_index)
+    assert (cmd.file, cmd.line, cmd.text) == (block.resolve(), 5, "fix bad all nope")
+    # "units si" echoed after the include is the block's line 2, not the deck's line 3
+    cmd = failed_command(log, deck, before=5)
+    assert (cmd.file.name, cmd.line) == ("block.liggghts", 2)
+    # back in the deck after the include
+    log2 = log.replace("fix bad all nope\nERROR", "fix bad all nope\nunits si\nERROR")
+    cmd = failed_command(log2, deck, before=find_error(log2).line_index)
+    assert (cmd.file, cmd.line) == (deck_path.resolve(), 3)
+
+
+def test_engine_error_names_the_included_file():
+    e = EngineError('Invalid fix style: "nope"', deck="decks/include/contact.liggghts", line=33,
+                    command="fix m1 all nope", phase="deck")
+    assert str(e).endswith("at decks/include/contact.liggghts:33: fix m1 all nope")

@@ -5,15 +5,16 @@ import math
 import numpy as np
 import pytest
 
-from vibrofeed.validation import hopping as H
-from vibrofeed.validation.subhopping import normalised_speed
+from vibrofeed.validation.models import hopping as H
+from vibrofeed.validation.models.subhopping import normalised_speed
 
 
 def test_period_one_limits_closed_form_values():
     # corrected report formula sqrt(1 + n^2 pi^2); the report's numbers in its units (g = 2) are 2x these
     for n, ref in zip((1, 2, 3, 4), (3.2969, 6.3623, 9.4777, 12.6061)):
         assert H.period_one_limit(n) == pytest.approx(ref, abs=5e-5)
-        assert 2 * H.period_one_limit(n) == pytest.approx((6.5938, 12.7245, 18.9554, 25.2122)[n - 1], abs=1e-4)
+        report = (6.5938, 12.7245, 18.9554, 25.2122)[n - 1]
+        assert 2 * H.period_one_limit(n) == pytest.approx(report, abs=1e-4)
 
 
 @pytest.mark.parametrize("n", [1, 2, 3, 4])
@@ -56,7 +57,8 @@ def test_e0_period_doubling_appears_just_above_sqrt_4_plus_pi2():
     p_above, _ = H.stroboscopic_period(1.01 * g_pd, 0.0, n_transient=400)
     assert p_below == 1 and p_above == 2
     # below: one jump length (one period); above: alternating long and short jumps summing to 2 periods
-    below, above = H.bifurcation_diagram([0.99 * g_pd, 1.01 * g_pd], 0.0, n_periods=16, n_transient=400, sweep=False)
+    below, above = H.bifurcation_diagram([0.99 * g_pd, 1.01 * g_pd], 0.0, n_periods=16,
+                                         n_transient=400, sweep=False)
     assert below.size >= 10 and np.ptp(below) < 1e-9
     assert below[0] == pytest.approx(1.0, abs=1e-9)
     lengths = np.unique(np.round(above, 6))
@@ -74,7 +76,8 @@ def test_locked_limit():
 
 @pytest.mark.parametrize("gamma", [1.05, 1.5, 2.5, 3.2])
 def test_optimal_phase_matches_closed_form(gamma):
-    """Locked period-one hop: gain(phi) = cos(phi)(tau - sin tau) + sin(phi)(1 - cos tau), phi = th_l - phase."""
+    """Locked period-one hop: gain(phi) = cos(phi)(tau - sin tau) + sin(phi)(1 - cos tau),
+    phi = th_l - phase."""
     tau = H.first_flight(gamma).duration
     th_l = H.launch_phase(gamma)
     expected = math.degrees(th_l - math.atan2(1 - math.cos(tau), tau - math.sin(tau)))

@@ -5,7 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from vibrofeed.validation.inplane import (
+from vibrofeed.validation.models.constants import G
+from vibrofeed.validation.models.inplane import (
     coulomb_pump_speed_curve,
     optimal_stick_slip_speed,
     optimal_stick_slip_waveform,
@@ -13,15 +14,14 @@ from vibrofeed.validation.inplane import (
     stick_slip_closed_form,
     stick_slip_speed_curve,
 )
-from vibrofeed.validation.part_on_surface import PartParams, mean_velocity
-from vibrofeed.validation.waveforms import (
+from vibrofeed.validation.models.part_on_surface import PartParams, mean_velocity
+from vibrofeed.validation.models.surface import (
     CoulombPumpWaveform,
     PiecewiseConstantAccel,
     SampledWaveform,
     StickSlipWaveform,
 )
 
-G = 9.81
 MU_S, MU_K = 0.6, 0.4
 PART = PartParams(MU_S, MU_K)
 FAST = dict(n_transient=8, n_block=4, max_blocks=4, rtol=1e-9)

@@ -2,10 +2,9 @@
 
 import pytest
 
+from helpers import DECKS
 from vibrofeed.decks import Deck
 from vibrofeed.parameters import ParameterError, parse_assignments, resolve
-
-from helpers import DECKS
 
 
 @pytest.fixture(scope="module")
@@ -28,8 +27,8 @@ def test_override_replaces_default(deck):
     ("freq", "0", "must be > 0"),
     ("freq", "-3", "must be > 0"),
     ("radius", "0", "must be > 0"),
-    ("amp_n", "-1e-4", "must be >= 0"),
-    ("amp_t", "-1e-4", "must be >= 0"),
+    ("amp_n", "-1e-4", "must be in [0, 0.01]"),
+    ("amp_t", "-1e-4", "must be in [0, 0.01]"),
     ("restitution", "0.05", "(0.05, 1]"),
     ("restitution", "1.2", "(0.05, 1]"),
     ("poisson", "0.6", "(-1, 0.5]"),

@@ -5,8 +5,9 @@ import json
 import pytest
 
 from helpers import vibrofeed, write_trial
+from vibrofeed.validation.models.constants import G
 
-MASS, G = 0.009, 9.81
+MASS = 0.009
 KEYS = {"mean_abs_error_mm", "max_displacement_mm", "final_measured_mm", "final_predicted_mm",
         "stuck_fraction"}
 
@@ -69,3 +70,12 @@ def test_a_file_that_is_not_a_trial_is_named(tmp_path):
     bad.write_text("a,b\n1,2\n")
     proc = vibrofeed("replay", bad, "--mass", MASS, "--normal-force", 1, "--mu-s", 0.5, "--mu-k", 0.5)
     assert proc.returncode == 2 and "notes.csv" in proc.stderr and "missing columns" in proc.stderr
+
+
+def test_plot_into_a_missing_folder_is_refused_before_any_work(trial, tmp_path):
+    """A mistyped folder is a usage error (exit 2), not created silently."""
+    target = tmp_path / "no" / "such" / "dir" / "x.png"
+    proc = vibrofeed("replay", trial, "--mass", MASS, "--normal-force", 40 * MASS * G,
+                     "--mu-s", 0.72, "--mu-k", 0.6, "--plot", target)
+    assert proc.returncode == 2 and "does not exist" in proc.stderr
+    assert not (tmp_path / "no").exists() and proc.stdout == ""

@@ -1,9 +1,12 @@
-"""Replaying trials through the model and fitting it (validation/replay_fit.py)."""
+"""Replaying trials through the model and fitting it (validation/replay/fit.py)."""
 
 import numpy as np
 import pytest
 
-from vibrofeed.validation.replay_fit import (
+from vibrofeed.validation.models.constants import G
+from vibrofeed.validation.models.surface import CallableSurface
+from vibrofeed.validation.models.vertical import Contact, simulate
+from vibrofeed.validation.replay.fit import (
     EDGE_FRAMES,
     MEASURED_NORMAL_FORCE_MG,
     MU_S,
@@ -15,10 +18,9 @@ from vibrofeed.validation.replay_fit import (
     prepare,
     replay,
 )
-from vibrofeed.validation.speed_dependent_friction import simulate_speed_dependent
-from vibrofeed.validation.trials import load_trials, read_trial, trials_dir
-from vibrofeed.validation.vertical import G, CallableSurface, Contact, simulate
-from vibrofeed.validation.vertical_study import leave_one_out_from_table
+from vibrofeed.validation.replay.trials import load_trials, read_trial
+from vibrofeed.validation.studies.speed_dependent_friction import simulate_speed_dependent
+from vibrofeed.validation.studies.vertical_study import leave_one_out_from_table
 
 DT = 1 / 960.0
 SIGMA = 2e-6  # m, tracking noise of the synthetic files
@@ -42,7 +44,7 @@ def synthetic_trial(path, a1, fn_mg, mu_k, n=290, seed=0):
     part = simulate(surface, contact, t_end=t[-1], z0=2e-3, t_eval=t).z
     rng = np.random.default_rng(seed)
     cols = {"t": t}
-    for m, z in (("p", surface.position(t)), ("o", part), ("s", np.zeros(n) - 3e-3)):
+    for m, z in (("p", surface.position(t)[0]), ("o", part), ("s", np.zeros(n) - 3e-3)):
         cols["x" + m] = (1e-3 + SIGMA * rng.standard_normal(n)) * 1e3
         cols["z" + m] = (z + SIGMA * rng.standard_normal(n)) * 1e3
         for q in "xz":
@@ -143,15 +145,12 @@ def test_speed_dependent_variant_reduces_to_coulomb(synthetic):
 
 # ---- the published trials ---------------------------------------------------------
 
-REAL = trials_dir()
-real = pytest.mark.skipif(
-    REAL is None, reason="measured trials not found: set VIBROFEED_TRIALS_DIR "
-                         "(default /work/shared/data/vertical-transport)")
+real = pytest.mark.usefixtures("measured_trials_dir")
 
 
 @pytest.fixture(scope="module")
-def real_preps():
-    trials = [tr for tr in load_trials(REAL) if tr.number in range(1, 7)]
+def real_preps(measured_trials_dir):
+    trials = [tr for tr in load_trials(measured_trials_dir) if tr.number in range(1, 7)]
     return [prepare(tr) for tr in trials]
 
 
@@ -172,4 +171,12 @@ def test_prediction_with_measured_forces_is_the_harder_figure(real_preps):
     loo = leave_one_out(real_preps)
     assert set(loo.mae_mm) == {p.name for p in real_preps}
     assert all(0.05 <= m <= MU_S for m in loo.mu_k.values())
-    assert np.isfinite(loo.mean_mae_mm) and loo.mean_mae_mm > 0.14
+    # What prediction must achieve (not a figure of an earlier run): beat the null
+    # prediction "the part does not move" (its error is the mean measured |z|),
+    # on average, and clearly on trials 1 and 2, whose measured grasp (11 and 17
+    # m g) can hold the sticking they show; trials 3-6 were measured at 5.3 m g,
+    # too little for their sticking (README, "Measured trials").
+    null = {name: float(np.mean(np.abs(r.measured_mm))) for name, r in loo.results.items()}
+    assert loo.mean_mae_mm < np.mean(list(null.values()))
+    for name in ("trial_1", "trial_2"):
+        assert loo.mae_mm[name] < 0.5 * null[name]

@@ -4,12 +4,13 @@ import h5py
 import numpy as np
 import pytest
 
+from helpers import parts, write_conveyor, write_result
+from vibrofeed import errors
 from vibrofeed.results import layout as L
+from vibrofeed.results import reader
 from vibrofeed.results.check import check_file
 from vibrofeed.results.reader import IncompleteResult, Result, ResultError
 from vibrofeed.results.writer import SlotMap
-
-from helpers import parts, write_result
 
 
 def three_frames(tmp_path, **kw):
@@ -31,7 +32,7 @@ def test_roundtrip_with_varying_particle_number(tmp_path):
         # slot 0 is particle 1, slot 1 held 2, was empty, then holds 3
         assert r.ids.tolist() == [[1, 2], [1, -1], [1, 3]]
         assert np.isnan(r.position[1, 1]).all()
-        assert np.isnan(r.radius[1, 1]) and r.species[1, 1] == L.SPECIES_FILL
+        assert np.isnan(r.radius[1, 1]) and r.species[1, 1] == -1  # FORMAT.md: species fill -1
         t, x = r.track(3)
         assert t.tolist() == [2e-5] and x.tolist() == [[5, 0, 1]]
         t, x = r.track(1)
@@ -60,6 +61,7 @@ def test_h5md_metadata_and_hard_links(tmp_path):
             assert f[f"{L.PARTS}/{name}/step"] == ref
         assert f[f"{L.SURFACE}/position/step"] == ref
         assert f[f"{L.PARTS}/id/value"].fillvalue == -1
+        assert f[f"{L.PARTS}/species/value"].fillvalue == -1
 
 
 def test_slot_map_reuses_lowest_free_slot():
@@ -201,3 +203,107 @@ def test_batched_frames_with_a_growing_particle_axis(tmp_path):
         assert r.ids[4].tolist() == [1, 2, 3, 4, 5]
         assert np.isnan(r.position[2, 3:]).all() and r.position[2, 2, 0] == 3
     assert check_file(tmp_path / "g.h5").ok
+
+
+def test_reader_errors_come_from_the_error_tree():
+    assert ResultError is errors.ResultError and IncompleteResult is errors.IncompleteResult
+
+
+# -- reading by window -----------------------------------------------------------------
+def conveyor(tmp_path, n_parts=30, n_frames=60, seed=5):
+    """Parts entering and leaving, slots reused (see helpers.write_conveyor)."""
+    rng = np.random.default_rng(seed)
+    first = rng.integers(0, n_frames - 1, n_parts)
+    last = np.minimum(first + rng.integers(0, n_frames, n_parts), n_frames - 1)
+    lifetimes = np.column_stack([first, last])
+    times = np.arange(n_frames) * 1e-4
+    return write_conveyor(tmp_path / "many.h5", times, lifetimes, rng.uniform(0, 0.01, n_parts),
+                          amp=1e-4)
+
+
+FRAME_SELECTIONS = [None, 7, -1, slice(3, 40, 5), slice(None, None, -3), slice(50, 10),
+                    [40, 2, 2, 17], np.array([0, 59]), np.arange(60) % 7 == 0, [], [5]]
+
+
+@pytest.mark.parametrize("dense", [0.0, 2.0])  # scattered frames read as one block / point by point
+def test_window_reads_match_whole_reads(tmp_path, monkeypatch, dense):
+    monkeypatch.setattr(reader, "_DENSE", dense)
+    path = conveyor(tmp_path)
+    with Result(path) as whole, Result(path) as r:
+        assert whole.ids.shape[1] == r.n_slots < 30  # slots were reused
+        for name in Result.FIELDS:
+            full = whole.read(name)
+            for frames in FRAME_SELECTIONS:
+                expected = (full if frames is None else full[np.array(frames, int)]
+                            if isinstance(frames, list) else full[frames])
+                got = r.read(name, frames=frames)
+                assert got.shape == expected.shape, (name, frames)
+                assert np.array_equal(got, expected, equal_nan=True), (name, frames)
+        pos = whole.position
+        for frames, slots, expected in [
+                (None, 3, pos[:, 3]), (11, slice(1, None, 2), pos[11, 1::2]),
+                ([30, 1], [4, 0, 4], pos[[30, 1]][:, [4, 0, 4]]), (None, [2, 5], pos[:, [2, 5]]),
+                (slice(5, 9), 0, pos[5:9, 0]), (7, [1], pos[7, [1]])]:
+            got = r.read("position", frames=frames, slots=slots)
+            assert np.array_equal(got, expected, equal_nan=True), (frames, slots)
+        assert np.array_equal(r.read("ids", frames=2), whole.ids[2])
+        with pytest.raises(KeyError, match="no field"):
+            r.read("temperature")
+        with pytest.raises(IndexError):
+            r.read("time", frames=60)
+        with pytest.raises(IndexError):
+            r.read("surface_position", slots=0)
+        assert not {"ids", "position", "time"} & set(vars(r))  # nothing read whole
+
+
+def test_tracks_and_frames_read_only_what_they_need(tmp_path, monkeypatch):
+    monkeypatch.setattr(reader, "_BLOCK_VALUES", 200)  # scan the ids a few frames at a time
+    path = conveyor(tmp_path)
+    with Result(path) as whole, Result(path) as r:
+        ids = whole.ids
+        full = {q: whole.read(q) for q in ("position", "radius")}
+        assert r.part_ids.tolist() == np.unique(ids[ids >= 0]).tolist()
+        assert np.array_equal(r.present(), whole.present())
+        assert np.array_equal(r.present(slice(5, 20, 3)), whole.present()[5:20:3])
+        for pid in r.part_ids:
+            frames, slots = np.nonzero(ids == pid)
+            assert [a.tolist() for a in r.locate(pid)] == [frames.tolist(), slots.tolist()]
+            for q in ("position", "radius"):
+                t, v = r.track(pid, q)
+                assert np.array_equal(t, whole.time[frames])
+                assert np.array_equal(v, full[q][frames, slots])
+            keep = frames % 2 == 1
+            t, v = r.track(pid, "position", frames=slice(1, None, 2))
+            assert np.array_equal(t, whole.time[frames[keep]])
+            assert np.array_equal(v, whole.position[frames[keep], slots[keep]])
+        with pytest.raises(KeyError, match="does not appear"):
+            r.track(999)
+        # arbitrary (frame, slot) pairs, slot changing between them
+        fr, sl = np.array([0, 1, 2, 2, 9, 9, 30]), np.array([0, 0, 1, 0, 0, 2, 2])
+        assert np.array_equal(r.gather("position", fr, sl), whole.position[fr, sl], equal_nan=True)
+        assert r.gather("position", [], []).shape == (0, 3)
+        frame = r.frame(-1, fields=("position", "mass", "surface_position"))
+        present = np.nonzero(ids[-1] >= 0)[0]
+        assert frame.index == 59 and frame.time == whole.time[-1] and frame.step == whole.step[-1]
+        assert frame.ids.tolist() == ids[-1, present].tolist() and len(frame) == len(present)
+        assert np.array_equal(frame["position"], whole.position[-1, present])
+        assert np.array_equal(frame["surface_position"], whole.surface_position[-1])
+        seen = [(f.index, f.ids.tolist()) for f in r.iter_frames(slice(0, None, 7), fields=())]
+        assert seen == [(j, ids[j][ids[j] >= 0].tolist()) for j in range(0, 60, 7)]
+        assert not {"ids", "position", "velocity"} & set(vars(r))
+
+
+def test_check_warns_about_a_missing_run_id(tmp_path):
+    from vibrofeed.results.check import check_file
+    from vibrofeed.results.writer import ResultWriter
+
+    path = tmp_path / "old.h5"
+    w = ResultWriter(path, deck_name="d", deck_path="d.liggghts", deck_text="# d\n",
+                     variables={"freq": ("50", "Hz", "f", "50")}, derived={}, seed=1,
+                     engine_version="LIGGGHTS (Version LIGGGHTS-PUBLIC 3.8.0)")  # no run_id
+    w.write_frame(0, 0.0, parts([1], [[0, 0, 0]]), [0, 0, 0], [0, 0, 0])
+    w.finish()
+    report = check_file(path)
+    assert report.ok  # a warning, not an error: format 1.0 files had no id
+    assert [p.level for p in report.problems] == ["warning"]
+    assert "'id'" in report.problems[0].message

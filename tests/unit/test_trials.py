@@ -1,24 +1,22 @@
-"""Reader of the measured trials and the platform-motion interpolant (validation/trials.py)."""
+"""Reader of the measured trials and the platform-motion interpolant (validation/replay/trials.py)."""
 
 import math
 
 import numpy as np
 import pytest
 
-from vibrofeed.validation.trials import (
+from helpers import DT, PLACEHOLDER, platform_truth, write_trial
+from vibrofeed.errors import InputError, TrialFileError
+from vibrofeed.validation.replay.trials import (
     COLUMNS,
     MIN_FRAMES,
-    TrialFileError,
     estimate_noise,
     finite_difference_comparison,
     fit_platform,
     fit_position,
     load_trials,
     read_trial,
-    trials_dir,
 )
-
-from helpers import DT, PLACEHOLDER, platform_truth, write_trial
 
 
 def test_reads_synthetic_trial_in_si_units(tmp_path):
@@ -76,7 +74,7 @@ def test_malformed_trials_are_named_and_explained(tmp_path, mutate, words):
     path = write_trial(tmp_path / "bad.csv", mutate=mutate)
     with pytest.raises(TrialFileError) as err:
         read_trial(path)
-    assert isinstance(err.value, ValueError)
+    assert isinstance(err.value, InputError) and isinstance(err.value, ValueError)
     assert str(path) in str(err.value) and words in str(err.value)
 
 
@@ -144,10 +142,10 @@ def test_surface_velocity_and_acceleration_are_derivatives_of_its_position():
     s = fit_position(t, y).surface
     tt = np.linspace(t[5], t[-5], 37)
     h = 1e-6
-    dz = (s.position(tt + h) - s.position(tt - h)) / (2 * h)
-    dv = (s.velocity(tt + h) - s.velocity(tt - h)) / (2 * h)
-    assert np.allclose(s.velocity(tt), dz, rtol=0, atol=1e-6 * np.max(np.abs(dz)))
-    assert np.allclose(s.acceleration(tt), dv, rtol=0, atol=1e-5 * np.max(np.abs(dv)))
+    dz = (s.position(tt + h)[0] - s.position(tt - h)[0]) / (2 * h)
+    dv = (s.velocity(tt + h)[0] - s.velocity(tt - h)[0]) / (2 * h)
+    assert np.allclose(s.velocity(tt)[0], dz, rtol=0, atol=1e-6 * np.max(np.abs(dz)))
+    assert np.allclose(s.acceleration(tt)[0], dv, rtol=0, atol=1e-5 * np.max(np.abs(dv)))
 
 
 def test_residual_lag1_tells_noise_matched_from_oversmoothed():
@@ -171,22 +169,19 @@ def test_fit_position_rejects_unknown_criterion():
 
 # ---- the published trials, when present ---------------------------------------------
 
-REAL = trials_dir()
-real = pytest.mark.skipif(
-    REAL is None, reason="measured trials not found: set VIBROFEED_TRIALS_DIR "
-                         "(default /work/shared/data/vertical-transport)")
+real = pytest.mark.usefixtures("measured_trials_dir")
 
 
 @pytest.fixture(scope="module")
-def real_trials():
-    return load_trials(REAL)
+def real_trials(measured_trials_dir):
+    return load_trials(measured_trials_dir)
 
 
 @real
-def test_real_trials_read_as_published(real_trials):
+def test_real_trials_read_as_published(real_trials, measured_trials_dir):
     assert [tr.name for tr in real_trials][:6] == [f"trial_{k}" for k in range(1, 7)]
     for tr in real_trials:
-        lines = (REAL / f"{tr.name}.csv").read_bytes().splitlines()
+        lines = (measured_trials_dir / f"{tr.name}.csv").read_bytes().splitlines()
         assert tr.n_frames == len(lines) - 1
         assert tr.dt == pytest.approx(1 / 960, rel=1e-4)
         assert np.isnan(tr.platform.vz[0]) and np.isnan(tr.platform.az[1])

@@ -7,9 +7,8 @@ import pytest
 
 from vibrofeed.validation import cases as C
 from vibrofeed.validation import deck_models as dm
-from vibrofeed.validation.crosscheck import (KINDS, Row, check_vertical_case, landing_period,
-                                             model_flights)
-from vibrofeed.validation.part_on_surface import Event
+from vibrofeed.validation.crosscheck import KINDS, Row, check_vertical_case, landing_period, model_flights
+from vibrofeed.validation.models.part_on_surface import Event
 
 # The quantities each kind reports (a case needs a tolerance for each it uses).
 QUANTITIES = {"flights": {"landing_time", "flight_duration"}, "transport": {"mean_speed"},
@@ -57,7 +56,8 @@ def test_sweeps_product_and_zip(tmp_path):
     ('title = "t"\nkind = "transport"\ndeck = "x"\n[tolerance]\nq = 0.1\n', "abs = x"),
     ('title = "t"\nkind = "transport"\ndeck = "x"\n[tolerance]\nq = { rel = -1 }\n', ">= 0"),
     ('title = "t"\nkind = "transport"\ndeck = "x"\n[sweep]\na = []\n', "non-empty"),
-    ('title = "t"\nkind = "transport"\ndeck = "x"\nzip = true\n[sweep]\na = [1]\nb = [1, 2]\n', "same length"),
+    ('title = "t"\nkind = "transport"\ndeck = "x"\nzip = true\n[sweep]\na = [1]\nb = [1, 2]\n',
+     "same length"),
     ("title = \n", "not valid TOML"),
 ])
 def test_malformed_case_files_are_refused(tmp_path, text, fragment):
@@ -111,7 +111,7 @@ def test_deck_waveforms_have_the_requested_amplitude(waveform):
     p = {"waveform": waveform, "freq": 40, "amp_t": 1e-4, "amp_n": 6e-5, "phase": 30, "duty": 0.7}
     wf = dm.waveform(p)
     t = np.linspace(0, wf.period, 20000, endpoint=False)
-    x, z = wf.displacement(t)
+    x, z = wf.position(t)
     assert (x.max() - x.min()) / 2 == pytest.approx(1e-4, rel=1e-6)
     assert abs(x.mean()) < 1e-9 and abs(z.mean()) < 1e-9  # about the mean position
     if waveform in (0, 1):

@@ -1,19 +1,23 @@
-"""Vertical stick/slip transport model (validation/vertical.py) against closed forms."""
+"""Vertical stick/slip transport model (validation/models/vertical.py) against closed forms."""
 
 import math
 
 import numpy as np
 import pytest
 
-from vibrofeed.validation.vertical import (
-    G,
+from vibrofeed.validation.models.constants import G
+from vibrofeed.validation.models.surface import (
     CallableSurface,
+    SquareWaveAccel,
+    StickSlipWaveform,
+    sine_drive,
+    two_level_drive,
+)
+from vibrofeed.validation.models.vertical import (
     Contact,
     check_feasible,
     periodic_transport,
     simulate,
-    sine_drive,
-    two_level_drive,
     two_level_transport,
 )
 
@@ -22,6 +26,12 @@ M = 0.009  # kg, the experiment's part
 
 def contact(fn_mg, mu_s=0.72, mu_k=0.6, g=G):
     return Contact(mass=M, normal_force=fn_mg * M * G, mu_s=mu_s, mu_k=mu_k, g=g)
+
+
+def callables_of_x(motion, **kw):
+    """The same along-track motion given as plain callables (the generic, sampled cut)."""
+    return CallableSurface(lambda t: motion.position(t)[0], lambda t: motion.velocity(t)[0],
+                           lambda t: motion.acceleration(t)[0], **kw)
 
 
 def constant_velocity(v):
@@ -87,7 +97,7 @@ def test_pure_sticking_inside_the_band_gives_no_net_motion():
     traj = simulate(drive, c, t_end=0.2)
     assert len(traj.phases) == 1 and traj.phases[0].stuck
     assert traj.stuck_fraction == 1.0
-    gap = traj.z - drive.position(traj.t)
+    gap = traj.z - drive.position(traj.t)[0]
     assert np.max(np.abs(gap - gap[0])) < 1e-15
     assert abs(traj.net_speed(period=1 / 40.0)) < 1e-12
 
@@ -158,8 +168,7 @@ def test_two_level_generic_callable_surface_matches_closed_form():
     c = contact(6.0)
     exact = two_level_transport(a_up, t_up, a_down, c)
     poly = two_level_drive(a_up, t_up, a_down)
-    generic = CallableSurface(poly.position, poly.velocity, poly.acceleration,
-                              breakpoints=[0.0, t_up], period=exact.period)
+    generic = callables_of_x(poly, breakpoints=[0.0, t_up], period=exact.period)
     got = periodic_transport(generic, c, n_periods=5)
     assert got.net_speed == pytest.approx(exact.net_speed, rel=1e-6)
 
@@ -215,11 +224,38 @@ def test_any_object_with_position_velocity_acceleration_is_a_surface():
     exact = two_level_transport(a_up, t_up, a_down, contact(5.0))
 
     class Motion:
-        position, velocity, acceleration = poly.position, poly.velocity, poly.acceleration
         breakpoints = (0.0, t_up)
         period = exact.period
+
+        @staticmethod
+        def position(t):
+            return poly.position(t)[0]
+
+        @staticmethod
+        def velocity(t):
+            return poly.velocity(t)[0]
+
+        @staticmethod
+        def acceleration(t):
+            return poly.acceleration(t)[0]
 
     got = periodic_transport(Motion(), contact(5.0), n_periods=4)
     assert got.net_speed == pytest.approx(exact.net_speed, rel=1e-6)
     with pytest.raises(TypeError, match="acceleration"):
         simulate(object(), contact(5.0), t_end=0.1)
+
+
+def test_deck_waveforms_drive_the_vertical_model_along_the_track():
+    """A two-axis motion of the part-on-surface model drives the vertical model by its x axis."""
+    c = contact(5.0)
+    square = SquareWaveAccel(40.0, 60.0 * G, 3.0 * G, 30.0)
+    only_x = callables_of_x(square, breakpoints=square.starts, period=square.period)
+    a = periodic_transport(square, c, n_periods=6)
+    b = periodic_transport(only_x, c, n_periods=6)
+    assert a.net_speed == b.net_speed and a.stuck_fraction == b.stuck_fraction
+    assert a.net_speed != 0.0
+    # The pieces of a piecewise-constant motion start at its breakpoints.
+    ss = StickSlipWaveform(25.0, 3.0, 9.0)
+    edges = ss.pieces(0.0, 3 * ss.period).edges
+    for tb in ss.breakpoints(0.0, 3 * ss.period):
+        assert np.min(np.abs(edges - tb)) < 1e-15

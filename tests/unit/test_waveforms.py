@@ -1,20 +1,22 @@
-"""Surface waveforms: kinematic consistency, periodicity, breakpoints, exact level crossings."""
+"""Surface motions: kinematic consistency, periodicity, breakpoints, exact level crossings, pieces."""
 
 import math
 
 import numpy as np
 import pytest
 
-from vibrofeed.validation.waveforms import (
+from vibrofeed.validation.models.constants import G
+from vibrofeed.validation.models.surface import (
     CoulombPumpWaveform,
     PiecewiseConstantAccel,
     SampledWaveform,
     SineWaveform,
     SquareWaveAccel,
     StickSlipWaveform,
+    SurfaceMotion,
+    sine_drive,
+    two_level_drive,
 )
-
-G = 9.81
 
 
 def _brute_roots(wf, cx, cz, level, t0, t1, n=200001):
@@ -29,14 +31,14 @@ def test_sine_conventions():
     wf = SineWaveform(50.0, 1e-4, 2e-4, phase=30.0)
     w = 2 * math.pi * 50
     t = np.linspace(0, 0.05, 7)
-    x, z = wf.displacement(t)
+    x, z = wf.position(t)
     np.testing.assert_allclose(x, 1e-4 * np.sin(w * t), rtol=0, atol=1e-18)
     np.testing.assert_allclose(z, 2e-4 * np.sin(w * t + math.radians(30)), rtol=0, atol=1e-18)
     assert wf.gamma(G) == pytest.approx(2e-4 * w * w / G, rel=1e-14)
     # the normal motion leads: it peaks phase/360 of a period earlier than x
     t_peak_x, t_peak_z = 0.25 / 50, 0.25 / 50 - 30 / 360 / 50
-    assert wf.displacement(t_peak_z)[1] == pytest.approx(2e-4, rel=1e-12)
-    assert wf.displacement(t_peak_x)[0] == pytest.approx(1e-4, rel=1e-12)
+    assert wf.position(t_peak_z)[1] == pytest.approx(2e-4, rel=1e-12)
+    assert wf.position(t_peak_x)[0] == pytest.approx(1e-4, rel=1e-12)
     g2 = SineWaveform.from_gamma(30.0, 2.0, 0.5, 90.0)
     assert g2.gamma() == pytest.approx(2.0, rel=1e-14)
     assert g2.amp_t * g2.omega ** 2 / G == pytest.approx(0.5, rel=1e-14)
@@ -53,17 +55,18 @@ def test_derivatives_consistent_and_periodic(wf):
     T = wf.period
     t = np.linspace(0.013 * T, 2.9 * T, 50)
     h = 1e-7 * T
-    (x1, z1), (x0, z0) = wf.displacement(t + h), wf.displacement(t - h)
+    (x1, z1), (x0, z0) = wf.position(t + h), wf.position(t - h)
     vx, vz = wf.velocity(t)
     scale_v = wf.max_speed()
     np.testing.assert_allclose((x1 - x0) / (2 * h), vx, atol=1e-6 * scale_v)
     np.testing.assert_allclose((z1 - z0) / (2 * h), vz, atol=1e-6 * scale_v)
     # periodicity and zero mean velocity / displacement over a period
     for k in (0, 1, 2):
-        np.testing.assert_allclose(wf._call(t + T, k), wf._call(t, k), atol=1e-9 * (scale_v + 1e-30) * T ** (1 - k) * 10)
+        np.testing.assert_allclose(wf._call(t + T, k), wf._call(t, k),
+                                   atol=1e-9 * (scale_v + 1e-30) * T ** (1 - k) * 10)
     ts = (np.arange(20000) + 0.5) * T / 20000
     assert abs(np.mean(wf.velocity(ts)[0])) < 1e-6 * scale_v
-    assert abs(np.mean(wf.displacement(ts)[0])) < 1e-6 * scale_v * T
+    assert abs(np.mean(wf.position(ts)[0])) < 1e-6 * scale_v * T
 
 
 def test_piecewise_constant_continuity_and_validation():
@@ -147,3 +150,24 @@ def test_next_breakpoint():
     assert wf.next_breakpoint(0.075) == pytest.approx(0.1)
     assert wf.next_breakpoint(0.3 - 1e-16) == pytest.approx(0.375)   # rounding-level: counts as passed
     assert math.isinf(SineWaveform(10.0, 1.0, 1.0).next_breakpoint(0.3))
+
+
+@pytest.mark.parametrize("motion", [
+    SineWaveform(40.0, 3e-4, 1e-4, 70.0),
+    StickSlipWaveform(25.0, 3.0, 9.0),
+    sine_drive(2e-4, 40.0, 0.3),
+    two_level_drive(0.5 * G, 0.02, 15 * G),
+])
+def test_every_motion_answers_the_one_protocol(motion):
+    """(x, z) from position/velocity/acceleration, and monotone along-track pieces."""
+    assert isinstance(motion, SurfaceMotion)
+    T = motion.period
+    t = np.linspace(0.0, 2 * T, 9)
+    for f in (motion.position, motion.velocity, motion.acceleration):
+        x, z = f(t)
+        assert x.shape == z.shape == t.shape
+    P = motion.pieces(0.1 * T, 2.3 * T)
+    assert P.edges[0] == 0.1 * T and P.edges[-1] == 2.3 * T and np.all(np.diff(P.edges) > 0)
+    np.testing.assert_allclose(P.v, motion.velocity(P.edges)[0], rtol=1e-12, atol=1e-15)
+    for b in motion.breakpoints(0.1 * T, 2.3 * T):      # a jump is always a piece edge
+        assert np.min(np.abs(P.edges - b)) <= 1e-12 * T

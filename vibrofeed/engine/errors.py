@@ -1,9 +1,14 @@
-"""Engine failures as exceptions: what went wrong, and where in the deck.
+"""Reading engine failures off LIGGGHTS' output: what went wrong, and where.
 
 LIGGGHTS reports an input error by printing ``ERROR: message (source:line)``
 to its screen and log and ending the process. With ``-echo log`` the log also
-holds every input line before it is executed, so the last deck command echoed
-before the ERROR is the one that failed.
+holds every input line before it is executed, the lines of included files
+included, so the last deck command echoed before the ERROR is the one that
+failed, and :attr:`Deck.commands <vibrofeed.decks.Deck>` (includes expanded,
+each command with its file and line) says where it is written.
+
+The exception classes live in :mod:`vibrofeed.errors`; the names are
+re-exported here for the engine's readers.
 """
 
 from __future__ import annotations
@@ -11,48 +16,11 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-from ..decks import Deck, normalize
+from ..decks import Command, Deck, normalize
+from ..errors import EngineError, RunError  # noqa: F401  (re-exported)
 
 _ERROR_START = re.compile(r"^ERROR(?: on proc (?P<proc>\d+))?:\s?(?P<text>.*)$")
 _SOURCE_LOC = re.compile(r"\s*\((?:\./)?src/[^():]+:\d+\)\s*$|\s*\([\w./-]+\.(?:cpp|h):\d+\)\s*$")
-
-
-class RunError(RuntimeError):
-    """Base of the errors a run reports to its user (one line, no traceback).
-
-    ``partial`` is ``(path, frames)`` when a failed run left frames behind.
-    """
-
-    partial: tuple | None = None
-
-
-class EngineError(RunError):
-    """LIGGGHTS stopped with an error.
-
-    Attributes: ``message`` (LIGGGHTS' text), ``deck`` (path), ``line`` and
-    ``command`` (the deck command that failed, when it is known), ``phase``
-    (``deck``, ``setup`` or ``run``), ``step`` and ``time`` (of the last frame
-    written before the error), ``log``.
-    """
-
-    def __init__(self, message: str, *, deck: str | None = None, line: int | None = None,
-                 command: str | None = None, phase: str | None = None,
-                 step: int | None = None, time: float | None = None, log: str | None = None):
-        self.message, self.deck, self.line, self.command = message, deck, line, command
-        self.phase, self.step, self.time, self.log = phase, step, time, log
-        super().__init__(str(self))
-
-    def __str__(self) -> str:
-        where = ""
-        if self.line is not None:
-            where = f" at {self.deck}:{self.line}: {self.command}"
-        elif self.phase == "run" and self.step is not None:
-            where = f" during the run, after the frame at t = {self.time:.6g} s (step {self.step})"
-        elif self.phase == "run":
-            where = " during the run"
-        elif self.phase == "setup":
-            where = " while setting up the run"
-        return f"LIGGGHTS error: {self.message}{where}"
 
 
 @dataclass
@@ -83,8 +51,14 @@ def find_error(log_text: str) -> LogError | None:
     return None
 
 
-def failed_command(log_text: str, deck: Deck, before: int | None = None):
-    """The deck command echoed last before line index ``before`` of the log."""
+def failed_command(log_text: str, deck: Deck, before: int | None = None) -> Command | None:
+    """The deck command echoed last before line index ``before`` of the log.
+
+    Log lines are matched in order against the deck's commands in execution
+    order (a command inside an included file follows the ``include``), so a
+    command written the same way in two places is told apart by where the
+    echo has got to. ``Command.file`` and ``.line`` say where it is written.
+    """
     lines = log_text.splitlines()[:before]
     commands = deck.commands
     cursor, last = 0, None

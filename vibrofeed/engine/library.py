@@ -16,9 +16,11 @@ from __future__ import annotations
 
 import ctypes
 import os
-from typing import Iterable, Sequence
+from collections.abc import Iterable, Sequence
 
 import numpy as np
+
+from ..errors import LibraryNotFound
 
 LIBRARY_NAME = "libliggghts.so.3"
 
@@ -39,9 +41,6 @@ PER_ATOM = {
     "omega": (ctypes.c_double, 3),
 }
 
-
-class LibraryNotFound(RuntimeError):
-    """The LIGGGHTS shared library could not be loaded."""
 
 
 def _mpi_comm_type():

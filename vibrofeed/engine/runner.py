@@ -15,6 +15,7 @@ what happened; one that fails before its first frame leaves nothing.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import shutil
@@ -23,22 +24,24 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Mapping
 
+from .. import __version__
 from ..decks import Deck
-from ..parameters import ParameterError, resolve
+from ..errors import EngineError, OutputError, RunError, UsageError
+from ..parameters import resolve
 from ..results import layout as L
 from ..results.writer import mark_file_status
-from .errors import EngineError, RunError, failed_command, find_error
+from .errors import failed_command, find_error
 from .worker import MARK
 
 _LAUNCHER_PREFIXES = ("OMPI_", "PMIX_", "OPAL_", "ORTE_", "PRTE_", "HYDRA_", "PMI_")
 
-
-class OutputError(RunError):
-    """The result cannot be written where asked."""
+# Ranks started per core at most: Open MPI oversubscribes on request, but far
+# beyond the cores a run only slows down, and thousands of ranks never start.
+RANKS_PER_CORE = 4
 
 
 @dataclass
@@ -54,6 +57,8 @@ class RunResult:
     sim_time: float = 0.0
     wall: float = 0.0
     parameters: dict = field(default_factory=dict)
+    run_id: str = ""
+    reused: bool = False  # an earlier complete result with the same run id was kept
 
     @property
     def steps_per_second(self) -> float:
@@ -73,8 +78,74 @@ def abort_shim() -> Path | None:
     be opened) is lost in an unflushed buffer; runs still work.
     """
     env = os.environ.get("VIBROFEED_ABORT_SHIM")
-    path = Path(env) if env else Path(__file__).resolve().parents[2] / "build/native/libvibrofeed_abortflush.so"
+    default = Path(__file__).resolve().parents[2] / "build/native/libvibrofeed_abortflush.so"
+    path = Path(env) if env else default
     return path if path.is_file() else None
+
+
+def max_ranks() -> int:
+    """The most MPI ranks a run may ask for here: RANKS_PER_CORE per core this
+    process may use, or the tasks of a Slurm allocation, or VIBROFEED_MAX_RANKS."""
+    env = os.environ.get("VIBROFEED_MAX_RANKS")
+    if env and env.isdigit() and int(env) > 0:
+        return int(env)
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    slurm = os.environ.get("SLURM_NTASKS", "")
+    return max(RANKS_PER_CORE * cores, int(slurm) if slurm.isdigit() else 0)
+
+
+def check_ranks(ranks) -> int:
+    """``ranks`` if it is a number of MPI ranks this machine can start, else UsageError."""
+    if isinstance(ranks, bool) or not isinstance(ranks, int) or ranks < 1:
+        raise UsageError(f"the number of ranks must be a positive integer, got {ranks!r}")
+    limit = max_ranks()
+    if ranks > limit:
+        raise UsageError(f"{ranks} ranks is more than this machine can run: at most {limit} "
+                         f"({RANKS_PER_CORE} per core; set VIBROFEED_MAX_RANKS to change the limit)")
+    return ranks
+
+
+def run_id(deck: Deck, values: Mapping[str, str], before_run=None, schedule=None) -> str:
+    """The identity of a run (signac's state point idea): a SHA-256 over the
+    text of the deck and of every file it includes, the resolved parameters,
+    any commands a driver adds, and the vibrofeed version. Equal ids mean the
+    same computation, so a complete result with the id can stand in for it."""
+    state = {
+        "deck": deck.name,
+        "sources": deck.sources,
+        "parameters": {k: str(v) for k, v in sorted(values.items())},
+        "before_run": list(before_run or ()),
+        "schedule": schedule,
+        "vibrofeed": __version__,
+    }
+    text = json.dumps(state, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _reusable(out: Path, rid: str, deck: Deck, values, ranks: int) -> RunResult | None:
+    """A RunResult for ``out`` if it is a complete result with run id ``rid``."""
+    if not out.is_file():
+        return None
+    try:
+        import h5py
+
+        with h5py.File(out, "r") as f:
+            run = f[L.RUN].attrs
+            if str(run.get("status", "")) != L.STATUS_COMPLETE or str(run.get("id", "")) != rid:
+                return None
+            step, time_ = f[f"{L.PARTS}/position/step"], f[f"{L.PARTS}/position/time"]
+            frames = len(step)
+            ids = f[f"{L.PARTS}/id/value"]
+            natoms = int((ids[-1] != L.ID_FILL).sum()) if frames else 0
+            n_steps = int(step[-1] - step[0]) if frames else 0
+            sim_time = float(time_[-1] - time_[0]) if frames else 0.0
+            wall = float(run.get("wall_seconds", 0.0))
+    except (OSError, KeyError):
+        return None
+    return RunResult(output=out, log=out.with_suffix(".log"), deck=deck.name, ranks=ranks,
+                     n_steps=n_steps, dt=sim_time / n_steps if n_steps else 0.0, frames=frames,
+                     natoms=natoms, sim_time=sim_time, wall=wall, parameters=dict(values),
+                     run_id=rid, reused=True)
 
 
 def worker_command(spec_path: str, ranks: int, shim: Path | None = None) -> list[str]:
@@ -142,7 +213,8 @@ def _frames_in(path: Path) -> tuple[int, int | None, float | None]:
 
 def run_deck(deck: Deck, params: Mapping[str, str], output, *, ranks: int = 1,
              on_event: Callable[[dict], None] | None = None, command: str = "",
-             before_run: list[str] | None = None, schedule: list[dict] | None = None) -> RunResult:
+             before_run: list[str] | None = None, schedule: list[dict] | None = None,
+             reuse: bool = False) -> RunResult:
     """Run ``deck`` with ``params`` (name -> value strings) into ``output``.
 
     ``before_run``: LIGGGHTS commands issued after the deck, before the first
@@ -151,16 +223,22 @@ def run_deck(deck: Deck, params: Mapping[str, str], output, *, ranks: int = 1,
     the deck's own ``n_steps`` in frames of ``output_every``.
 
     ``on_event`` receives the worker's messages (``run``, ``progress``,
-    ``done``...) as dicts, for progress display. Raises
-    :class:`~vibrofeed.parameters.ParameterError` before starting anything if a
-    parameter is bad, :class:`OutputError` if the output cannot be written,
-    :class:`EngineError` if LIGGGHTS stops with an error, :class:`RunError`
-    for any other failure of the run.
+    ``done``...) as dicts, for progress display. ``reuse``: keep ``output``
+    and return at once if it is a complete result with this run's id (see
+    :func:`run_id`). Raises :class:`~vibrofeed.errors.ParameterError` or
+    :class:`~vibrofeed.errors.UsageError` before starting anything if a
+    parameter or the rank count is bad, :class:`OutputError` if the output
+    cannot be written, :class:`EngineError` if LIGGGHTS stops with an error,
+    :class:`RunError` for any other failure of the run.
     """
-    if not isinstance(ranks, int) or ranks < 1:
-        raise ParameterError(f"the number of ranks must be a positive integer, got {ranks!r}")
+    check_ranks(ranks)
     values = resolve(deck, params)
+    rid = run_id(deck, values, before_run, schedule)
     out, part, log = _prepare_output(output)
+    if reuse:
+        kept = _reusable(out, rid, deck, values, ranks)
+        if kept is not None:
+            return kept
     for stale in (out, part):
         stale.unlink(missing_ok=True)
 
@@ -172,7 +250,7 @@ def run_deck(deck: Deck, params: Mapping[str, str], output, *, ranks: int = 1,
         "constants": deck.constants,
         "output": str(part), "log": str(log), "screen": str(screen),
         "seed": int(float(values["seed"])) if "seed" in values else None,
-        "command": command,
+        "command": command, "run_id": rid, "sources": deck.sources,
         "before_run": list(before_run or ()),
         "schedule": schedule,
     }
@@ -180,7 +258,8 @@ def run_deck(deck: Deck, params: Mapping[str, str], output, *, ranks: int = 1,
     spec_path.write_text(json.dumps(spec))
     stderr_path = tmp / "stderr.txt"
 
-    result = RunResult(output=out, log=log, deck=deck.name, ranks=ranks, parameters=values)
+    result = RunResult(output=out, log=log, deck=deck.name, ranks=ranks, parameters=values,
+                       run_id=rid)
     events: list[dict] = []
     started = time.monotonic()
     try:
@@ -262,11 +341,12 @@ def _diagnose(rc, events, deck: Deck, log: Path, screen: Path, stderr: Path,
         err, in_log = find_error(screen_text), False
     if err is not None:
         line = command = None
+        where = deck.path
         if phase == "deck":
             cmd = failed_command(log_text, deck, before=err.line_index if in_log else None)
-            if cmd is not None:
-                line, command = cmd.line, cmd.text
-        return EngineError(err.message, deck=_display(deck.path), line=line, command=command,
+            if cmd is not None:  # in the deck or in a file it includes
+                line, command, where = cmd.line, cmd.text, cmd.file or deck.path
+        return EngineError(err.message, deck=_display(where), line=line, command=command,
                            phase=phase, step=step, time=t, log=str(log))
     tail = " ".join(_read(stderr).strip().splitlines()[-3:])
     if "MPI_ABORT" in tail:

@@ -103,6 +103,12 @@ def surface_state(lmp) -> tuple[list, list]:
     return pos, vel
 
 
+def _includes(spec: dict) -> dict[str, str]:
+    """The texts of the files the deck includes, by path relative to its folder."""
+    main = Path(spec["deck"]).name
+    return {path: text for path, text in spec.get("sources", {}).items() if path != main}
+
+
 def run(spec: dict) -> int:
     from mpi4py import MPI
 
@@ -156,9 +162,11 @@ def run(spec: dict) -> int:
         variables = {name: (value, *spec["var_meta"][name]) for name, value in spec["variables"].items()}
         writer = ResultWriter(
             spec["output"], deck_name=spec["deck_name"], deck_path=spec["deck"],
-            deck_text=Path(spec["deck"]).read_text(), variables=variables, derived=derived,
+            deck_text=Path(spec["deck"]).read_text(), includes=_includes(spec), variables=variables,
+            derived=derived,
             engine_version=engine_version(spec["log"]), seed=spec.get("seed"),
-            ranks=comm.size, command=spec.get("command", ""), capacity_hint=max(lmp.natoms, 1))
+            ranks=comm.size, command=spec.get("command", ""), run_id=spec.get("run_id", ""),
+            capacity_hint=max(lmp.natoms, 1))
         flush_on_engine_exit(writer)
 
     # The run, as (commands, steps) segments with a frame after each. A plain

@@ -117,7 +117,8 @@ class _Checker:
                 self.error(f"{L.PARTS}/box", "attribute 'dimension' must be 3")
             boundary = [_text(b) for b in np.ravel(box.attrs.get("boundary", []))]
             if len(boundary) != 3 or any(b not in ("none", "periodic") for b in boundary):
-                self.error(f"{L.PARTS}/box", f"attribute 'boundary' must be 3 of none/periodic, got {boundary}")
+                self.error(f"{L.PARTS}/box",
+                           f"attribute 'boundary' must be 3 of none/periodic, got {boundary}")
         values = {}
         for name, (_, comps, unit) in L.PART_ELEMENTS.items():
             v = self.time_series(f"{L.PARTS}/{name}", comps, unit, n_parts=True)
@@ -191,6 +192,10 @@ class _Checker:
         self.need(L.DERIVED, h5py.Group)
         if not self.need(L.RUN, h5py.Group):
             return ""
+        rid = _text(self.f[L.RUN].attrs.get("id", ""))
+        if len(rid) != 64 or any(c not in "0123456789abcdef" for c in rid):
+            self.warn(L.RUN, "attribute 'id' (the run's SHA-256 identity) missing or malformed: "
+                             "--reuse cannot recognise this run")
         status = _text(self.f[L.RUN].attrs.get("status", ""))
         if status not in L.STATUSES:
             self.error(L.RUN, f"unknown status {status!r}")

@@ -10,7 +10,7 @@ from __future__ import annotations
 H5MD_VERSION = (1, 1)
 UNITS_MODULE_VERSION = (1, 0)
 FORMAT_NAME = "vibrofeed-result"
-FORMAT_VERSION = (1, 0)
+FORMAT_VERSION = (1, 1)  # 1.1: parameters/run@id, parameters/includes
 
 PARTS = "particles/parts"
 SURFACE = "observables/surface"

@@ -1,29 +1,37 @@
-"""Read a vibrofeed H5MD result file.
+"""Read a vibrofeed H5MD result file, whole or by windows of frames.
 
 >>> with Result("hop.h5") as r:
-...     t, z = r.time, r.position[:, 0, 2]
+...     t, z = r.time, r.position[:, 0, 2]                   # whole arrays (small files)
+...     x = r.read("position", frames=slice(100, None, 10))  # every 10th frame from 100
+...     t1, v1 = r.track(1, "velocity")                      # one part, where it exists
 ...     print(r.parameters["freq"], r.surface_position[:, 2].max())
 
-Arrays are read lazily on first access and cached. Slots of particles that do
-not exist at a frame hold ``id == -1`` and NaN.
+A file of many parts over many frames need not fit in memory: :meth:`Result.read`
+reads a selection of frames and of slots of one field, :meth:`Result.frame`
+and :meth:`Result.iter_frames` the parts present at a frame, and
+:meth:`Result.track` one part's values without loading the other parts. The
+whole-array properties (``position``, ``ids``, ...) read everything on first
+access and keep it. Slots of particles that do not exist at a frame hold
+``id == -1`` and NaN.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from functools import cached_property
 
 import h5py
 import numpy as np
 
+from ..errors import IncompleteResult, ResultError  # noqa: F401  (importable from here too)
 from . import layout as L
 
-
-class ResultError(ValueError):
-    """A file is not a readable vibrofeed result."""
-
-
-class IncompleteResult(ResultError):
-    """The run that wrote the file did not complete."""
+# Frames read at once when scanning ids or iterating: blocks of at most this
+# many slot values (32 MB of int64 ids), so memory stays bounded on big files.
+_BLOCK_VALUES = 1 << 22
+# A scattered frame selection is read as its bounding block when it covers at
+# least this fraction of it (one contiguous read), else point by point.
+_DENSE = 0.25
 
 
 def _text(value) -> str:
@@ -34,8 +42,92 @@ def _text(value) -> str:
     return str(value)
 
 
+def _normalise(sel, n: int):
+    """A selection along an axis of length n as an int, a forward slice or an int array."""
+    if sel is None:
+        return slice(0, n, 1)
+    if isinstance(sel, (int, np.integer)):
+        k = int(sel) + n * (int(sel) < 0)
+        if not 0 <= k < n:
+            raise IndexError(f"index {int(sel)} out of range for {n} entries")
+        return k
+    if isinstance(sel, slice):
+        start, stop, step = sel.indices(n)
+        if step > 0:
+            return slice(start, max(start, stop), step)
+        sel = np.arange(start, stop, step)  # h5py reads forwards only
+    arr = np.asarray(sel)
+    if arr.dtype == bool:
+        if arr.shape != (n,):
+            raise IndexError(f"boolean selection of length {arr.shape} for {n} entries")
+        arr = np.nonzero(arr)[0]
+    arr = arr.astype(np.int64).ravel()
+    arr = arr + n * (arr < 0)
+    if len(arr) and (arr.min() < 0 or arr.max() >= n):
+        raise IndexError(f"indices out of range for {n} entries")
+    return arr
+
+
+def _read_axis0(ds, sel, rest: tuple) -> np.ndarray:
+    """ds[sel, *rest] with sel normalised along axis 0 (the frames)."""
+    if not isinstance(sel, np.ndarray):
+        return ds[(sel, *rest)]
+    if len(sel) == 0:
+        shape = np.empty(ds.shape[1:])[rest].shape if rest else ds.shape[1:]
+        return np.empty((0, *shape), dtype=ds.dtype)
+    steps = np.diff(sel)
+    if len(sel) == 1 or (steps[0] > 0 and (steps == steps[0]).all()):
+        step = int(steps[0]) if len(sel) > 1 else 1
+        return ds[(slice(int(sel[0]), int(sel[-1]) + 1, step), *rest)]
+    unique, inverse = np.unique(sel, return_inverse=True)
+    lo, hi = int(unique[0]), int(unique[-1]) + 1
+    if len(unique) >= _DENSE * (hi - lo):
+        block = ds[(slice(lo, hi), *rest)]
+        return block[unique - lo][inverse]
+    return ds[(unique, *rest)][inverse]  # h5py point selection: sorted, unique
+
+
+@dataclass(frozen=True)
+class Frame:
+    """The parts present at one frame: their ``ids`` and ``slots``, and the
+    fields asked for, one row per present part (``frame["position"]``)."""
+
+    index: int
+    time: float
+    step: int
+    ids: np.ndarray
+    slots: np.ndarray
+    fields: dict = field(default_factory=dict)
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        return self.fields[name]
+
+    def __len__(self) -> int:
+        return len(self.ids)
+
+
+class _Whole:
+    """A whole dataset as an attribute, read on first access and kept."""
+
+    def __init__(self, attr: str, name: str, doc: str):
+        self.attr, self.name, self.__doc__ = attr, name, doc
+
+    def __get__(self, obj, owner=None):
+        if obj is None:
+            return self
+        value = obj.read(self.name)
+        obj.__dict__[self.attr] = value  # later reads hit the instance dict
+        return value
+
+
 class Result:
-    """A result file. ``allow_incomplete=True`` also opens killed or failed runs."""
+    """A result file. ``allow_incomplete=True`` also opens killed or failed runs.
+
+    Whole arrays, read on first access and kept (one per field of the layout,
+    see ``_whole_arrays``): ``time``, ``step``, ``ids``, ``position``,
+    ``velocity``, ``angular_velocity``, ``force``, ``radius``, ``mass``,
+    ``species``, ``surface_position``, ``surface_velocity``.
+    """
 
     def __init__(self, path, allow_incomplete: bool = False):
         self.path = str(path)
@@ -91,6 +183,21 @@ class Result:
         return _text(self.file[L.PARAMETERS]["deck"][()])
 
     @property
+    def deck_includes(self) -> dict[str, str]:
+        """``{path relative to the deck's folder: text}`` of the files the deck included."""
+        group = self.file[L.PARAMETERS].get("includes")
+        found: dict[str, str] = {}
+        if group is not None:
+            group.visititems(lambda name, obj: found.__setitem__(name, _text(obj[()]))
+                             if hasattr(obj, "shape") else None)
+        return found
+
+    @property
+    def run_id(self) -> str:
+        """The run's identity (SHA-256 of deck, includes, parameters, version); '' if absent."""
+        return _text(self.file[L.RUN].attrs.get("id", ""))
+
+    @property
     def deck_name(self) -> str:
         return _text(self.file[L.PARAMETERS]["deck"].attrs.get("name", ""))
 
@@ -102,81 +209,140 @@ class Result:
     def seed(self) -> int:
         return int(self.file[L.PARAMETERS]["seed"][()])
 
-    # -- time series ----------------------------------------------------------------
-    def _part(self, name: str) -> np.ndarray:
-        return self.file[L.PARTS][name]["value"][()]
+    # -- reading by window ----------------------------------------------------------
+    FIELDS = (*L.PART_ELEMENTS, "surface_position", "surface_velocity", "time", "step")
+    """Names :meth:`read` knows: the per-part elements (``ids`` is an alias of
+    ``id``), the surface's motion and the frames' time and step."""
 
-    @cached_property
-    def step(self) -> np.ndarray:
-        return self.file[L.PARTS]["position/step"][()]
+    def _dataset(self, name: str):
+        """(dataset, per_part) of a field name."""
+        name = "id" if name == "ids" else name
+        if name in L.PART_ELEMENTS:
+            return self.file[L.PARTS][name]["value"], True
+        if name.startswith("surface_") and name[len("surface_"):] in L.SURFACE_ELEMENTS:
+            return self.file[L.SURFACE][name[len("surface_"):]]["value"], False
+        if name in ("time", "step"):
+            return self.file[L.PARTS]["position"][name], False
+        raise KeyError(f"no field {name!r} in a vibrofeed result; known: {', '.join(self.FIELDS)}")
 
-    @cached_property
-    def time(self) -> np.ndarray:
-        return self.file[L.PARTS]["position/time"][()]
+    def read(self, name: str, frames=None, slots=None) -> np.ndarray:
+        """Values of field ``name`` at a selection of frames (and slots).
+
+        ``frames`` and ``slots`` select as numpy does along the first and
+        second axes: None (all), an int (the axis is dropped), a slice, a
+        sequence of indices (any order, repeats allowed) or a boolean mask.
+        Only the selected frames are read from the file.
+
+        >>> r.read("position", frames=slice(0, None, 10))   # (frames/10, slots, 3)
+        >>> r.read("id", frames=[0, -1])                     # first and last frame
+        >>> r.read("surface_position", frames=-1)            # (3,)
+        """
+        ds, per_part = self._dataset(name)
+        f = _normalise(frames, ds.shape[0])
+        if not per_part:
+            if slots is not None:
+                raise IndexError(f"{name!r} has no slots to select")
+            return _read_axis0(ds, f, ())
+        s = _normalise(slots, ds.shape[1])
+        if isinstance(s, np.ndarray):  # h5py takes one list: read the slots' span, pick in memory
+            lo, hi = (int(s.min()), int(s.max()) + 1) if len(s) else (0, 0)
+            block = _read_axis0(ds, f, (slice(lo, hi),))
+            return np.take(block, s - lo, axis=0 if isinstance(f, int) else 1)
+        return _read_axis0(ds, f, (s,))
+
+    def gather(self, name: str, frames, slots) -> np.ndarray:
+        """Values of per-part field ``name`` at the pairs (frames[k], slots[k]).
+
+        A part keeps its slot while it exists, so its pairs form runs of one
+        slot over increasing frames: each run is one read of one column.
+        """
+        frames = np.asarray(frames, dtype=np.int64)
+        slots = np.asarray(slots, dtype=np.int64)
+        ds, per_part = self._dataset(name)
+        if not per_part:
+            raise KeyError(f"{name!r} is not a per-part field")
+        out = np.empty((len(frames), *ds.shape[2:]), dtype=ds.dtype)
+        if len(frames) == 0:
+            return out
+        cuts = np.nonzero((np.diff(slots) != 0) | (np.diff(frames) <= 0))[0] + 1
+        for a, b in zip(np.r_[0, cuts], np.r_[cuts, len(frames)]):
+            out[a:b] = _read_axis0(ds, frames[a:b], (int(slots[a]),))
+        return out
 
     @property
     def n_frames(self) -> int:
         return len(self.file[L.PARTS]["position/step"])
 
-    @cached_property
-    def ids(self) -> np.ndarray:
-        """(frames, slots) particle ids, -1 where a slot is empty."""
-        return self._part("id")
+    @property
+    def n_slots(self) -> int:
+        """Width of the per-part arrays: the most particles present at once."""
+        return self.file[L.PARTS]["id/value"].shape[1]
 
-    @cached_property
-    def position(self) -> np.ndarray:
-        return self._part("position")
+    # -- parts ----------------------------------------------------------------------
+    def frame_indices(self, frames=None) -> np.ndarray:
+        """The frame numbers a selection (as for :meth:`read`) stands for."""
+        f = _normalise(frames, self.n_frames)
+        if isinstance(f, slice):
+            return np.arange(f.start, f.stop, f.step)
+        return np.atleast_1d(np.asarray(f, dtype=np.int64))
 
-    @cached_property
-    def velocity(self) -> np.ndarray:
-        return self._part("velocity")
-
-    @cached_property
-    def angular_velocity(self) -> np.ndarray:
-        return self._part("angular_velocity")
-
-    @cached_property
-    def force(self) -> np.ndarray:
-        """(frames, slots, 3) total force on each particle [N]."""
-        return self._part("force")
-
-    @cached_property
-    def radius(self) -> np.ndarray:
-        return self._part("radius")
-
-    @cached_property
-    def mass(self) -> np.ndarray:
-        return self._part("mass")
-
-    @cached_property
-    def species(self) -> np.ndarray:
-        return self._part("species")
-
-    @cached_property
-    def surface_position(self) -> np.ndarray:
-        return self.file[L.SURFACE]["position/value"][()]
-
-    @cached_property
-    def surface_velocity(self) -> np.ndarray:
-        return self.file[L.SURFACE]["velocity/value"][()]
+    def _id_blocks(self, frames=None):
+        """(frame numbers, ids) in blocks of bounded size, over a frame selection."""
+        index = self.frame_indices(frames)
+        if "ids" in self.__dict__:  # already in memory
+            yield index, self.ids[index]
+            return
+        per_block = max(1, _BLOCK_VALUES // max(self.n_slots, 1))
+        for a in range(0, len(index), per_block):
+            block = index[a:a + per_block]
+            yield block, self.read("id", frames=block)
 
     @cached_property
     def part_ids(self) -> np.ndarray:
         """Every particle id that appears in the run, sorted."""
-        ids = self.ids
-        return np.unique(ids[ids != L.ID_FILL])
+        found = [np.unique(ids[ids != L.ID_FILL]) for _, ids in self._id_blocks()]
+        return np.unique(np.concatenate(found)) if found else np.empty(0, dtype=np.int64)
 
-    def present(self) -> np.ndarray:
-        """(frames,) number of particles present at each frame."""
-        return (self.ids != L.ID_FILL).sum(axis=1)
+    def present(self, frames=None) -> np.ndarray:
+        """(frames,) number of particles present at each (selected) frame."""
+        counts = [(ids != L.ID_FILL).sum(axis=1) for _, ids in self._id_blocks(frames)]
+        return np.concatenate(counts) if counts else np.empty(0, dtype=np.int64)
 
-    def track(self, part_id: int, quantity: str = "position"):
-        """(time, values) of one particle over the frames where it exists."""
-        frames, slots = np.nonzero(self.ids == part_id)
-        if len(frames) == 0:
+    def locate(self, part_id: int, frames=None) -> tuple[np.ndarray, np.ndarray]:
+        """(frames, slots) where particle ``part_id`` is, over a frame selection."""
+        found_f, found_s = [], []
+        for index, ids in self._id_blocks(frames):
+            rows, cols = np.nonzero(ids == part_id)
+            found_f.append(index[rows])
+            found_s.append(cols)
+        if not found_f:
+            return np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64)
+        return np.concatenate(found_f), np.concatenate(found_s).astype(np.int64)
+
+    def track(self, part_id: int, quantity: str = "position", frames=None):
+        """(time, values) of one particle over the frames where it exists (within
+        a frame selection); reads that particle's column of one field only."""
+        where, slots = self.locate(part_id, frames)
+        if len(where) == 0:
             raise KeyError(f"particle id {part_id} does not appear in {self.path}")
-        values = getattr(self, quantity)[frames, slots]
-        return self.time[frames], values
+        return self.time[where], self.gather(quantity, where, slots)
+
+    def frame(self, index: int, fields=("position",)) -> Frame:
+        """The parts present at frame ``index`` with the ``fields`` asked for
+        (per-part fields: one row per present part; surface fields: (3,))."""
+        return next(self.iter_frames([index], fields))
+
+    def iter_frames(self, frames=None, fields=("position",)):
+        """:class:`Frame` after :class:`Frame` over a frame selection, read in blocks."""
+        for index, ids in self._id_blocks(frames):
+            values = {name: self.read(name, frames=index) for name in fields}
+            per_part = {name: self._dataset(name)[1] for name in fields}
+            for k, i in enumerate(index):
+                slots = np.nonzero(ids[k] != L.ID_FILL)[0]
+                per_frame = {name: (v[k][slots] if per_part[name] else v[k])
+                             for name, v in values.items()}
+                yield Frame(int(i), float(self.time[i]), int(self.step[i]), ids[k][slots],
+                            slots, per_frame)
 
     # -- lifetime -------------------------------------------------------------------
     def close(self) -> None:
@@ -192,3 +358,22 @@ class Result:
     def __repr__(self) -> str:
         return (f"Result({self.path!r}, deck={self.deck_name!r}, frames={self.n_frames}, "
                 f"status={self.status!r})")
+
+
+def _whole_arrays() -> dict:
+    """attribute -> (field, docstring) of every whole array, from the layout."""
+    out = {"time": ("time", "(frames,) simulated time of each frame [s]."),
+           "step": ("step", "(frames,) engine step of each frame.")}
+    for name, (_, comps, unit) in L.PART_ELEMENTS.items():
+        shape = "(frames, slots, 3)" if comps else "(frames, slots)"
+        unit = f" [{unit}]" if unit else ""
+        out["ids" if name == "id" else name] = (name, f"{shape} {name} of each slot{unit}; "
+                                                      "a fill value (-1 or NaN) where it is empty.")
+    for name, (_, comps, unit) in L.SURFACE_ELEMENTS.items():
+        out[f"surface_{name}"] = (f"surface_{name}", f"(frames, {comps}) {name} of the surface [{unit}].")
+    return out
+
+
+for _attr, (_field, _doc) in _whole_arrays().items():
+    setattr(Result, _attr, _Whole(_attr, _field, _doc))
+del _attr, _field, _doc

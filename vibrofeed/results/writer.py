@@ -22,7 +22,7 @@ import getpass
 import socket
 import threading
 import time as _time
-from typing import Mapping
+from collections.abc import Mapping
 
 import h5py
 import numpy as np
@@ -39,7 +39,7 @@ def _fixed(s: str) -> np.bytes_:
 
 
 def _now() -> str:
-    return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+    return _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
 
 
 def _number_or_text(value: str):
@@ -85,6 +85,9 @@ class ResultWriter:
         File to create (overwritten if it exists).
     deck_name, deck_path, deck_text:
         The deck that was run, stored verbatim.
+    includes:
+        ``{path relative to the deck's folder: text}`` of every file the deck
+        includes, stored verbatim under ``parameters/includes``.
     variables:
         Every deck variable with the value used: ``{name: (value, unit,
         description, default)}``; values are strings as given to LIGGGHTS.
@@ -94,14 +97,18 @@ class ResultWriter:
         The LIGGGHTS version line.
     seed:
         The run's random seed.
+    run_id:
+        The run's identity (hash of deck, includes, parameters and version).
     capacity_hint:
         Expected largest number of particles, to size HDF5 chunks.
     """
 
     def __init__(self, path, *, deck_name: str, deck_path: str, deck_text: str,
-                 variables: Mapping[str, tuple], derived: Mapping[str, float],
+                 includes: Mapping[str, str] | None = None, variables: Mapping[str, tuple],
+                 derived: Mapping[str, float],
                  engine_version: str, seed: int | None, ranks: int = 1,
-                 command: str = "", capacity_hint: int = 1, max_delay: float = 0.25):
+                 command: str = "", run_id: str = "", capacity_hint: int = 1,
+                 max_delay: float = 0.25):
         self.path = str(path)
         self.slots = SlotMap()
         self.frames = 0          # frames handed over
@@ -118,8 +125,8 @@ class ResultWriter:
         self.file = h5py.File(self.path, "w")
         f = self.file
         self._write_h5md_metadata(f)
-        self._write_parameters(f, deck_name, deck_path, deck_text, variables, derived,
-                               engine_version, seed, ranks, command)
+        self._write_parameters(f, deck_name, deck_path, deck_text, includes or {}, variables,
+                               derived, engine_version, seed, ranks, command, run_id)
         self._create_time_series(f)
         # Dataset handles, looked up once.
         self._values = {name: f[L.PARTS][name]["value"] for name in L.PART_ELEMENTS}
@@ -159,14 +166,17 @@ class ResultWriter:
         units.attrs["system"] = _fixed("SI")
 
     @staticmethod
-    def _write_parameters(f, deck_name, deck_path, deck_text, variables, derived,
-                          engine_version, seed, ranks, command) -> None:
+    def _write_parameters(f, deck_name, deck_path, deck_text, includes, variables, derived,
+                          engine_version, seed, ranks, command, run_id) -> None:
         p = f.create_group(L.PARAMETERS)
         p.attrs["format"] = _fixed(L.FORMAT_NAME)
         p.attrs["format_version"] = np.array(L.FORMAT_VERSION, dtype="i4")
         deck = p.create_dataset("deck", data=deck_text, dtype=h5py.string_dtype())
         deck.attrs["name"] = deck_name
         deck.attrs["path"] = deck_path
+        inc = p.create_group("includes")  # by path relative to the deck's folder
+        for name, text in includes.items():
+            inc.create_dataset(name.lstrip("/"), data=text, dtype=h5py.string_dtype())
         p.create_dataset("liggghts_version", data=engine_version, dtype=h5py.string_dtype())
         p.create_dataset("seed", data=np.int64(seed if seed is not None else -1))
         var = p.create_group("variables")
@@ -180,6 +190,7 @@ class ResultWriter:
         for name, value in derived.items():
             der.create_dataset(name, data=float(value))
         run = p.create_group("run")
+        run.attrs["id"] = run_id
         run.attrs["status"] = L.STATUS_RUNNING
         run.attrs["message"] = ""
         run.attrs["started"] = _now()

@@ -5,7 +5,8 @@ with the slip speed explains the measured trials better than Coulomb's
 constant one. The law is the simplest with exact events: mu_k below a slip
 speed v_c, mu_k_fast at or above it (mu_k_fast < mu_k: velocity weakening,
 Stribeck-like; > mu_k: strengthening). The part's acceleration stays
-piecewise constant, so the events of ``vertical`` carry over: besides
+piecewise constant, so the event roots of the vertical model
+(``models.roots``) carry over: besides
 w = v_s - v_p = 0 there are crossings of |w| = v_c, found as zeros of
 w - s v_c with the same bracketed search. With strengthening, |w| can be
 held at v_c (neither regime moves it away): the part then "rides" at a
@@ -22,7 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .vertical import Contact, _slip_end, _stick_decision, _stick_exit
+from ..models.roots import slip_end, stick_decision, stick_exit
+from ..models.vertical import Contact
 
 __all__ = ["simulate_speed_dependent"]
 
@@ -41,7 +43,7 @@ class _Segment:
 
 def _first_level(P, i, t0, v0, a_p, level, direction, from_level, tol):
     """First time w = v_s - v_p equals ``level``; w - level moves with sign ``direction``."""
-    return _slip_end(P, i, t0, v0 + level, direction, a_p, tol, from_zero=from_level)
+    return slip_end(P, i, t0, v0 + level, direction, a_p, tol, from_zero=from_level)
 
 
 def simulate_speed_dependent(surface, contact: Contact, mu_k_fast: float, v_c: float,
@@ -61,10 +63,10 @@ def simulate_speed_dependent(surface, contact: Contact, mu_k_fast: float, v_c: f
     a_slow = {s: s * contact.mu_k * fn_m - contact.g for s in (1, -1)}
     a_fast = {s: s * mu_k_fast * fn_m - contact.g for s in (1, -1)}
     t = float(t_start)
-    z = float(surface.position(t)) if z0 is None else float(z0)
+    z = float(surface.position(t)[0]) if z0 is None else float(z0)
     v = P.local(0, t, 1)
     i = 0
-    side = _stick_decision(P, 0, t, lo, hi, tol)
+    side = stick_decision(P, 0, t, lo, hi, tol)
     state = ("stick", 0) if side == 0 else ("slow", side)
     segments: list[_Segment] = []
     repeats = 0
@@ -74,7 +76,7 @@ def simulate_speed_dependent(surface, contact: Contact, mu_k_fast: float, v_c: f
             w_hold = 0.0 if kind == "stick" else s * v_c
             band = (lo, hi) if kind == "stick" else tuple(sorted((a_slow[s], a_fast[s])))
             offset = z - P.local(i, t, 0)
-            hit = _stick_exit(P, i, t, *band)
+            hit = stick_exit(P, i, t, *band)
             t1, j, out = (t_end, P.n - 1, 0) if hit is None else hit
             segments.append(_Segment(t, t1, kind, z, v, 0.0, offset, w_hold))
             z = P.local(j, t1, 0) + offset - w_hold * (t1 - t)
@@ -114,7 +116,7 @@ def simulate_speed_dependent(surface, contact: Contact, mu_k_fast: float, v_c: f
                 j += 1
             if what == "zero":
                 v = P.local(j, t1, 1)
-                side = _stick_decision(P, j, t1, lo, hi, tol)
+                side = stick_decision(P, j, t1, lo, hi, tol)
                 state = ("stick", 0) if side == 0 else ("slow", side)
             elif what == "vc":
                 a = P.local(j, t1, 2)
@@ -139,6 +141,6 @@ def simulate_speed_dependent(surface, contact: Contact, mu_k_fast: float, v_c: f
             tau = tt - g.t0
             out[n] = g.z0 + g.v0 * tau + 0.5 * g.accel * tau * tau
         else:
-            out[n] = float(surface.position(tt)) + g.offset - g.slip_speed * (tt - g.t0)
+            out[n] = float(surface.position(tt)[0]) + g.offset - g.slip_speed * (tt - g.t0)
     stuck = sum(g.t1 - g.t0 for g in segments if g.kind == "stick") / (t_end - t_start)
     return out, stuck, segments

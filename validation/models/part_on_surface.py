@@ -1,7 +1,8 @@
 """One rigid part on a vibrating surface: stick, slip and flight with exact events.
 
-Implements the single-part kinematics of the report (Khan & Sarma, sections
-2.1-2.4) for any surface waveform of `validation.waveforms`, independent of
+Implements the single-part kinematics of the report (Khan & Sarma, "Vibratory
+Assembly Update: Part Transportation Mechanics Analysis", sections 2.1-2.4) for
+any periodic surface motion of `validation.models.surface`, independent of
 LIGGGHTS, so that DEM trajectories can be overlaid on it.
 
 Model (SI units; surface frame x along the track, z normal to the surface)
@@ -36,7 +37,7 @@ Model (SI units; surface frame x along the track, z normal to the surface)
   (n = 0) falls inside the summed interval.
 
 Events are found by root isolation on the analytic trajectories (see
-`validation.event_roots`): flight is a parabola against the surface motion,
+`validation.models.roots`): flight is a parabola against the surface motion,
 stick follows the surface, slip has a closed form in the surface velocity and
 displacement. No fixed time grid is used for events.
 """
@@ -48,10 +49,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .event_roots import MERGE, all_roots, first_descent, first_negative_interval
-from .waveforms import Waveform
+from .constants import G
+from .roots import MERGE, all_roots, first_descent, first_negative_interval
+from .surface import SurfaceMotion
 
-G_DEFAULT = 9.81
 PHASES = ("stick", "slip", "flight")
 
 
@@ -117,8 +118,8 @@ class PartOnSurface:
 
     Parameters
     ----------
-    waveform : Waveform
-        Surface motion.
+    waveform : SurfaceMotion
+        Periodic surface motion.
     part : PartParams
         Friction and restitution.
     incline : float
@@ -135,8 +136,8 @@ class PartOnSurface:
     in the attributes t, x, z, vx, vz, mode and the history in `events`.
     """
 
-    def __init__(self, waveform: Waveform, part: PartParams, incline: float = 0.0,
-                 g: float = G_DEFAULT, chatter_tol: float = 1e-6, record: bool = True):
+    def __init__(self, waveform: SurfaceMotion, part: PartParams, incline: float = 0.0,
+                 g: float = G, chatter_tol: float = 1e-6, record: bool = True):
         self.wf = waveform
         self.part = part
         self.incline = float(incline)
@@ -173,7 +174,7 @@ class PartOnSurface:
         surface velocity. If z is given above the surface the part starts in
         flight with velocity (vx, vz) [m/s] (default: the surface velocity).
         """
-        xs, zs = self.wf.displacement(t0)
+        xs, zs = self.wf.position(t0)
         vt, vn = self.wf.velocity(t0)
         self.t = float(t0)
         self.x = xs if x is None else float(x)
@@ -204,13 +205,13 @@ class PartOnSurface:
                     seg.z0 + seg.vz0 * tau - 0.5 * self.g_n * tau * tau,
                     seg.vx0 - self.g_t * tau + 0 * tau,
                     seg.vz0 - self.g_n * tau + 0 * tau)
-        (xs, zs), (vt, vn) = wf.displacement(t), wf.velocity(t)
+        (xs, zs), (vt, vn) = wf.position(t), wf.velocity(t)
         if seg.mode == "stick":
-            xs0 = wf.displacement(seg.t0)[0]
+            xs0 = wf.position(seg.t0)[0]
             return seg.x0 + (xs - xs0), zs, vt, vn
         if seg.mode == "slip":
             k = seg.s * self.part.mu_k
-            zs0 = wf.displacement(seg.t0)[1]
+            zs0 = wf.position(seg.t0)[1]
             vn0 = wf.velocity(seg.t0)[1]
             c = k * self.g_n + self.g_t
             vx = seg.vx0 - c * tau - k * (vn - vn0)
@@ -228,7 +229,7 @@ class PartOnSurface:
             x, z, vx, vz = self._eval_segment(seg, t_new)
             self.x, self.z, self.vx, self.vz = float(x), float(z), float(vx), float(vz)
             if self.mode != "flight":    # exactly on the surface
-                self.z, self.vz = self.wf.displacement(t_new)[1], self.wf.velocity(t_new)[1]
+                self.z, self.vz = self.wf.position(t_new)[1], self.wf.velocity(t_new)[1]
             if self.record:
                 self.segments.append(seg)
         self.t = t_new
@@ -239,7 +240,7 @@ class PartOnSurface:
 
         def h(t):
             tau = t - t0
-            return Z0 + Vz * tau - 0.5 * gn * tau * tau - wf.displacement(t)[1]
+            return Z0 + Vz * tau - 0.5 * gn * tau * tau - wf.position(t)[1]
 
         def hp(t):
             return Vz - gn * (t - t0) - wf.velocity(t)[1]
@@ -317,7 +318,7 @@ class PartOnSurface:
     def _impact(self):
         wf, e, mu = self.wf, self.part.e, self.part.mu_k
         vt, vn = wf.velocity(self.t)
-        self.z = wf.displacement(self.t)[1]
+        self.z = wf.position(self.t)[1]
         w = min(self.vz - vn, 0.0)            # normal relative velocity (approaching)
         u = self.vx - vt
         P = (1.0 + e) * (-w)                  # normal impulse per unit mass
@@ -358,7 +359,7 @@ class PartOnSurface:
         if self.record and tau > 0:
             self.segments.append(seg)
         self.t, self.x, self.vx = t_inf, seg.x1, vx_inf
-        self.z, self.vz = wf.displacement(t_inf)[1], wf.velocity(t_inf)[1]
+        self.z, self.vz = wf.position(t_inf)[1], wf.velocity(t_inf)[1]
         self._emit("rest", summed_time=tau, summed_impulse_n=p_rem * self.part.mass)
         self._settle_contact(rel_stop)
         return True
@@ -437,7 +438,7 @@ class PartOnSurface:
             for k, v in zip(("x", "z", "vx", "vz"), vals):
                 out[k][sel] = v
             phase[sel] = "flight" if seg.mode == "chatter" else seg.mode
-        (xs, zs), (vxs, vzs) = self.wf.displacement(times), self.wf.velocity(times)
+        (xs, zs), (vxs, vzs) = self.wf.position(times), self.wf.velocity(times)
         return dict(t=times, **out, xs=xs, zs=zs, vxs=vxs, vzs=vzs, phase=phase)
 
 
@@ -473,8 +474,8 @@ class Trajectory:
         return self.model.sample(times)
 
 
-def simulate(waveform: Waveform, part: PartParams, n_periods: float = 10.0, incline: float = 0.0,
-             g: float = G_DEFAULT, t0: float = 0.0, samples_per_period: int = 100,
+def simulate(waveform: SurfaceMotion, part: PartParams, n_periods: float = 10.0, incline: float = 0.0,
+             g: float = G, t0: float = 0.0, samples_per_period: int = 100,
              initial: dict | None = None, chatter_tol: float = 1e-6) -> Trajectory:
     """Simulate one part on the vibrating surface and return its trajectory.
 
@@ -522,7 +523,7 @@ class SteadyState:
     n_periods: int
 
 
-def mean_velocity(waveform: Waveform, part: PartParams, incline: float = 0.0, g: float = G_DEFAULT,
+def mean_velocity(waveform: SurfaceMotion, part: PartParams, incline: float = 0.0, g: float = G,
                   n_transient: int = 20, n_block: int = 24, max_blocks: int = 20,
                   rtol: float = 1e-4, atol: float = 0.0, chatter_tol: float = 1e-6,
                   initial: dict | None = None) -> SteadyState:

@@ -30,12 +30,11 @@ exactly Coulomb:
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 from scipy.interpolate import PPoly
 
-from .replay_fit import EDGE_FRAMES, ReplayResult, compare_with_measurement, prepare
+from .fit import EDGE_FRAMES, ReplayResult, compare_with_measurement, prepare
 from .trials import Trial
 
 PART_RADIUS = 0.01  # m
@@ -94,20 +93,25 @@ def deck_parameters(mass: float, normal_force: float, mu: float, duration: float
             "t_end": repr(duration), "output_dt": repr(frame_dt)}
 
 
-def replay_dem(trial: Trial, mass: float, normal_force: float, mu: float, output,
-               edge_frames: int = EDGE_FRAMES, ranks: int = 1, on_event=None) -> ReplayResult:
-    """Replay a trial in LIGGGHTS into ``output`` (H5MD) and compare with the
-    measured part; fields as ``replay_fit.replay``."""
+def replay_request(trial: Trial, mass: float, normal_force: float, mu: float, output,
+                   edge_frames: int = EDGE_FRAMES, ranks: int = 1, reuse: bool = False):
+    """The LIGGGHTS run replaying ``trial``, as a request for the batch executor."""
     from vibrofeed.decks import Deck
-    from vibrofeed.engine.runner import run_deck
-    from vibrofeed.results.reader import Result
+    from vibrofeed.engine.batch import RunRequest
 
     prep = prepare(trial)
-    tr = prep.trial
     before, segments, t0, duration = platform_schedule(prep, edge_frames)
-    params = deck_parameters(mass, normal_force, mu, duration, tr.dt)
-    run_deck(Deck.find("single_part"), params, output, ranks=ranks, before_run=before,
-             schedule=segments, on_event=on_event)
+    params = deck_parameters(mass, normal_force, mu, duration, prep.trial.dt)
+    return RunRequest(Deck.find("single_part"), params, output, label=prep.name, ranks=ranks,
+                      reuse=reuse, before_run=before, schedule=segments)
+
+
+def replay_result(trial: Trial, output, normal_force: float, mu: float,
+                  edge_frames: int = EDGE_FRAMES) -> ReplayResult:
+    """Compare the LIGGGHTS replay in ``output`` with the measured part."""
+    from vibrofeed.results.reader import Result
+
+    tr = prepare(trial).trial
     with Result(output) as r:
         t_dem = r.time
         x = r.track(int(r.part_ids[0]))[1][:, 0]
@@ -118,3 +122,15 @@ def replay_dem(trial: Trial, mass: float, normal_force: float, mu: float, output
     stuck = np.abs(v - vs) <= 1e-2 * np.abs(vs).max()
     return compare_with_measurement(tr, edge_frames, t_dem - t_dem[0], x - x[0], xs, stuck,
                                     stuck.mean(), float(normal_force), float(mu))
+
+
+def replay_dem(trial: Trial, mass: float, normal_force: float, mu: float, output,
+               edge_frames: int = EDGE_FRAMES, ranks: int = 1, on_event=None) -> ReplayResult:
+    """Replay a trial in LIGGGHTS into ``output`` (H5MD) and compare with the
+    measured part; fields as ``fit.replay``."""
+    from vibrofeed.engine.runner import run_deck
+
+    req = replay_request(trial, mass, normal_force, mu, output, edge_frames, ranks)
+    run_deck(req.deck, req.params, req.output, ranks=req.ranks, before_run=req.before_run,
+             schedule=req.schedule, on_event=on_event)
+    return replay_result(trial, output, normal_force, mu, edge_frames)

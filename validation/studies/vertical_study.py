@@ -1,7 +1,7 @@
 """What limits the prediction of the measured trials? (numbers for the notes)
 
-Run ``python -m vibrofeed.validation.vertical_study`` (about 30 s) to
-recompute the tables of VERTICAL_TRANSPORT_NOTES.md. Every hypothesis is
+Run ``python -m vibrofeed.validation.studies.vertical_study`` (about 30 s) to
+recompute the tables of replay/VERTICAL_TRANSPORT_NOTES.md. Every hypothesis is
 scored the same way: each trial predicted with its MEASURED normal force,
 every other parameter (mu_k and the hypothesis' own) chosen on a grid to
 minimise the mean MAE of the OTHER trials (leave-one-out). A hypothesis
@@ -18,12 +18,22 @@ import numpy as np
 from scipy.interpolate import PPoly, make_interp_spline
 from scipy.signal import lsim
 
-from .replay_fit import (EDGE_FRAMES, MU_S, PART_MASS, PreparedTrial, fit_trials,
-                         leave_one_out, measured_normal_force_mg, prepare, replay)
+from ..models.constants import G
+from ..models.surface import PolynomialSurface
+from ..models.vertical import Contact, simulate
+from ..replay.fit import (
+    EDGE_FRAMES,
+    MU_S,
+    PART_MASS,
+    PreparedTrial,
+    fit_trials,
+    leave_one_out,
+    measured_normal_force_mg,
+    prepare,
+    replay,
+)
+from ..replay.trials import estimate_noise, fit_position, load_trials
 from .speed_dependent_friction import simulate_speed_dependent
-from .surface_motion import PolynomialSurface
-from .trials import fit_position, estimate_noise, load_trials
-from .vertical import G, Contact, simulate
 
 __all__ = ["error_table", "leave_one_out_from_table", "noise_floor", "run_study"]
 
@@ -62,22 +72,23 @@ def _refit(trial, **kwargs) -> PreparedTrial:
 
 def _transformed(trial, kind: str, angle_deg: float = 0.0):
     """Platform and part z in another frame: relative to marker s, or a rotated camera."""
-    P, O, S = trial.platform, trial.part, trial.marker
+    platform, part, marker = trial.platform, trial.part, trial.marker
     if kind == "marker":
-        ref = S.z - S.z[0]
-        P, O = dataclasses.replace(P, z=P.z - ref), dataclasses.replace(O, z=O.z - ref)
+        ref = marker.z - marker.z[0]
+        platform = dataclasses.replace(platform, z=platform.z - ref)
+        part = dataclasses.replace(part, z=part.z - ref)
     elif kind == "tilt":
         c, s = np.cos(np.radians(angle_deg)), np.sin(np.radians(angle_deg))
-        P = dataclasses.replace(P, z=c * P.z + s * P.x)
-        O = dataclasses.replace(O, z=c * O.z + s * O.x)
-    return dataclasses.replace(trial, platform=P, part=O)
+        platform = dataclasses.replace(platform, z=c * platform.z + s * platform.x)
+        part = dataclasses.replace(part, z=c * part.z + s * part.x)
+    return dataclasses.replace(trial, platform=platform, part=part)
 
 
 def _compliant(p: PreparedTrial, f_c: float, zeta: float = 1.0) -> PreparedTrial:
     """Platform motion seen through a tangential spring-damper (natural freq. f_c)."""
     t0, t1 = p.trial.t[0], p.trial.t[-1]
     tt = np.linspace(t0, t1, int((t1 - t0) * 40000) + 1)
-    z, v = p.surface.position(tt), p.surface.velocity(tt)
+    z, v = p.surface.position(tt)[0], p.surface.velocity(tt)[0]
     w = 2 * np.pi * f_c
     sys = (np.array([[0, 1], [-w * w, -2 * zeta * w]]), np.array([[0, 0], [w * w, 2 * zeta * w]]),
            np.array([[1.0, 0.0]]), np.zeros((1, 2)))
@@ -101,6 +112,15 @@ def _row(name, preps, table, combos, describe):
             "chosen": [describe(combos[k]) for k in chosen]}
 
 
+def _variant_row(name, preps, variants: dict, describe):
+    """Row of a family of modified trials: ``variants`` maps a setting to the
+    prepared trials under it; every (setting, mu_k) pair is scored."""
+    combos = list(itertools.product(variants, MU_GRID[::2]))
+    table = np.array([[_mae_coulomb(variants[v][i], m) for v, m in combos]
+                      for i in range(len(preps))])
+    return _row(name, preps, table, combos, describe)
+
+
 def noise_floor(prep: PreparedTrial, normal_force_mg: float, mu_k: float,
                 seeds=(0, 1, 2)) -> float:
     """MAE [mm] that tracking noise alone causes, for a trial and parameters.
@@ -121,7 +141,7 @@ def noise_floor(prep: PreparedTrial, normal_force_mg: float, mu_k: float,
     for seed in seeds:
         rng = np.random.default_rng(seed)
         noisy = dataclasses.replace(
-            tr, platform=dataclasses.replace(tr.platform, z=truth.position(t)
+            tr, platform=dataclasses.replace(tr.platform, z=truth.position(t)[0]
                                              + sig_p * rng.standard_normal(t.size)),
             part=dataclasses.replace(tr.part, z=part + sig_o * rng.standard_normal(t.size)))
         r = replay(prepare(noisy), PART_MASS, contact.normal_force, MU_S, mu_k)
@@ -176,20 +196,13 @@ def run_study(trials=None, verbose: bool = True) -> dict:
 
     angles = (-15.0, -5.0, 0.0, 5.0, 15.0)
     tilted = {a: [prepare(_transformed(p.trial, "tilt", a)) for p in preps] for a in angles}
-    combos = list(itertools.product(angles, MU_GRID[::2]))
-    table = np.array([[_mae_coulomb(tilted[a][i], m) for a, m in combos]
-                      for i in range(len(preps))])
-    out["rows"].append(_row("camera tilt (x mixed into z)", preps, table, combos,
-                            lambda c: f"{c[0]:+.0f}deg,mu_k={c[1]:.2f}"))
+    out["rows"].append(_variant_row("camera tilt (x mixed into z)", preps, tilted,
+                                    lambda c: f"{c[0]:+.0f}deg,mu_k={c[1]:.2f}"))
     say("tilt")
 
-    freqs = (150.0, 300.0, 600.0)
-    soft = {f: [_compliant(p, f) for p in preps] for f in freqs}
-    combos = list(itertools.product(freqs, MU_GRID[::2]))
-    table = np.array([[_mae_coulomb(soft[f][i], m) for f, m in combos]
-                      for i in range(len(preps))])
-    out["rows"].append(_row("grasp compliance (low-pass f_c)", preps, table, combos,
-                            lambda c: f"f_c={c[0]:.0f}Hz,mu_k={c[1]:.2f}"))
+    soft = {f: [_compliant(p, f) for p in preps] for f in (150.0, 300.0, 600.0)}
+    out["rows"].append(_variant_row("grasp compliance (low-pass f_c)", preps, soft,
+                                    lambda c: f"f_c={c[0]:.0f}Hz,mu_k={c[1]:.2f}"))
     say("compliance")
 
     combos = list(itertools.product(MU_GRID[::2], (0.5, 0.75, 1.0, 1.25, 1.5),

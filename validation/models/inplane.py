@@ -1,4 +1,4 @@
-"""In-plane (horizontal-only) vibratory transport (report 2.1).
+"""In-plane (horizontal-only) vibratory transport (Khan & Sarma, §2.1).
 
 Speed curves of the asymmetric stick-slip and Coulomb-pump waveforms computed
 with the event-driven model, and two limits as closed or semi-closed forms:
@@ -33,12 +33,13 @@ import math
 
 import numpy as np
 
-from .part_on_surface import G_DEFAULT, PartParams, mean_velocity
-from .waveforms import CoulombPumpWaveform, PiecewiseConstantAccel, StickSlipWaveform, Waveform
+from .constants import G
+from .part_on_surface import PartParams, mean_velocity
+from .surface import CoulombPumpWaveform, PiecewiseConstantAccel, StickSlipWaveform, SurfaceMotion
 
 
 def optimal_stick_slip_speed(a_max: float, mu_s: float, mu_k: float, freq: float,
-                             g: float = G_DEFAULT) -> float:
+                             g: float = G) -> float:
     """Best steady mean part speed [m/s] of horizontal vibration with |a| <= a_max.
 
     a_max [m/s^2], mu_s, mu_k [-], freq [Hz], g [m/s^2]. Umbanhowar & Lynch's
@@ -52,7 +53,7 @@ def optimal_stick_slip_speed(a_max: float, mu_s: float, mu_k: float, freq: float
 
 
 def optimal_stick_slip_waveform(a_max: float, mu_s: float, mu_k: float, freq: float,
-                                g: float = G_DEFAULT) -> PiecewiseConstantAccel:
+                                g: float = G) -> PiecewiseConstantAccel:
     """The optimal three-phase surface acceleration (+mu_s g, -a_max, +a_max).
 
     Durations: t1 = T mu_k/(mu_s + mu_k), tau = T mu_s/(mu_s + mu_k),
@@ -69,8 +70,8 @@ def optimal_stick_slip_waveform(a_max: float, mu_s: float, mu_k: float, freq: fl
     return PiecewiseConstantAccel([t1, t2, tau - t2], [mu_s * g, -a_max, a_max])
 
 
-def sliding_limit_speed(waveform: Waveform, mu_k: float | None = None, incline: float = 0.0,
-                        g: float = G_DEFAULT, n: int = 200_000) -> float:
+def sliding_limit_speed(waveform: SurfaceMotion, mu_k: float | None = None, incline: float = 0.0,
+                        g: float = G, n: int = 200_000) -> float:
     """High-frequency (always sliding) limit of the part speed [m/s].
 
     Solves mu_k int_0^T n(t) sign(v_s(t) - V) dt = g sin(beta) T for V, with
@@ -111,7 +112,7 @@ def sliding_limit_speed(waveform: Waveform, mu_k: float | None = None, incline: 
 
 
 def stick_slip_closed_form(waveform: StickSlipWaveform, mu_s: float, mu_k: float,
-                           g: float = G_DEFAULT) -> float:
+                           g: float = G) -> float:
     """Steady mean part speed [m/s] for the two-phase stick-slip waveform, flat track.
 
     Valid when a_forward <= mu_s g < a_backward (stick forward, slip back) and
@@ -132,17 +133,17 @@ def stick_slip_closed_form(waveform: StickSlipWaveform, mu_s: float, mu_k: float
     return (ab - mu_k * g) * tb * (tb + ts) / (2 * T)
 
 
-def speed_curve(make_waveform, peak_speeds, part: PartParams, g: float = G_DEFAULT, **kw):
+def speed_curve(make_waveform, peak_speeds, part: PartParams, g: float = G, **kw):
     """Steady mean part speed [m/s] for each surface peak speed [m/s].
 
-    make_waveform(peak_speed) -> Waveform; part : PartParams; extra keywords go
+    make_waveform(peak_speed) -> SurfaceMotion; part : PartParams; extra keywords go
     to `part_on_surface.mean_velocity`. Returns an array.
     """
     return np.array([mean_velocity(make_waveform(v), part, g=g, **kw).velocity for v in peak_speeds])
 
 
 def stick_slip_speed_curve(freq: float, peak_speeds, forward_fraction: float, part: PartParams,
-                           g: float = G_DEFAULT, **kw):
+                           g: float = G, **kw):
     """Part speed [m/s] vs peak surface speed [m/s] for the stick-slip waveform
     (report 2.1, Figure 1) at fixed frequency [Hz] and forward-time fraction."""
     return speed_curve(lambda v: StickSlipWaveform.from_peak_speed(freq, v, forward_fraction),
@@ -150,7 +151,7 @@ def stick_slip_speed_curve(freq: float, peak_speeds, forward_fraction: float, pa
 
 
 def coulomb_pump_speed_curve(freq: float, peak_speeds, accel: float, part: PartParams,
-                             g: float = G_DEFAULT, **kw):
+                             g: float = G, **kw):
     """Part speed [m/s] vs forward surface speed [m/s] for the Coulomb pump
     (report 2.1, Figure 2) at fixed frequency [Hz] and reversal acceleration
     [m/s^2] (peak speeds up to accel / (4 freq))."""

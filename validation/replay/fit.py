@@ -31,8 +31,10 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from .trials import Trial, fit_platform
-from .vertical import G, Contact, simulate
+from ..models.constants import G
+from ..models.surface import PolynomialSurface
+from ..models.vertical import Contact, simulate
+from .trials import PositionFit, Trial, fit_platform
 
 __all__ = [
     "PART_MASS",
@@ -76,8 +78,8 @@ class PreparedTrial:
     """A trial with its platform interpolant, built once and replayed many times."""
 
     trial: Trial
-    surface: object  # PolynomialSurface of the platform z [m]
-    fit: object  # trials.PositionFit
+    surface: PolynomialSurface  # the platform's vertical motion [m] (along its x axis)
+    fit: PositionFit
 
     @property
     def name(self) -> str:
@@ -129,7 +131,7 @@ def replay(trial: Trial | PreparedTrial, mass: float, normal_force: float, mu_s:
     z0 = float(tr.part.z[k0])
     traj = simulate(prep.surface, contact, t_end=float(t[-1]), t_start=float(t[0]),
                     z0=z0, t_eval=t)
-    platform = prep.surface.position(t) - prep.surface.position(t[0])
+    platform = prep.surface.position(t)[0] - prep.surface.position(t[0])[0]
     return compare_with_measurement(tr, k0, t - t[0], traj.z - z0, platform, traj.stuck,
                                     traj.stuck_fraction, normal_force, mu_k)
 

@@ -1,4 +1,4 @@
-"""Sub-hopping transport: the part never leaves the surface (report 2.2.1, 2.3.1).
+"""Sub-hopping transport: the part never leaves the surface (Khan & Sarma, §2.2.1, §2.3.1).
 
 With a normal acceleration amplitude below g cos(beta) the part stays in
 contact; normal vibration only modulates the friction limit mu N, and
@@ -14,12 +14,11 @@ velocities, which is why results are also returned divided by amp_t w.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-from .part_on_surface import G_DEFAULT, PartParams, SteadyState, mean_velocity
-from .waveforms import SineWaveform
+from .constants import TWO_PI, G
+from .part_on_surface import PartParams, SteadyState, mean_velocity
+from .surface import SineWaveform
 
 #: Report Figure 8: delta = 0, horizontal and vertical acceleration amplitudes
 #: 0.8 g (the report's A = 1.6 in units where g = 2), mu = 0.75.
@@ -28,7 +27,7 @@ FIGURE8 = dict(gamma_t=0.8, gamma_n=0.8, phase=0.0, mu=0.75)
 
 def sine_speed(freq: float, gamma_t: float, gamma_n: float, phase: float, mu_s: float,
                mu_k: float | None = None, e: float = 0.0, incline: float = 0.0,
-               g: float = G_DEFAULT, **kw) -> SteadyState:
+               g: float = G, **kw) -> SteadyState:
     """Steady mean conveying velocity for sinusoidal vibration (report 2.3.1).
 
     freq [Hz]; gamma_t, gamma_n: tangential and normal peak accelerations in
@@ -49,8 +48,8 @@ def normalised_speed(gamma_t: float, gamma_n: float, phase: float, mu_s: float,
     Frequency-independent (see module docstring); computed at 50 Hz.
     """
     ss = sine_speed(50.0, gamma_t, gamma_n, phase, mu_s, mu_k, e, incline, **kw)
-    w = 2 * math.pi * 50.0
-    return ss.velocity / (gamma_t * G_DEFAULT / w)
+    w = TWO_PI * 50.0
+    return ss.velocity / (gamma_t * G / w)
 
 
 def speed_map(gamma_t: float, gammas_n, phases, inclines, mu_s: float, mu_k: float | None = None,
@@ -69,7 +68,7 @@ def speed_map(gamma_t: float, gammas_n, phases, inclines, mu_s: float, mu_k: flo
 
 
 def square_wave_speed(freq: float, acc_t: float, acc_n: float, mu_s: float, mu_k: float | None = None,
-                      g: float = G_DEFAULT) -> float:
+                      g: float = G) -> float:
     """Closed-form steady speed [m/s] for in-phase square-wave accelerations (report Figs 4-5).
 
     Surface: SquareWaveAccel(freq, acc_t, acc_n, phase=0), flat track; half A

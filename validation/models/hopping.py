@@ -1,4 +1,4 @@
-"""Hopping of a part on a sinusoidally vibrating surface, Gamma > 1 (report 2.3.2, 2.4).
+"""Hopping of a part on a sinusoidally vibrating surface, Gamma > 1 (Khan & Sarma, §2.3.2, §2.4).
 
 The normal motion of the part does not depend on the tangential one (friction
 and the tangential impulse do not act along z), so the hopping dynamics is
@@ -10,12 +10,13 @@ time in 1/w, so that gravity is 1/Gamma (the report's units, where gravity is
 Gamma / cos(beta).
 
 All quantities are computed with the event-driven model of
-`validation.part_on_surface` (SineWaveform with w = 1, amp_n = 1, g = 1/Gamma),
+`part_on_surface` (SineWaveform with w = 1, amp_n = 1, g = 1/Gamma),
 so the thresholds below are properties of the same model that is compared
 with DEM, not separate approximations. Closed forms are given alongside where
 they exist (and are used by the tests as independent checks).
 
-Corrections of the report (see /work/shared/seeds/README.md):
+Corrections of the report (Khan & Sarma, "Vibratory Assembly Update: Part
+Transportation Mechanics Analysis", §2.3 and §2.3.2):
 * launch at theta_l = asin(1/Gamma) (the report's asin(g/A) in its units);
 * flight h_p = sin th_l + (th - th_l) cos th_l - (th - th_l)^2 / (2 Gamma)
   (gravity with a minus sign);
@@ -33,10 +34,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq, fsolve, minimize_scalar
 
+from .constants import TWO_PI
 from .part_on_surface import PartOnSurface, PartParams
-from .waveforms import SineWaveform
+from .surface import SineWaveform
 
-TWO_PI = 2.0 * math.pi
 _UNIT_WAVE = SineWaveform(1.0 / TWO_PI, 0.0, 1.0, 0.0)   # w = 1 rad/s, amp_n = 1
 
 

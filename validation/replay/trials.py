@@ -7,7 +7,7 @@ z up. Velocity and acceleration are the tracker's central differences and are
 missing (a non-numeric placeholder) in the first and last rows.
 
 ``read_trial`` reads such a file as it is and returns SI arrays; anything
-that is not such a trial raises ``TrialFileError`` (a ``ValueError``) naming
+that is not such a trial raises ``vibrofeed.errors.TrialFileError`` naming
 the file and the problem.
 
 Platform motion for the model
@@ -82,7 +82,8 @@ from scipy.interpolate import BSpline, PPoly
 from scipy.linalg import cho_solve_banded, cholesky_banded
 from scipy.optimize import brentq
 
-from .surface_motion import PolynomialSurface
+from ...errors import TrialFileError
+from ..models.surface import PolynomialSurface
 
 __all__ = [
     "TrialFileError",
@@ -103,7 +104,7 @@ __all__ = [
 
 #: Data set location, beside the repository (where CI has it); the
 #: environment variable VIBROFEED_TRIALS_DIR overrides it.
-DEFAULT_TRIALS_DIR = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "vertical-transport"
+DEFAULT_TRIALS_DIR = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "vertical-transport"
 
 MARKERS = {"p": "platform", "o": "part", "s": "marker"}
 _QUANTITIES = ("x", "z", "vx", "vz", "ax", "az")
@@ -111,15 +112,6 @@ COLUMNS = ("t",) + tuple(q + m for m in MARKERS for q in _QUANTITIES)
 _SCALE = 1e-3  # mm, mm/s, mm/s^2 -> m, m/s, m/s^2
 MIN_FRAMES = 16
 _UNIFORM_RTOL = 1e-3  # the times are printed with 8 decimals: ~1e-5 relative jitter
-
-
-class TrialFileError(ValueError):
-    """A file is not a readable vertical-transport trial."""
-
-    def __init__(self, path, problem: str):
-        self.path = str(path)
-        self.problem = problem
-        super().__init__(f"{self.path}: {problem}")
 
 
 @dataclass(frozen=True)

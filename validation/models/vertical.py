@@ -1,36 +1,44 @@
 """Vertical vibratory transport: a part squeezed against a vertically moving surface.
 
-Model (seed 000). A part of mass m is pressed with a normal force F_n against
-a surface moving vertically as z_s(t), z up; Coulomb friction with static and
-kinetic coefficients mu_s >= mu_k; gravity g. With A_s = mu_s F_n / m and
-A_k = mu_k F_n / m:
+Model of Yako, Nowak, Yuan & Salisbury, "Vertical Vibratory Transport of
+Grasped Parts Using Impacts" (ICRA 2024), section "Dynamics". A part of mass m
+is pressed with a normal force F_n against a surface moving vertically as
+z_s(t), z up; Coulomb friction with static and kinetic coefficients
+mu_s >= mu_k; gravity g. With A_s = mu_s F_n / m and A_k = mu_k F_n / m:
 
 * sticking: z_p' = z_s', possible while  -A_s - g <= z_s'' <= A_s - g;
 * slipping: z_p'' = A_k sgn(z_s' - z_p') - g.
 
+The surface is any ``SurfaceMotion`` (``validation.models.surface``); its
+along-track coordinate x is the z here, as in the decks, where a wall at
+incline = 90 moves up along x.
+
 Events are located exactly, not by a fixed-step check. The surface is cut into
 pieces on which its acceleration is continuous and monotone
-(``surface_motion.Pieces``). While stuck, leaving the stick band is a level
+(``SurfaceMotion.pieces``). While stuck, leaving the stick band is a level
 crossing of z_s'' (at most one per piece). While slipping, the part's
 acceleration a_p is constant, so its motion is an exact parabola and the
 relative velocity w = z_s' - z_p' has w' = z_s'' - a_p: w is unimodal on each
 piece, its extremum is a level crossing of z_s'', and its return to zero is a
-bracketed root. All roots are refined by Brent's method to ~1e-14 s on the
-surface's own (analytic or piecewise-polynomial) formulas.
+bracketed root (``roots.stick_exit``, ``roots.slip_end``). All roots are
+refined by Brent's method to ~1e-14 s on the surface's own (analytic or
+piecewise-polynomial) formulas.
 
 Transitions:
 
 * stick -> slip when z_s'' leaves the band: above it the surface outruns
   the part (slip with sgn = +1), below it the surface drops away (sgn = -1);
 * slip -> stick when w returns to zero and z_s'' is inside the band there;
-  if it is outside, the part keeps slipping with the sign set by the side.
+  if it is outside, the part keeps slipping with the sign set by the side
+  (``roots.stick_decision``).
 
-Feasibility (seed 000): holding the part on a surface at rest needs
-F_n > m g / mu_s, and making it slip downwards needs a surface acceleration
-beyond the lower band edge, a_max > mu_s F_n / m + g, which then exceeds 2 g;
-``check_feasible`` tests both and says which fails and by how much.
+Feasibility (Yako et al., section "Vertical Vibratory Transport Is
+Difficult"): holding the part on a surface at rest needs F_n > m g / mu_s, and
+making it slip downwards needs a surface acceleration beyond the lower band
+edge, a_max > mu_s F_n / m + g, which then exceeds 2 g; ``check_feasible``
+tests both and says which fails and by how much.
 
-The two-level drive (``surface_motion.two_level_drive``) has a closed-form
+The two-level drive (``surface.two_level_drive``) has a closed-form
 transport rate, derived in ``two_level_transport``; the event-driven model is
 tested against it.
 """
@@ -41,16 +49,15 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import brentq
 
-from .surface_motion import (CallableSurface, Pieces, PolynomialSurface, sine_drive,
-                             two_level_down_time, two_level_drive)
+from .constants import G
+from .roots import slip_end, stick_decision, stick_exit
+from .surface import CallableSurface, SurfaceMotion, two_level_down_time
 
 __all__ = [
-    "G",
     "Contact",
     "Phase",
-    "Trajectory",
+    "VerticalTrajectory",
     "PeriodicTransport",
     "TwoLevelTransport",
     "check_feasible",
@@ -58,16 +65,7 @@ __all__ = [
     "simulate",
     "periodic_transport",
     "two_level_transport",
-    "CallableSurface",
-    "PolynomialSurface",
-    "sine_drive",
-    "two_level_drive",
 ]
-
-G = 9.81  # m/s^2, the value used by the experiment (README)
-
-_XTOL = 1e-14  # s, absolute tolerance of event times
-_RTOL = 4 * np.finfo(float).eps
 
 
 @dataclass(frozen=True)
@@ -112,7 +110,7 @@ class Contact:
 
 def check_feasible(mass: float, normal_force: float, mu_s: float, a_max: float,
                    g: float = G) -> dict:
-    """Check the two necessary conditions of upward transport (seed 000).
+    """Check the two necessary conditions of upward transport (Yako et al.).
 
     ``a_max`` is the largest downward surface acceleration magnitude
     [m/s^2]. Raises ``ValueError`` naming every bound that fails and by how
@@ -155,15 +153,15 @@ class Phase:
 
 
 @dataclass
-class Trajectory:
-    """Part motion: exact phases plus arrays sampled at ``t``.
+class VerticalTrajectory:
+    """Part motion of the vertical model: exact phases plus arrays sampled at ``t``.
 
     ``t, z, v, stuck`` are the part's time [s], position [m], velocity [m/s]
     and stuck flag at the requested output times.
     """
 
     phases: list[Phase]
-    surface: object
+    surface: SurfaceMotion
     t: np.ndarray = field(default=None)
     z: np.ndarray = field(default=None)
     v: np.ndarray = field(default=None)
@@ -193,8 +191,8 @@ class Trajectory:
         v = v0 + acc * tau
         if stuck.any():
             off = np.array([p.offset for p in self.phases])[k]
-            z[stuck] = self.surface.position(t[stuck]) + off[stuck]
-            v[stuck] = self.surface.velocity(t[stuck])
+            z[stuck] = self.surface.position(t[stuck])[0] + off[stuck]
+            v[stuck] = self.surface.velocity(t[stuck])[0]
         return z, v, stuck
 
     def stuck_time(self, t_a: float | None = None, t_b: float | None = None) -> float:
@@ -218,116 +216,17 @@ class Trajectory:
         return float(z[1] - z[0]) / (n * period)
 
 
-def _stick_decision(P: Pieces, j: int, t: float, lo: float, hi: float, tol: float) -> int:
-    """At zero relative velocity: 0 to stick, +1/-1 to slip upward/downward.
-
-    Uses the right-hand acceleration (piece j contains t at its start side).
-    Within ``tol`` of a band edge (event times are exact only to ~1e-14 s),
-    the piece's trend decides, so an exit found at t is not undone at t.
-    """
-    a = P.local(j, t, 2)
-    a_end = P.a_end[j]
-    if a > hi + tol or (a >= hi - tol and a_end > hi):
-        return 1
-    if a < lo - tol or (a <= lo + tol and a_end < lo):
-        return -1
-    return 0
-
-
-def _chunks(i: int, n: int):
-    """Index ranges [j0, j1) from piece i onward, growing so short searches stay cheap."""
-    size = 16
-    while i < n:
-        yield i, min(n, i + size)
-        i += size
-        size *= 2
-
-
-def _stick_exit(P: Pieces, i: int, t: float, lo: float, hi: float):
-    """First time >= t where the surface acceleration leaves [lo, hi]."""
-    for j0, j1 in _chunks(i, P.n):
-        a_s = P.a_start[j0:j1].copy()
-        a_e = P.a_end[j0:j1]
-        if j0 == i:
-            a_s[0] = P.local(i, t, 2)
-        bad = np.flatnonzero((a_s < lo) | (a_s > hi) | (a_e < lo) | (a_e > hi))
-        if bad.size == 0:
-            continue
-        k = bad[0]
-        j = j0 + k
-        start = t if j == i else P.edges[j]
-        if a_s[k] > hi:  # a jump out of the band at the piece start
-            return start, j, 1
-        if a_s[k] < lo:
-            return start, j, -1
-        level, side = (hi, 1) if a_e[k] > hi else (lo, -1)
-        t_x = brentq(lambda tau: P.local(j, tau, 2) - level, start, P.edges[j + 1],
-                     xtol=_XTOL, rtol=_RTOL)
-        return t_x, j, side
-    return None
-
-
-def _slip_end(P: Pieces, i: int, t0: float, v0: float, s: int, a_p: float,
-              tol: float, from_zero: bool = True):
-    """First time > t0 where the relative velocity w = v_s - v_p reaches zero.
-
-    sgn(w) = s just after t0. ``from_zero``: the slip starts at w(t0) = 0
-    (an event), rather than from an initial condition with w(t0) != 0.
-    """
-    def w(j, tau):
-        return P.local(j, tau, 1) - v0 - a_p * (tau - t0)
-
-    d_first = P.local(i, t0, 2) - a_p
-    if from_zero:
-        if abs(d_first) <= tol:
-            d_first = 0.0  # leaving exactly at a_s = a_p (e.g. mu_k = mu_s): trend decides
-        if s * d_first < 0 or (d_first == 0 and s * (P.a_end[i] - a_p) <= 0):
-            return t0, i  # cannot move away in direction s: decide again at once
-    for j0, j1 in _chunks(i, P.n):
-        t_end = P.edges[j0 + 1:j1 + 1]
-        sw_end = s * (P.v[j0 + 1:j1 + 1] - v0 - a_p * (t_end - t0))
-        d_s = P.a_start[j0:j1] - a_p
-        if j0 == i:
-            d_s = d_s.copy()
-            d_s[0] = d_first
-        d_e = P.a_end[j0:j1] - a_p
-        # s*w returns to 0 either by the piece end, or inside at a local minimum.
-        cross = sw_end <= 0
-        dip = (s * d_s < 0) & (s * d_e > 0)
-        for k in np.flatnonzero(cross | dip):
-            j = j0 + k
-            p = t0 if j == i else P.edges[j]
-            q = P.edges[j + 1]
-            if d_s[k] * d_e[k] < 0:  # interior extremum of w where a_s = a_p
-                t_m = brentq(lambda tau: P.local(j, tau, 2) - a_p, p, q,
-                             xtol=_XTOL, rtol=_RTOL)
-                sw_m = s * w(j, t_m)
-                if s * d_s[k] < 0:  # s*w falls to a minimum at t_m
-                    if sw_m <= 0:
-                        return brentq(lambda tau: w(j, tau), p, t_m,
-                                      xtol=_XTOL, rtol=_RTOL), j
-                    continue  # rises again after t_m: no crossing in this piece
-                if cross[k]:  # s*w rises to a maximum, then falls through zero
-                    return brentq(lambda tau: w(j, tau), t_m, q, xtol=_XTOL, rtol=_RTOL), j
-                continue
-            if j == i and from_zero:
-                continue  # monotone away from w(t0) = 0: no return in the first piece
-            if cross[k]:
-                return brentq(lambda tau: w(j, tau), p, q, xtol=_XTOL, rtol=_RTOL), j
-    return None
-
-
 def as_surface(motion):
     """A surface usable by ``simulate``.
 
-    Objects with ``pieces`` (``PolynomialSurface``, ``CallableSurface``) pass
-    through; any other object with ``position``, ``velocity`` and
-    ``acceleration`` is wrapped as a ``CallableSurface`` using its optional
-    ``breakpoints``, ``turning_points``, ``period`` and ``max_step``
-    attributes. A sampled measured motion becomes a surface through
-    ``trials.fit_position(t, z).surface``.
+    A ``SurfaceMotion`` passes through; any other object with ``position``,
+    ``velocity`` and ``acceleration`` of one coordinate (callables of t) is
+    wrapped as a ``CallableSurface`` using its optional ``breakpoints``,
+    ``turning_points``, ``period`` and ``max_step`` attributes. A sampled
+    measured motion becomes a surface through
+    ``replay.trials.fit_position(t, z).surface``.
     """
-    if hasattr(motion, "pieces"):
+    if isinstance(motion, SurfaceMotion):
         return motion
     missing = [n for n in ("position", "velocity", "acceleration") if not hasattr(motion, n)]
     if missing:
@@ -341,10 +240,10 @@ def as_surface(motion):
 
 def simulate(surface, contact: Contact, t_end: float, t_start: float = 0.0,
              z0: float | None = None, v0: float | None = None, t_eval=None,
-             max_phases: int = 1_000_000) -> Trajectory:
+             max_phases: int = 1_000_000) -> VerticalTrajectory:
     """Part motion on ``surface`` over [t_start, t_end] with exact stick/slip events.
 
-    ``surface``: a ``PolynomialSurface``/``CallableSurface``, or any object
+    ``surface``: a ``SurfaceMotion`` (its along-track axis), or any object
     with position, velocity and acceleration (see ``as_surface``). The part starts at z0
     (default: the surface position) with velocity v0 (default: the surface
     velocity). It starts stuck when v0 equals the surface velocity and the
@@ -358,13 +257,13 @@ def simulate(surface, contact: Contact, t_end: float, t_start: float = 0.0,
     lo, hi = contact.stick_lower, contact.stick_upper
     tol = 1e-9 * (abs(lo) + abs(hi)) + 1e-12  # m/s^2, roundoff of a_s at an event
     t = float(t_start)
-    z = float(surface.position(t)) if z0 is None else float(z0)
+    z = float(surface.position(t)[0]) if z0 is None else float(z0)
     v_s = P.local(0, t, 1)
     v = v_s if v0 is None else float(v0)
     from_zero = abs(v - v_s) <= 1e-12 * max(1.0, abs(v_s))
     if from_zero:
         v = v_s
-        mode = _stick_decision(P, 0, t, lo, hi, tol)
+        mode = stick_decision(P, 0, t, lo, hi, tol)
     else:
         mode = 1 if v_s > v else -1
     i = 0
@@ -375,7 +274,7 @@ def simulate(surface, contact: Contact, t_end: float, t_start: float = 0.0,
             raise RuntimeError(f"more than {max_phases} stick/slip phases")
         if mode == 0:
             offset = z - P.local(i, t, 0)
-            hit = _stick_exit(P, i, t, lo, hi)
+            hit = stick_exit(P, i, t, lo, hi)
             t1, j, side = (t_end, P.n - 1, 0) if hit is None else hit
             phases.append(Phase(t, t1, True, z, v, 0.0, offset))
             z, v = P.local(j, t1, 0) + offset, P.local(j, t1, 1)
@@ -383,7 +282,7 @@ def simulate(surface, contact: Contact, t_end: float, t_start: float = 0.0,
             from_zero = True
         else:
             a_p = contact.slip_acceleration(mode)
-            hit = _slip_end(P, i, t, v, mode, a_p, tol, from_zero)
+            hit = slip_end(P, i, t, v, mode, a_p, tol, from_zero)
             t1, j = (t_end, P.n - 1) if hit is None else hit
             tau = t1 - t
             phases.append(Phase(t, t1, False, z, v, a_p, 0.0))
@@ -392,7 +291,7 @@ def simulate(surface, contact: Contact, t_end: float, t_start: float = 0.0,
             if hit is not None:
                 if t1 >= P.edges[j + 1] and j + 1 < P.n:
                     j += 1  # decide with the acceleration after the edge
-                mode = _stick_decision(P, j, t1, lo, hi, tol)
+                mode = stick_decision(P, j, t1, lo, hi, tol)
             from_zero = True
         # Guard against chattering: many events at the same instant.
         zero_length = zero_length + 1 if t1 <= t else 0
@@ -402,7 +301,7 @@ def simulate(surface, contact: Contact, t_end: float, t_start: float = 0.0,
     if t_eval is None:
         grid = np.linspace(t_start, t_end, 1001)
         t_eval = np.unique(np.concatenate((grid, [p.t0 for p in phases], [t_end])))
-    traj = Trajectory(phases=phases, surface=surface)
+    traj = VerticalTrajectory(phases=phases, surface=surface)
     traj.t = np.asarray(t_eval, dtype=float)
     traj.z, traj.v, traj.stuck = traj.sample(traj.t)
     return traj

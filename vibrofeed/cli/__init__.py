@@ -1,0 +1,94 @@
+"""The ``vibrofeed`` command line: one module per command.
+
+``COMMANDS`` lists every command with the module that implements it and its
+one-line help. Only the module of the command being run is imported (it adds
+its own arguments and runs), so ``vibrofeed decks`` does not load the models,
+h5py or the plotting libraries that other commands need.
+
+A command module defines ``DESCRIPTION``, ``add_arguments(parser)`` and
+``run(args) -> int`` and imports what it needs inside ``run``. Errors of the
+:mod:`vibrofeed.errors` tree are printed as one line (``vibrofeed: error:
+...``) with their branch's exit status (2 for bad input, 1 for a failed run);
+anything else is a bug and keeps its traceback (``VIBROFEED_DEBUG=1`` shows
+tracebacks for the user errors too).
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import os
+import sys
+
+from .. import __version__
+from ..errors import EXIT_INTERRUPTED, VibrofeedError
+
+# name -> (module, one-line help), in the order `vibrofeed --help` lists them.
+COMMANDS: dict[str, tuple[str, str]] = {
+    "run": ("vibrofeed.cli.run", "run a deck and write an H5MD result"),
+    "check": ("vibrofeed.cli.check", "validate result files against the format"),
+    "validate": ("vibrofeed.cli.validate", "run DEM and analytic model on the validation cases"),
+    "replay": ("vibrofeed.cli.replay", "replay measured vertical-transport trials"),
+    "decks": ("vibrofeed.cli.decks", "list the decks in decks/"),
+    "params": ("vibrofeed.cli.params", "list a deck's parameters with defaults and units"),
+}
+
+
+def fail(message: str, code: int) -> int:
+    """Print one error line and return the exit status."""
+    print(f"vibrofeed: error: {message}", file=sys.stderr)
+    return code
+
+
+def _requested(argv: list[str]) -> str | None:
+    """The command named on the command line (the first word that is not an option)."""
+    for word in argv:
+        if not word.startswith("-"):
+            return word if word in COMMANDS else None
+    return None
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse, with its usage errors as the one line every error is."""
+
+    def error(self, message: str):
+        self.exit(2, f"vibrofeed: error: {self.prog}: {message} (see {self.prog} --help)\n")
+
+
+def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
+    """The parser, with the arguments of the requested command only (or of all
+    commands when ``argv`` is None, for documentation and tests)."""
+    parser = _Parser(
+        prog="vibrofeed",
+        description="DEM simulation of vibratory feeding of micro-parts with LIGGGHTS.")
+    parser.add_argument("--version", action="version", version=f"vibrofeed {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    wanted = set(COMMANDS) if argv is None else {_requested(argv)}
+    for name, (module_name, help_text) in COMMANDS.items():
+        if name not in wanted:
+            sub.add_parser(name, help=help_text, add_help=False)
+            continue
+        module = importlib.import_module(module_name)
+        p = sub.add_parser(name, help=help_text, description=module.DESCRIPTION)
+        module.add_arguments(p)
+        p.set_defaults(func=module.run)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    args = build_parser(argv).parse_args(argv)
+    debug = bool(os.environ.get("VIBROFEED_DEBUG"))
+    try:
+        return args.func(args)
+    except KeyboardInterrupt:
+        return fail("interrupted", EXIT_INTERRUPTED)
+    except VibrofeedError as exc:
+        if debug:
+            raise
+        code = fail(str(exc), exc.exit_code)
+        partial = getattr(exc, "partial", None)
+        if partial:
+            print(f"vibrofeed: the {partial[1]} frames written before the failure are kept in "
+                  f"{partial[0]} (status: failed)", file=sys.stderr)
+        return code

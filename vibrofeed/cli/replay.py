@@ -1,0 +1,128 @@
+"""``vibrofeed replay``: replay measured vertical-transport trials through the
+model of Yako et al. (ICRA 2024) or a LIGGGHTS wall, or fit its friction."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+from ..errors import UsageError
+
+DESCRIPTION = ("Drive the vertical-transport model (or a LIGGGHTS wall) with the measured platform "
+               "motion of trial files and compare the predicted part position with the measured one; "
+               "or, with --fit, fit one kinetic friction coefficient for all trials and one normal "
+               "force per trial.")
+
+REPLAY_KEYS = ("mean_abs_error_mm", "max_displacement_mm", "final_measured_mm",
+               "final_predicted_mm", "stuck_fraction")
+
+
+def add_arguments(p) -> None:
+    from .run import ranks
+
+    p.add_argument("trials", nargs="+", metavar="TRIAL.csv", help="measured trial files")
+    p.add_argument("--mass", type=float, metavar="KG", help="part mass [kg]")
+    p.add_argument("--normal-force", type=float, metavar="N", help="grasp (normal) force [N]")
+    p.add_argument("--mu-s", type=float, metavar="X", help="static friction coefficient")
+    p.add_argument("--mu-k", type=float, metavar="Y", help="kinetic friction coefficient")
+    p.add_argument("--engine", choices=("model", "dem"), default="model",
+                   help="model (Coulomb stick/slip of Yako et al.) or dem (LIGGGHTS wall; needs "
+                        "mu_s = mu_k)")
+    p.add_argument("--fit", action="store_true",
+                   help="fit mu_k (shared) and the normal force of each trial (needs --mass, --mu-s)")
+    p.add_argument("--json", action="store_true", help="print the figures as JSON")
+    p.add_argument("--plot", metavar="FILE.png",
+                   help="plot measured and predicted part position (its folder must exist)")
+    p.add_argument("-o", "--output", default="replay-results", metavar="DIR",
+                   help="folder for the DEM engine's result files (default replay-results)")
+    p.add_argument("-n", "--ranks", type=ranks, default=1, metavar="RANKS",
+                   help="MPI ranks (DEM engine)")
+
+
+def _positive(name: str, value) -> float:
+    if value is None:
+        raise UsageError(f"{name} is required")
+    if not value > 0:
+        raise UsageError(f"{name} must be > 0, got {value}")
+    return float(value)
+
+
+def _plot_path(path: str | None) -> Path | None:
+    """The figure's path, refused before any work if its folder does not exist:
+    a mistyped folder should not be created silently after minutes of work."""
+    if path is None:
+        return None
+    out = Path(path)
+    if not out.parent.is_dir():
+        raise UsageError(f"--plot {path}: folder {out.parent} does not exist")
+    return out
+
+
+def run(args) -> int:
+    from ..validation.models.constants import G
+    from ..validation.replay.trials import read_trial
+
+    plot = _plot_path(args.plot)
+    trials = [read_trial(path) for path in args.trials]
+    mass = _positive("--mass", args.mass)
+    mu_s = _positive("--mu-s", args.mu_s)
+    if args.fit:
+        return _fit(args, trials, mass, mu_s)
+    force = _positive("--normal-force", args.normal_force)
+    mu_k = _positive("--mu-k", args.mu_k)
+    if mu_k > mu_s:
+        raise UsageError(f"--mu-k ({mu_k}) cannot exceed --mu-s ({mu_s})")
+    if args.engine == "dem" and mu_k != mu_s:
+        raise UsageError("the DEM engine has one friction coefficient (LIGGGHTS): give equal "
+                         "--mu-s and --mu-k")
+    if force * mu_s <= mass * G:
+        print(f"vibrofeed: note: --normal-force {force:g} N is below m g / mu_s = "
+              f"{mass * G / mu_s:.4g} N: the part cannot stay stuck on a still wall", file=sys.stderr)
+    results = []
+    for trial in trials:
+        if args.engine == "model":
+            from ..validation.replay.fit import replay
+
+            results.append(replay(trial, mass, force, mu_s, mu_k))
+        else:
+            from ..validation.replay.dem import replay_dem
+
+            out = Path(args.output) / f"{trial.name}.h5"
+            results.append(replay_dem(trial, mass, force, mu_k, out, ranks=args.ranks))
+    rows = [{"trial": r.name, "engine": args.engine, **{k: getattr(r, k) for k in REPLAY_KEYS}}
+            for r in results]
+    if args.json:
+        print(json.dumps(rows[0] if len(rows) == 1 else rows, indent=2))
+    else:
+        for r in results:
+            print(f"{r.name} ({args.engine}): mean abs error {r.mean_abs_error_mm:.3f} mm "
+                  f"(largest measured displacement {r.max_displacement_mm:.3f} mm); final measured "
+                  f"{r.final_measured_mm:+.3f} mm, predicted {r.final_predicted_mm:+.3f} mm; "
+                  f"stuck {r.stuck_fraction:.0%} of the time")
+    if plot is not None:
+        from ..validation.plots import plot_replay
+
+        path = plot_replay(results, plot, engine=args.engine)
+        if not args.json:
+            print(f"figure: {path}")
+    return 0
+
+
+def _fit(args, trials, mass: float, mu_s: float) -> int:
+    from ..validation.replay.fit import fit_trials
+
+    fit = fit_trials(trials, mass=mass, mu_s=mu_s)
+    rows = [{"trial": t.name, "normal_force": fit.normal_force[t.name],
+             "normal_force_mg": fit.normal_force_mg[t.name],
+             "mean_abs_error_mm": fit.mae_mm[t.name]} for t in trials]
+    if args.json:
+        print(json.dumps({"mass": mass, "mu_s": mu_s, "mu_k": fit.mu_k, "trials": rows,
+                          "mean_abs_error_mm": fit.mean_mae_mm}, indent=2))
+        return 0
+    print(f"fitted kinetic friction mu_k = {fit.mu_k:.4f} (mu_s = {mu_s}, mass {mass} kg)")
+    for row in rows:
+        print(f"  {row['trial']}: normal force {row['normal_force']:.4g} N "
+              f"({row['normal_force_mg']:.3f} m g), mean abs error {row['mean_abs_error_mm']:.3f} mm")
+    print(f"mean of the mean abs errors: {fit.mean_mae_mm:.3f} mm")
+    return 0

@@ -1,0 +1,102 @@
+"""``vibrofeed validate``: DEM against the analytic models on the validation cases."""
+
+from __future__ import annotations
+
+import json
+import sys
+
+from ..errors import EXIT_FAILED, CaseError, RunError
+
+DESCRIPTION = ("Run each validation case (validation/cases/*.toml) through LIGGGHTS and through the "
+               "analytic model on the same parameters, print model vs DEM with tolerances and write "
+               "PNG figures. Exit status 1 if any quantity is out of tolerance.")
+
+
+def add_arguments(p) -> None:
+    from .run import ranks
+
+    p.add_argument("cases", nargs="*", metavar="CASE", help="case names (default: all; see --list)")
+    p.add_argument("-o", "--output", default="validation-results", metavar="DIR",
+                   help="folder for DEM results and figures (default: validation-results)")
+    p.add_argument("--list", action="store_true", help="list the cases and exit")
+    p.add_argument("--json", action="store_true",
+                   help="print the table as JSON rows (case, quantity, model, dem, rel_diff, "
+                        "tolerance, passed)")
+    p.add_argument("-j", "--jobs", type=ranks, default=2, metavar="N",
+                   help="DEM runs at once (default 2)")
+    p.add_argument("-n", "--ranks", type=ranks, default=1, metavar="RANKS",
+                   help="MPI ranks per DEM run")
+    p.add_argument("--reuse", action="store_true",
+                   help="reuse DEM results already in DIR that have the run id of the case's run "
+                        "(same deck text, parameters and vibrofeed version)")
+
+
+def _fmt(x: float) -> str:
+    if x != x:
+        return "nan"
+    if x == int(x) and abs(x) < 1e6:
+        return f"{int(x)}"
+    return f"{x:.6g}"
+
+
+def table(rows) -> list[str]:
+    """The comparison rows as aligned text lines (header, rule, one line a row)."""
+    lines = [("case", "quantity", "model", "DEM", "rel diff", "tolerance", "")]
+    for r in rows:
+        tol = f"{_fmt(r.tolerance)} {r.unit}".strip() if r.tolerance_type == "abs" \
+            else f"{r.tolerance:.1%}"
+        rel = "-" if r.rel_diff is None else f"{r.rel_diff:+.2%}"
+        lines.append((r.case, r.quantity, _fmt(r.model), _fmt(r.dem), rel,
+                      tol, "pass" if r.passed else "FAIL"))
+    widths = [max(len(row[i]) for row in lines) for i in range(len(lines[0]))]
+    out = []
+    for k, row in enumerate(lines):
+        out.append("  ".join(c.ljust(w) for c, w in zip(row, widths)).rstrip())
+        if k == 0:
+            out.append("  ".join("-" * w for w in widths))
+    return out
+
+
+def run(args) -> int:
+    from ..validation import cases as C
+    from ..validation.crosscheck import CrossCheck
+
+    if args.list:
+        names = C.available()
+        width = max(map(len, names))
+        for name in names:
+            case = C.find(name)
+            print(f"{name:<{width}}  [{case.kind}] {case.title}")
+        return 0
+    selected = [C.find(n) for n in (args.cases or C.available())]
+    say = (lambda *a: None) if args.json else (lambda text: print(text, file=sys.stderr))
+    rows, figures, failed, errors = [], [], [], []
+    for case in selected:
+        say(f"== {case.name}: {case.title}")
+        check = CrossCheck(case, args.output, ranks=args.ranks, jobs=args.jobs, reuse=args.reuse,
+                           on_run=lambda label, state, c=case: say(f"   {c.name} [{label}]: {state}"))
+        try:
+            outcome = check.run()
+        except (RunError, CaseError) as exc:  # one broken case does not stop the others
+            errors.append(f"{case.name}: {exc}")
+            failed.append(case.name)
+            say(f"   {case.name}: error: {exc}")
+            continue
+        rows += outcome.rows
+        figures += outcome.figures
+        if not outcome.passed:
+            failed.append(case.name)
+        if not args.json and len(selected) > 1:
+            say("\n".join("   " + line for line in table(outcome.rows)))
+    if args.json:
+        print(json.dumps([r.as_dict() for r in rows], indent=2))
+    else:
+        print("\n".join(table(rows)))
+        n_fail = sum(not r.passed for r in rows)
+        print(f"\n{len(rows) - n_fail}/{len(rows)} quantities within tolerance"
+              + (f"; failing cases: {', '.join(failed)}" if failed else ""))
+        for f in figures:
+            print(f"figure: {f}")
+    for e in errors:
+        print(f"vibrofeed: error: case {e}", file=sys.stderr)
+    return EXIT_FAILED if failed else 0
