@@ -20,7 +20,8 @@ case "$JOB" in demo|test|validate|setup) ;; *)
 esac
 
 APT_PACKAGES=(liggghts libliggghts-dev openmpi-bin libopenmpi-dev
-              python3 python3-venv python3-dev build-essential cmake ca-certificates)
+              python3 python3-venv python3-dev build-essential cmake ca-certificates
+              libegl1 libgl1-mesa-dri)  # off-screen pictures: VTK's EGL window, Mesa software GL
 
 say() { printf '\033[1m[bootstrap]\033[0m %s\n' "$*"; }
 
@@ -81,8 +82,8 @@ quietly cmake --build build
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 case "$JOB" in
   demo)
-    say "running the main job: one part hopping on a vibrating plate"
-    .venv/bin/vibrofeed run single_part -o results/demo.h5 ;;
+    say "running the main job: a bulk feeder (300 micro-parts on a vibrating track), its feed rate and singulation"
+    .venv/bin/vibrofeed demo -o results ;;
   test)
     say "running the default test suite (ctest -LE slow)"
     ctest --test-dir build -LE slow --output-on-failure -j 2 ;;

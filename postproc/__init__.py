@@ -11,13 +11,22 @@ a selection of frames and answers in ``results``::
 
 - :mod:`.base`: :class:`AnalysisBase` and :class:`Results`, the shape;
 - :mod:`.transport`: :class:`Transport`, conveying speed along the track;
-- :mod:`.flights`: :class:`Flights`, lift-offs, landings and impacts of one part.
+- :mod:`.flights`: :class:`Flights`, lift-offs, landings and impacts of one part;
+- :mod:`.feedrate`: :class:`FeedRate`, parts and mass per second at a bulk
+  feeder's outlet over the detected steady window, conveying speed profile;
+- :mod:`.singulation`: :class:`Singulation`, inter-arrival times, doubles,
+  gaps, clusters on the track and chip orientation at the outlet;
+- :mod:`.clusters`: :func:`cluster_labels`, the contact graph's components.
 """
 
 from __future__ import annotations
 
 from .base import AnalysisBase, Results
+from .clusters import cluster_labels, cluster_sizes
+from .feedrate import FeedRate
 from .flights import Flights
+from .singulation import Singulation
 from .transport import Transport
 
-__all__ = ["AnalysisBase", "Results", "Transport", "Flights"]
+__all__ = ["AnalysisBase", "Results", "Transport", "Flights", "FeedRate", "Singulation",
+           "cluster_labels", "cluster_sizes"]

@@ -8,6 +8,12 @@ Shared helpers live in tests/helpers.py.
 import os
 
 import pytest
+from hypothesis import settings
+
+# Property-based tests draw the same examples on every run (a red CI run is
+# reproducible, a green one is not luck) and keep no example database in the tree.
+settings.register_profile("vibrofeed", derandomize=True, database=None, deadline=None)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "vibrofeed"))
 
 
 @pytest.fixture(scope="session")

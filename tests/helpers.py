@@ -58,6 +58,43 @@ def parts(ids, positions, radius=5e-4, velocity=None, force=None, mass=1e-6):
 
 
 
+def write_bulk_result(path, frames, events=None, counts=None, track=None, variables=None,
+                      body_template=None, outlet=None, surface=None, status="complete"):
+    """A bulk-feeder result file from synthetic data (FORMAT.md, "Bulk feeders").
+
+    ``frames``: a list of (step, time, parts dict) as for :func:`write_result`;
+    a parts dict may hold ``orientation`` (N, 4). ``events``: one table for
+    ``ResultWriter.write_events`` (``time``, ``id``, ``position``,
+    ``velocity``, ``orientation``), written with the last frame. ``counts``:
+    one ``{"inserted", "on_track", "exited", "lost"}`` dict per frame, or None.
+    ``track``: (vertices, triangles); ``outlet``: the table's attributes
+    (default: outlet_x 0.02 m, catch_z -3e-4 m, method "synthetic"), the table
+    exists whenever ``events`` or ``outlet`` is given.
+    """
+    from vibrofeed.results.writer import ResultWriter
+
+    variables = variables or {"freq": ("100", "Hz", "vibration frequency", "100")}
+    if outlet is None and events is not None:
+        outlet = {"outlet_x": 0.02, "catch_z": -3e-4, "method": "synthetic"}
+    w = ResultWriter(path, deck_name="synthetic_bulk", deck_path="synthetic_bulk.liggghts",
+                     deck_text="# synthetic bulk feeder\n", variables=variables,
+                     derived={"dt_used": 1e-6},
+                     engine_version="LIGGGHTS (Version LIGGGHTS-PUBLIC 3.8.0, synthetic)",
+                     seed=1, run_id=hashlib.sha256(str(path).encode()).hexdigest(),
+                     track=track, body_template=body_template, outlet=outlet)
+    for k, (step, t, parts) in enumerate(frames):
+        sp = np.zeros(3) if surface is None else surface[k][0]
+        sv = np.zeros(3) if surface is None else surface[k][1]
+        if events is not None and k == len(frames) - 1:
+            w.write_events(events)
+        w.write_frame(step, t, parts, sp, sv, counts=None if counts is None else counts[k])
+    if status is None:
+        w.close()
+    else:
+        w.finish(status)
+    return path
+
+
 def write_conveyor(path, times, lifetimes, speeds, amp=0.0, freq=50.0, seed=0, radius=5e-4):
     """A many-part result whose answers are known by construction.
 

@@ -13,12 +13,24 @@ line. It follows the deck's ``include`` commands into the shared blocks of
 LIGGGHTS opens a relative path from its working directory, which is not the
 deck's folder), so commands, formulas and sources cover every file a run
 reads. Includes inside an ``if`` are not followed.
+
+A deck that needs files made for each run (meshes, clump templates) declares a
+prepare hook in its header::
+
+    # vibrofeed prepare: vibrofeed.geometry:prepare_bulk_feeder
+
+The runner calls it with the resolved parameters and the run's own folder
+before LIGGGHTS starts (:meth:`Deck.prepare`); the hook returns the extra
+``-var`` values, e.g. ``mesh_dir``. Such a deck may include generated files as
+``include ${mesh_dir}/NAME``: they are not followed (they do not exist yet).
 """
 
 from __future__ import annotations
 
+import importlib
 import os
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -26,17 +38,20 @@ from .errors import DeckError
 
 DECK_SUFFIX = ".liggghts"
 
-# Set by vibrofeed itself, never by a user's -p.
-RESERVED = {"driver", "deck_dir", "dump_file"}
+# Set by vibrofeed itself (or its prepare hook, or for runs by hand only), never by a user's -p.
+RESERVED = {"driver", "deck_dir", "dump_file", "mesh_dir", "outlet_file"}
 
 _INDEX = re.compile(
     r"^\s*variable\s+(?P<name>\w+)\s+index\s+(?P<value>\S+)\s*(?:#\s*(?P<comment>.*))?$")
 _EQUAL = re.compile(r"^variable\s+(?P<name>\w+)\s+equal\s+(?P<formula>.+)$")
 _INCLUDE = re.compile(r"^include\s+(?P<path>\S+)$")
 _REF = re.compile(r"\bv_(\w+)")
-_CLOCK = re.compile(r"\b(time|step|elapsed|elaplong|dt)\b")
+# What changes during a run: the clock, and the atom count and fix or compute values
+_CLOCK = re.compile(r"\b(time|step|elapsed|elaplong|dt|atoms|[fc]_\w+)\b")
 _UNIT = re.compile(r"^\[(?P<unit>[^\]]*)\]\s*(?P<text>.*)$")
 _DECK_DIR = "${deck_dir}"
+_PREPARE = re.compile(r"^#\s*vibrofeed prepare:\s*(?P<target>[\w.]+:\w+)\s*$")
+_GENERATED_DIR = "${mesh_dir}/"  # files a prepare hook writes for each run
 
 
 def decks_dir() -> Path:
@@ -156,6 +171,7 @@ class Deck:
         self.text = read_text(Path(path))  # errors name the path as given
         self.name = self.path.stem
         self.sources: dict[str, str] = {self.path.name: self.text}
+        self.generated: list[str] = []  # includes of files the prepare hook writes
         self.variables: dict[str, Variable] = {}
         self.formulas: dict[str, str] = {}
         self.commands = self._expand(self.path, self.text, (self.path,))
@@ -181,6 +197,9 @@ class Deck:
             out.append(cmd)
             m = _INCLUDE.match(cmd.text)
             if not m:
+                continue
+            if m["path"].startswith(_GENERATED_DIR) and self.prepare_target:
+                self.generated.append(m["path"])
                 continue
             target = self._include_target(m["path"], cmd, path)
             if target in chain:
@@ -234,6 +253,33 @@ class Deck:
                 break
             lines.append(line[1:].removeprefix(" "))
         return "\n".join(lines).strip()
+
+    @property
+    def prepare_target(self) -> str | None:
+        """``module:function`` of the deck's prepare hook (a header line
+        ``# vibrofeed prepare: module:function``), or None."""
+        for line in self.text.splitlines():
+            if not line.startswith("#"):
+                break
+            m = _PREPARE.match(line)
+            if m:
+                return m["target"]
+        return None
+
+    def prepare(self, values: Mapping[str, str], folder: str | os.PathLike):
+        """Run the deck's prepare hook for one run: it writes its files into
+        ``folder`` and returns a :class:`vibrofeed.geometry.Prepared` (None for a
+        deck without a hook). ``values``: the resolved parameters."""
+        target = self.prepare_target
+        if target is None:
+            return None
+        module_name, _, function = target.partition(":")
+        try:
+            hook = getattr(importlib.import_module(module_name), function)
+        except (ImportError, AttributeError) as exc:
+            raise DeckError(f"{_shown(self.path)}: its prepare hook {target} cannot be loaded: "
+                            f"{exc}") from None
+        return hook(dict(values), Path(folder))
 
     @property
     def title(self) -> str:

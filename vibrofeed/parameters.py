@@ -46,6 +46,12 @@ def _between(lo, hi, lo_open=True, hi_open=True, why=""):
     return check
 
 
+def _youngs_or_zero(x):
+    return None if x == 0 or x > 5e6 else (
+        "must be 0 (the parts' softening applied to aluminium) or > 5e+06 (LIGGGHTS' Hertz "
+        "model needs youngsModulus > 5e6 Pa)")
+
+
 def _integer(lo=None, choices=None):
     def check(x):
         if x != int(x):
@@ -84,6 +90,34 @@ RULES: dict[str, Callable[[float], str | None]] = {
     "output_dt": _positive,
     "dt": _non_negative,
     "seed": _integer(lo=1),
+    # the bulk feeder (decks/bulk_feeder.liggghts)
+    "shape": _integer(choices=(0, 1, 2)),
+    "part_size": _positive,
+    "part_thickness": _positive,
+    "size_spread": _between(0, 1, lo_open=False),
+    "n_parts": _integer(lo=0),
+    "fill_from": _between(0, 1, lo_open=False, hi_open=False),
+    "fill_to": _between(0, 1, lo_open=False, hi_open=False),
+    "inlet_rate": _non_negative,
+    "track_length": _positive,
+    "track_width": _positive,
+    "wall_height": _positive,
+    "gate_width": _non_negative,
+    "gate_at": _between(0, 1, lo_open=False),
+    "youngs_track": _youngs_or_zero,
+    "poisson_track": _between(-1, 0.5, hi_open=False),
+    "restitution_pp": _between(0.05, 1, hi_open=False,
+                               why="LIGGGHTS needs coefficientRestitution > 0.05"),
+    "mu_pp": _non_negative,
+    "rolling_friction": _non_negative,
+    "surface_energy": _non_negative,
+    "surface_energy_pp": _non_negative,
+    "t_settle": _non_negative,
+}
+
+# Parameters that also take names; a name is replaced by the deck's number.
+NAMED_VALUES: dict[str, dict[str, str]] = {
+    "shape": {"sphere": "0", "chip": "1", "disc": "2"},
 }
 
 
@@ -112,6 +146,9 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
                 f"unknown parameter {name!r} for deck {deck.name}{hint}; "
                 f"valid parameters: {', '.join(tunables)}")
     values = {name: str(given.get(name, v.default)) for name, v in tunables.items()}
+    for name, names in NAMED_VALUES.items():
+        if name in values and values[name].strip().lower() in names:
+            values[name] = names[values[name].strip().lower()]
 
     numbers = {}
     for name, value in values.items():
@@ -121,6 +158,9 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
         try:
             x = float(value)
         except ValueError:
+            if name in NAMED_VALUES:
+                choices = ", ".join(f"{k} ({v})" for k, v in NAMED_VALUES[name].items())
+                raise ParameterError(f"parameter {name}={value!r} must be one of {choices}") from None
             raise ParameterError(f"parameter {name}={value!r} is not a number") from None
         if not math.isfinite(x):
             raise ParameterError(f"parameter {name}={value} is not finite")
@@ -159,6 +199,7 @@ def _check_relations(p: Mapping[str, float]) -> None:
             raise ParameterError(
                 f"t_end={p['t_end']:g} s with output_dt={p['output_dt']:g} s would write "
                 f"{frames:.3g} frames (limit {MAX_FRAMES:.0e}); raise output_dt or shorten t_end")
+    _check_bulk_feeder(p)
     dt = p.get("dt", 0.0)
     if dt > 0:
         if "output_dt" in p and p["output_dt"] < dt:
@@ -166,3 +207,62 @@ def _check_relations(p: Mapping[str, float]) -> None:
                 f"output_dt={p['output_dt']:g} s is shorter than the timestep dt={dt:g} s")
         if "t_end" in p and p["t_end"] < dt:
             raise ParameterError(f"t_end={p['t_end']:g} s is shorter than the timestep dt={dt:g} s")
+
+
+# Random loose packing of a settled pre-fill, to tell whether it stays between the walls.
+FILL_PACKING = 0.6
+
+
+def _check_bulk_feeder(p: Mapping[str, float]) -> None:
+    """Relations between the bulk feeder's parameters (decks/bulk_feeder.liggghts refuses
+    the same for runs by hand)."""
+    if "part_size" not in p or "track_width" not in p:
+        return
+    size, shape = p["part_size"], int(p.get("shape", 0))
+    spread = p.get("size_spread", 0.0)
+    widest = size * (1 + spread) if shape == 0 else size
+    if p.get("n_parts", 1) <= 0 and p.get("inlet_rate", 1) <= 0:
+        raise ParameterError("n_parts=0 and inlet_rate=0: no part would ever be fed; "
+                             "set n_parts (pre-fill) or inlet_rate")
+    if shape != 0 and p.get("part_thickness", 0.0) > size:
+        raise ParameterError(f"part_thickness={p['part_thickness']:g} m exceeds part_size={size:g} m: "
+                             "a chip or disc is thinner than its edge")
+    if shape != 0 and spread > 0:
+        raise ParameterError(f"size_spread={spread:g} applies to spheres only (shape=0), "
+                             f"not shape={shape}")
+    if p["track_width"] < widest:
+        raise ParameterError(f"track_width={p['track_width']:g} m is narrower than a part "
+                             f"({widest:g} m across)")
+    gate = p.get("gate_width", 0.0)
+    length = p.get("track_length", math.inf)
+    if gate > 0:
+        if gate < widest:
+            raise ParameterError(f"gate_width={gate:g} m is narrower than a part ({widest:g} m across)")
+        if gate >= p["track_width"]:
+            raise ParameterError(f"gate_width={gate:g} m must be narrower than track_width="
+                                 f"{p['track_width']:g} m (gate_width=0: no gate)")
+        gate_x = p.get("gate_at", 0.7) * length
+        if gate_x + (p["track_width"] - gate) / 2 > length:
+            raise ParameterError(f"gate_at={p.get('gate_at', 0.7):g}: the gate's 45 degree taper "
+                                 f"(ends {(p['track_width'] - gate) / 2:g} m after it starts) runs "
+                                 "past the outlet edge; lower gate_at")
+        if p.get("fill_to", 0.0) > p.get("gate_at", 0.7):
+            raise ParameterError(f"fill_to={p['fill_to']:g} reaches into the gate (gate_at="
+                                 f"{p.get('gate_at', 0.7):g}); lower fill_to")
+    fill_from, fill_to = p.get("fill_from", 0.0), p.get("fill_to", 1.0)
+    if fill_from >= fill_to:
+        raise ParameterError(f"fill_from={fill_from:g} must be below fill_to={fill_to:g}")
+    radius = size / 2 if shape == 0 else p.get("part_thickness", size) / 2
+    if "wall_height" in p and p["wall_height"] <= radius:
+        raise ParameterError(f"wall_height={p['wall_height']:g} m is no higher than a part's centre "
+                             f"({radius:g} m): parts would leave over the walls")
+    n = p.get("n_parts", 0)
+    if n > 0 and "wall_height" in p and math.isfinite(length):
+        thickness = p.get("part_thickness", size)
+        volume = {0: math.pi / 6 * size**3, 1: size**2 * thickness,
+                  2: math.pi / 4 * size**2 * thickness}[shape]
+        pile = n * volume / (FILL_PACKING * (fill_to - fill_from) * length * p["track_width"])
+        if pile > p["wall_height"]:
+            raise ParameterError(f"n_parts={n:g} settle {pile:.3g} m high, above the walls "
+                                 f"(wall_height={p['wall_height']:g} m); fewer parts, a longer fill "
+                                 "(fill_from, fill_to) or higher walls")

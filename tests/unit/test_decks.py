@@ -7,7 +7,8 @@ from helpers import DECKS, vibrofeed
 from vibrofeed.decks import Deck, DeckError, available, split_commands, strip_comment
 from vibrofeed.errors import InputError
 
-VOCABULARY = ["freq", "amp_t", "amp_n", "phase", "incline", "radius", "density", "youngs",
+# (the part's size is deck-specific: single_part's radius, bulk_feeder's part_size)
+VOCABULARY = ["freq", "amp_t", "amp_n", "phase", "incline", "density", "youngs",
               "poisson", "restitution", "mu", "t_end", "output_dt", "dt", "seed"]
 
 

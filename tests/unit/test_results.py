@@ -307,3 +307,282 @@ def test_check_warns_about_a_missing_run_id(tmp_path):
     assert report.ok  # a warning, not an error: format 1.0 files had no id
     assert [p.level for p in report.problems] == ["warning"]
     assert "'id'" in report.problems[0].message
+
+
+# -- bulk feeders: orientation, outlet events, mass balance, track mesh (FORMAT.md) --------------
+def _quat(axis, angle):
+    axis = np.asarray(axis, float) / np.linalg.norm(axis)
+    return np.r_[np.cos(angle / 2), np.sin(angle / 2) * axis]
+
+
+def bulk_file(tmp_path, name="b.h5", **kw):
+    """Three parts: 2 leaves the track (event) and stays one frame as it falls, then is gone;
+    4 is inserted at frame 1 and grows the slot axis."""
+    from helpers import write_bulk_result
+
+    q1, q2 = _quat([0, 0, 1], 0.3), _quat([1, 1, 0], 2.0)
+    ident = [1.0, 0, 0, 0]
+
+    def with_q(p, qs):
+        p["orientation"] = np.asarray(qs, float)
+        return p
+
+    frames = [
+        (0, 0.0, with_q(parts([1, 2, 3], [[0, 0, 1e-4], [19e-3, 0, 1e-4], [5e-3, 0, 1e-4]]),
+                        [q1, q2, ident])),
+        (10, 0.01, with_q(parts([3, 2, 1, 4], [[6e-3, 0, 1e-4], [20.5e-3, 0, -4e-4],
+                                              [1e-3, 0, 1e-4], [0, 1e-3, 1e-4]]),
+                          [ident, q2, q1, ident])),
+        (20, 0.02, with_q(parts([1, 3, 4], [[2e-3, 0, 1e-4], [7e-3, 0, 1e-4], [1e-3, 1e-3, 1e-4]]),
+                          [q1, ident, ident])),
+    ]
+    counts = [dict(inserted=3, on_track=3, exited=0, lost=0),
+              dict(inserted=4, on_track=3, exited=1, lost=0),
+              dict(inserted=4, on_track=3, exited=1, lost=0)]
+    events = {"time": [0.0071], "id": [2], "position": [[20.2e-3, 0, -3e-4]],
+              "velocity": [[0.04, 0, -0.05]], "orientation": [q2]}
+    vertices = np.array([[0, -1e-3, 0], [0.02, -1e-3, 0], [0.02, 1e-3, 0], [0, 1e-3, 0.0]])
+    triangles = np.array([[0, 1, 2], [0, 2, 3]], dtype=np.int32)
+    template = np.array([[-1e-4, 0, 0, 7.5e-5], [0, 0, 0, 7.5e-5], [1e-4, 0, 0, 7.5e-5]])
+    args = dict(events=events, counts=counts, track=(vertices, triangles), body_template=template)
+    args.update(kw)
+    path = write_bulk_result(tmp_path / name, frames, **args)
+    return path, dict(q1=q1, q2=q2, events=events, vertices=vertices, triangles=triangles,
+                      template=template)
+
+
+def test_bulk_roundtrip(tmp_path):
+    path, known = bulk_file(tmp_path)
+    with Result(path) as r:
+        assert r.ids.tolist() == [[1, 2, 3, -1], [1, 2, 3, 4], [1, -1, 3, 4]]
+        q = r.read("orientation")
+        assert q.shape == (3, 4, 4)
+        assert np.allclose(q[0, 0], known["q1"]) and np.allclose(q[1, 1], known["q2"])
+        assert np.isnan(q[0, 3]).all() and np.isnan(q[2, 1]).all()
+        assert np.allclose(r.orientation[2, 0], known["q1"])  # whole-array attribute
+        t, qs = r.track(2, "orientation")
+        assert t.tolist() == [0.0, 0.01] and np.allclose(qs, known["q2"])
+        f = r.frame(1, fields=("position", "orientation"))
+        assert np.allclose(f["orientation"][f.ids.tolist().index(2)], known["q2"])
+        out = r.outlet
+        assert out["id"].tolist() == [2] and out["time"].tolist() == [0.0071]
+        assert out["position"].shape == (1, 3) and np.allclose(out["orientation"][0], known["q2"])
+        assert r.outlet_plane == {"outlet_x": 0.02, "catch_z": -3e-4, "method": "synthetic"}
+        mb = r.mass_balance
+        assert mb["inserted"].tolist() == [3, 4, 4] and mb["exited"].tolist() == [0, 1, 1]
+        assert mb["lost"].dtype == np.int64 and mb["on_track"].tolist() == [3, 3, 3]
+        v, tri = r.track_mesh
+        assert np.array_equal(v, known["vertices"]) and tri.dtype == np.int32
+        assert np.array_equal(tri, known["triangles"])
+        assert np.array_equal(r.body_template, known["template"])
+    with h5py.File(path, "r") as f:  # step/time hard links, as for every time series
+        ref = f[f"{L.PARTS}/position/step"]
+        assert f[f"{L.MASS_BALANCE}/lost/step"] == ref and f[f"{L.PARTS}/orientation/step"] == ref
+    report = check_file(path)
+    assert report.ok, [str(p) for p in report.problems]
+
+
+def test_files_without_bulk_data_read_defaults_and_stay_valid(tmp_path):
+    path = three_frames(tmp_path)
+    with h5py.File(path, "r") as f:
+        for absent in (f"{L.PARTS}/orientation", L.OUTLET, L.MASS_BALANCE, L.TRACK, L.BODY_TEMPLATE):
+            assert absent not in f
+    with Result(path) as r:
+        q = r.read("orientation")  # identity where a part is, NaN in empty slots
+        assert q.shape == (3, 2, 4)
+        assert q[0, 0].tolist() == [1, 0, 0, 0] and np.isnan(q[1, 1]).all()
+        assert r.read("orientation", frames=2, slots=1).tolist() == [1, 0, 0, 0]
+        assert r.track(1, "orientation")[1].tolist() == [[1, 0, 0, 0]] * 3
+        assert r.outlet["id"].shape == (0,) and r.outlet["position"].shape == (0, 3)
+        assert r.outlet_plane is None and r.mass_balance is None
+        assert r.track_mesh is None and r.body_template is None
+    assert check_file(path).ok
+
+
+def test_outlet_table_exists_without_events(tmp_path):
+    from helpers import write_bulk_result
+
+    path = write_bulk_result(tmp_path / "e.h5", [(0, 0.0, parts([1], [[0, 0, 0]]))],
+                             counts=[dict(inserted=1, on_track=1, exited=0, lost=0)],
+                             outlet={"outlet_x": 0.02, "catch_z": -1e-3, "method": "ballistic"})
+    with Result(path) as r:
+        assert r.outlet["time"].shape == (0,) and r.outlet_plane["method"] == "ballistic"
+    assert check_file(path).ok
+
+
+def test_orientation_and_counts_appearing_late_read_fill_values_before(tmp_path):
+    from vibrofeed.results.writer import ResultWriter
+
+    path = tmp_path / "late.h5"
+    w = ResultWriter(path, deck_name="x", deck_path="x", deck_text="x",
+                     variables={"a": ("1", "", "", "1")}, derived={}, engine_version="LIGGGHTS x",
+                     seed=1, max_delay=0)
+    w.write_frame(0, 0.0, parts([1], [[0, 0, 0]]), [0, 0, 0], [0, 0, 0])  # on disk at once
+    p = parts([1, 2], [[0, 0, 0], [1, 1, 1]])
+    p["orientation"] = np.array([[1.0, 0, 0, 0], [0, 1.0, 0, 0]])
+    w.write_frame(1, 0.1, p, [0, 0, 0], [0, 0, 0],
+                  counts=dict(inserted=2, on_track=2, exited=0, lost=0))
+    w.finish()
+    with Result(path) as r:
+        q = r.read("orientation")
+        assert np.isnan(q[0]).all() and q[1].tolist() == [[1, 0, 0, 0], [0, 1, 0, 0]]
+        assert r.mass_balance["inserted"].tolist() == [-1, 2]
+    report = check_file(path)  # a frame without counts is an error in a mass balance
+    assert not report.ok and any("negative counts" in str(p) for p in report.problems)
+
+
+@pytest.mark.parametrize("change, message", [
+    (dict(counts=[dict(inserted=3, on_track=3, exited=0, lost=0),
+                  dict(inserted=4, on_track=3, exited=0, lost=1),
+                  dict(inserted=4, on_track=3, exited=0, lost=1)]), "lost"),
+    (dict(events={"time": [0.007, 0.008], "id": [2, 2], "position": np.zeros((2, 3)),
+                  "velocity": np.zeros((2, 3)), "orientation": [[1.0, 0, 0, 0]] * 2}),
+     "more than once"),
+    (dict(events={"time": [0.007], "id": [2], "position": np.zeros((1, 3)),
+                  "velocity": np.zeros((1, 3)), "orientation": [[0.5, 0, 0, 0]]}), "unit quaternion"),
+    (dict(track=(np.zeros((3, 3)), np.array([[0, 1, 3]], np.int32))), "vertex that does not exist"),
+    (dict(counts=[dict(inserted=3, on_track=3, exited=0, lost=0),
+                  dict(inserted=4, on_track=3, exited=1, lost=0),
+                  dict(inserted=4, on_track=1, exited=1, lost=2)]), "parts present"),
+    (dict(counts=[dict(inserted=3, on_track=3, exited=0, lost=0),
+                  dict(inserted=4, on_track=3, exited=1, lost=0),
+                  dict(inserted=5, on_track=3, exited=1, lost=0)]), "on_track + exited + lost"),
+    (dict(events={"time": [0.007, 0.008], "id": [2, 5], "position": np.zeros((2, 3)),
+                  "velocity": np.zeros((2, 3)), "orientation": [[1.0, 0, 0, 0]] * 2}),
+     "outlet events"),
+])
+def test_check_catches_bulk_problems(tmp_path, change, message):
+    path, _ = bulk_file(tmp_path, **change)
+    report = check_file(path)
+    assert not report.ok
+    assert any(message in str(p) for p in report.problems), [str(p) for p in report.problems]
+
+
+def test_vectorised_slot_map_matches_the_rule(tmp_path):
+    """Lowest free slot first, in the order new ids come; a reference loop decides."""
+    rng = np.random.default_rng(3)
+    s, ref, free, cap = SlotMap(), {}, [], 0
+    pool = np.arange(1, 200)
+    for _ in range(60):
+        ids = rng.permutation(rng.choice(pool, size=rng.integers(0, 80), replace=False))
+        for gone in [i for i in ref if i not in set(ids.tolist())]:
+            free.append(ref.pop(gone))
+        free.sort()
+        want = []
+        for i in ids.tolist():
+            if i not in ref:
+                ref[i] = free.pop(0) if free else cap
+                cap += ref[i] == cap
+            want.append(ref[i])
+        assert s.assign(ids).tolist() == want
+        assert s.capacity == cap and s.slot_of == ref
+
+
+def test_the_writer_thread_flushes_within_the_delay(tmp_path):
+    """Frames handed over reach the disk max_delay (+ a quarter of it) later, without help."""
+    import time
+
+    from vibrofeed.results.writer import ResultWriter
+
+    w = ResultWriter(tmp_path / "t.h5", deck_name="d", deck_path="d", deck_text="d", variables={},
+                     derived={}, engine_version="LIGGGHTS", seed=1, max_delay=0.4)
+    try:
+        w.write_frame(0, 0.0, parts([1], [[0, 0, 0]]), [0, 0, 0], [0, 0, 0])
+        assert w.written == 0  # batched, not yet due
+        time.sleep(0.9)        # due at 0.4 s, seen by the thread by 0.5 s
+        assert w.written == 1
+    finally:
+        w.finish()
+
+
+def test_run_record_defaults_and_status_of_a_missing_file(tmp_path):
+    import h5py
+
+    from vibrofeed.results.writer import mark_file_status
+
+    path = three_frames(tmp_path)
+    with h5py.File(path, "r") as f:
+        run = f[L.RUN].attrs
+        assert run["ranks"] == 1 and run["status"] == "complete" and run["message"] == ""
+        assert f[f"{L.PARAMETERS}/seed"][()] == 1
+    assert mark_file_status(path, "failed", "boom") is True
+    with Result(path, allow_incomplete=True) as r:
+        assert r.status == "failed" and r.message == "boom"
+    assert mark_file_status(tmp_path / "missing.h5", "failed") is False
+    (tmp_path / "text.h5").write_text("not hdf5")
+    assert mark_file_status(tmp_path / "text.h5", "failed") is False
+    with h5py.File(tmp_path / "bare.h5", "w"):
+        pass
+    assert mark_file_status(tmp_path / "bare.h5", "failed") is False
+
+
+def test_author_is_unknown_when_the_user_cannot_be_named(tmp_path, monkeypatch):
+    import getpass
+
+    import h5py
+
+    def nobody():
+        raise KeyError("uid not in passwd")
+
+    monkeypatch.setattr(getpass, "getuser", nobody)
+    path = three_frames(tmp_path)
+    with h5py.File(path, "r") as f:
+        assert f["h5md/author"].attrs["name"] == b"unknown"
+
+
+def test_format_version_is_the_one_format_md_documents(tmp_path):
+    import re
+
+    import h5py
+
+    from helpers import REPO
+
+    text = (REPO / "FORMAT.md").read_text()
+    documented = [int(v) for v in re.search(r"\+format_version = \[(\d+), (\d+)\]", text).groups()]
+    with h5py.File(three_frames(tmp_path), "r") as f:
+        assert f[L.PARAMETERS].attrs["format_version"].tolist() == documented
+        assert f[L.PARAMETERS].attrs["format"] == b"vibrofeed-result"
+        assert f["h5md"].attrs["version"].tolist() == [1, 1]  # H5MD 1.1
+
+
+def test_included_files_are_stored_verbatim(tmp_path):
+    from vibrofeed.results.writer import ResultWriter
+
+    includes = {"include/contact.liggghts": "pair_style gran\n", "include/motion.liggghts": "fix m\n"}
+    w = ResultWriter(tmp_path / "i.h5", deck_name="d", deck_path="d", deck_text="include x\n",
+                     includes=includes, variables={}, derived={}, engine_version="LIGGGHTS", seed=1)
+    w.write_frame(0, 0.0, parts([1], [[0, 0, 0]]), [0, 0, 0], [0, 0, 0])
+    w.write_frame(1, 1e-3, parts([1], [[0, 0, 1]]), [0, 0, 0], [0, 0, 0])
+    assert w.frames == 2
+    w.finish()
+    with Result(tmp_path / "i.h5") as r:
+        assert r.deck_includes == includes and r.deck_text == "include x\n"
+        assert r.n_frames == 2
+
+
+def test_writer_as_a_context_manager_records_how_the_run_ended(tmp_path):
+    from vibrofeed.results.writer import ResultWriter
+
+    def writer(name):
+        return ResultWriter(tmp_path / name, deck_name="d", deck_path="d", deck_text="d",
+                            variables={}, derived={}, engine_version="LIGGGHTS", seed=None)
+
+    with writer("ok.h5") as w:
+        assert w.max_delay == 0.25  # the documented default
+        w.write_frame(0, 0.0, parts([1], [[0, 0, 0]]), [0, 0, 1e-6], [0, 0, 2e-3])
+    with pytest.raises(RuntimeError):
+        with writer("bad.h5") as w:
+            w.write_frame(0, 0.0, parts([1], [[0, 0, 0]]), [0, 0, 0], [0, 0, 0])
+            raise RuntimeError("engine died")
+    with Result(tmp_path / "ok.h5") as r:
+        assert r.status == "complete" and r.seed == -1  # no seed: -1
+        assert r.read("surface_position")[0].tolist() == [0, 0, 1e-6]
+        assert r.read("surface_velocity")[0].tolist() == [0, 0, 2e-3]
+    with Result(tmp_path / "bad.h5", allow_incomplete=True) as r:
+        assert r.status == "failed" and r.message == "RuntimeError: engine died"
+
+
+def test_duplicate_ids_anywhere_in_a_frame_are_refused(tmp_path):
+    for k, ids in enumerate(([1, 2, 2], [3, 1, 3], [5, 6, 7, 8, 6])):
+        with pytest.raises(ValueError, match="duplicate"):
+            write_result(tmp_path / f"d{k}.h5", [(0, 0.0, parts(ids, np.zeros((len(ids), 3))))])

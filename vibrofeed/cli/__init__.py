@@ -25,12 +25,18 @@ from ..errors import EXIT_INTERRUPTED, VibrofeedError
 
 # name -> (module, one-line help), in the order `vibrofeed --help` lists them.
 COMMANDS: dict[str, tuple[str, str]] = {
+    "demo": ("vibrofeed.cli.demo", "run the main job: a bulk feeder, its feed rate and singulation"),
     "run": ("vibrofeed.cli.run", "run a deck and write an H5MD result"),
     "check": ("vibrofeed.cli.check", "validate result files against the format"),
     "validate": ("vibrofeed.cli.validate", "run DEM and analytic model on the validation cases"),
     "replay": ("vibrofeed.cli.replay", "replay measured vertical-transport trials"),
     "decks": ("vibrofeed.cli.decks", "list the decks in decks/"),
     "params": ("vibrofeed.cli.params", "list a deck's parameters with defaults and units"),
+    "prepare": ("vibrofeed.cli.prepare", "write a deck's meshes and templates for a run by hand"),
+    "feedrate": ("vibrofeed.cli.feedrate", "feed rate and conveying speed of a bulk-feeder result"),
+    "singulation": ("vibrofeed.cli.singulation", "doubles, gaps and clusters of a bulk-feeder result"),
+    "render": ("vibrofeed.cli.render", "draw a frame (PNG) or a movie (MP4) of a result"),
+    "export": ("vibrofeed.cli.export", "write a result as a ParaView time series (.pvd)"),
 }
 
 

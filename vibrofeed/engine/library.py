@@ -39,6 +39,9 @@ PER_ATOM = {
     "v": (ctypes.c_double, 3),
     "f": (ctypes.c_double, 3),
     "omega": (ctypes.c_double, 3),
+    # body id of each sphere of a multisphere part (fix multisphere sets it);
+    # not allocated for plain spheres
+    "molecule": (ctypes.c_int, 1),
 }
 
 

@@ -243,6 +243,11 @@ def run_deck(deck: Deck, params: Mapping[str, str], output, *, ranks: int = 1,
         stale.unlink(missing_ok=True)
 
     tmp = Path(tempfile.mkdtemp(prefix=".vibrofeed-", dir=out.parent))
+    try:  # the deck's own files for this run (meshes, templates), if it declares a hook
+        prepared = deck.prepare(values, tmp)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
     screen = tmp / "screen.txt"
     spec = {
         "deck": str(deck.path), "deck_name": deck.name, "variables": values,
@@ -253,6 +258,8 @@ def run_deck(deck: Deck, params: Mapping[str, str], output, *, ranks: int = 1,
         "command": command, "run_id": rid, "sources": deck.sources,
         "before_run": list(before_run or ()),
         "schedule": schedule,
+        # extra -var values, the track mesh and the clump template (vibrofeed.geometry.Prepared)
+        "prepared": prepared.to_spec() if prepared is not None else None,
     }
     spec_path = tmp / "spec.json"
     spec_path.write_text(json.dumps(spec))

@@ -12,6 +12,12 @@ rank 0, which appends a frame to the H5MD file and flushes it.
 
 Rank 0 reports to the parent on stdout, one JSON object per line prefixed
 with ``@vibrofeed``: phases (``deck``, ``setup``, ``run``), progress, the end.
+
+A bulk feeder's deck (it defines ``outlet_x``, ``catch_z``, ``n_inserted``,
+``body_spheres``: ``results.layout.BULK_CONTRACT``) also gets parts as bodies
+(:mod:`.bodies`: one row per multisphere clump, with its orientation), outlet
+events and the mass balance (:mod:`.outlet`), and the track mesh and clump
+template the runner's prepare hook made (``spec["prepared"]``) in the file.
 """
 
 from __future__ import annotations
@@ -80,21 +86,118 @@ def flush_on_engine_exit(writer) -> None:
         setter(abort_cb)
 
 
+def gather_atoms(lmp, comm, names=PER_ATOM) -> dict | None:
+    """Per-atom arrays of every atom on rank 0 (None elsewhere)."""
+    local = lmp.local_atoms(names)
+    if comm.size == 1:
+        return local
+    pieces = comm.gather(local, root=0)
+    if comm.rank != 0:
+        return None
+    return {k: np.concatenate([p[k] for p in pieces]) for k in names}
+
+
 def gather_parts(lmp, comm) -> dict | None:
     """All particles on rank 0 (None elsewhere), as the writer wants them."""
-    local = lmp.local_atoms(PER_ATOM)
-    if comm.size == 1:
-        cat = local
-    else:
-        pieces = comm.gather(local, root=0)
-        if comm.rank != 0:
-            return None
-        cat = {k: np.concatenate([p[k] for p in pieces]) for k in PER_ATOM}
+    cat = gather_atoms(lmp, comm)
+    if cat is None:
+        return None
     return {
         "id": cat["id"], "species": cat["type"], "radius": cat["radius"], "mass": cat["rmass"],
         "position": cat["x"], "velocity": cat["v"], "angular_velocity": cat["omega"],
         "force": cat["f"],
     }
+
+
+def _load_array(value, keys=()):
+    """An array given inline (nested lists) or as a file (.npz under one of
+    ``keys``, .npy, or whitespace text such as a LIGGGHTS clump file)."""
+    if value is None:
+        return None
+    if isinstance(value, (str, os.PathLike)):
+        path = Path(value)
+        if path.suffix == ".npz":
+            with np.load(path) as data:
+                key = next((k for k in keys if k in data.files), data.files[0])
+                return data[key]
+        if path.suffix == ".npy":
+            return np.load(path)
+        return np.loadtxt(path, ndmin=2)
+    return np.asarray(value)
+
+
+def prepared_geometry(spec: dict) -> tuple[tuple | None, np.ndarray | None]:
+    """(track (vertices, triangles) or None, body template (n, 4) or None) from
+    the prepare hook's part of the spec (vibrofeed.geometry.Prepared)."""
+    prepared = spec.get("prepared") or {}
+    track = prepared.get("track")
+    if isinstance(track, (str, os.PathLike)):
+        path = Path(track)
+        with np.load(path) as data:
+            track = (data["vertices"], data["triangles"])
+    if track is not None:
+        track = (np.asarray(track[0], dtype=float).reshape(-1, 3),
+                 np.asarray(track[1], dtype=np.int32).reshape(-1, 3))
+    template = _load_array(prepared.get("body_template"), ("body_template", "template"))
+    if template is not None:
+        template = np.asarray(template, dtype=float).reshape(-1, 4)
+    return track, template
+
+
+class BulkFrames:
+    """A bulk feeder's frames: parts as bodies, outlet events, the mass balance.
+
+    Built on every rank (the deck's variables are evaluated collectively);
+    :meth:`frame` returns (parts, events, counts) on rank 0, None elsewhere.
+    """
+
+    def __init__(self, lmp, spec: dict):
+        from .outlet import Outlet, gravity_vector
+
+        self.n_spheres = int(round(lmp.variable("body_spheres")))
+        g = lmp.variable("g") if lmp.has_variable("g") else 9.81
+        incline = float(spec.get("variables", {}).get("incline", 0.0))
+        self.outlet = Outlet(lmp.variable("outlet_x"), lmp.variable("catch_z"),
+                             gravity_vector(g, incline))
+        self.track, self.template = prepared_geometry(spec)
+        self.names = PER_ATOM + (("molecule",) if self.n_spheres > 1 else ())
+        self.warnings: list[str] = []
+        if self.template is not None and self.n_spheres > 1 and len(self.template) != self.n_spheres:
+            raise ValueError(f"the body template has {len(self.template)} spheres, the deck's "
+                             f"body_spheres is {self.n_spheres}")
+
+    def template_from_first_body(self, lmp, comm) -> None:
+        """Without a template from the prepare hook, take the first clump as it is
+        now (orientations are then relative to that clump's pose at the start)."""
+        if self.n_spheres <= 1 or self.template is not None:
+            return
+        atoms = gather_atoms(lmp, comm, self.names)
+        template = None
+        if atoms is not None and len(atoms["id"]):
+            first = atoms["molecule"] == atoms["molecule"].min()
+            order = np.argsort(atoms["id"][first])
+            x = atoms["x"][first][order]
+            template = np.column_stack([x - x.mean(axis=0), atoms["radius"][first][order]])
+            self.warnings.append("no body template from the deck's prepare hook: orientations "
+                                 "are relative to the first part's pose at the start")
+        self.template = comm.bcast(template, root=0) if comm.size > 1 else template
+
+    def frame(self, lmp, comm, time: float):
+        inserted = int(round(lmp.variable("n_inserted")))  # collective: on every rank
+        atoms = gather_atoms(lmp, comm, self.names)
+        if atoms is None:
+            return None
+        from .bodies import aggregate, spheres
+
+        if self.n_spheres > 1:
+            parts, incomplete = aggregate(atoms, self.template, self.n_spheres)
+            if incomplete and not any("incomplete" in w for w in self.warnings):
+                self.warnings.append(f"{incomplete} clump(s) with fewer than {self.n_spheres} "
+                                     f"spheres at t = {time:g} s (identity orientation)")
+        else:
+            parts = spheres(atoms)
+        events, counts = self.outlet.step(time, parts, inserted)
+        return parts, events, counts
 
 
 def surface_state(lmp) -> tuple[list, list]:
@@ -121,6 +224,8 @@ def run(spec: dict) -> int:
     args = ["-log", spec["log"], "-screen", spec["screen"], "-echo", "log", "-nocite"]
     for name, value in spec["variables"].items():
         args += ["-var", name, str(value)]
+    for name, value in ((spec.get("prepared") or {}).get("variables") or {}).items():
+        args += ["-var", name, str(value)]  # e.g. mesh_dir, from the deck's prepare hook
     args += ["-var", "driver", "1", "-var", "deck_dir", str(Path(spec["deck"]).parent)]
 
     report("deck")
@@ -128,6 +233,9 @@ def run(spec: dict) -> int:
     lmp.file(spec["deck"])
 
     missing = [name for name in L.DECK_CONTRACT if not lmp.has_variable(name)]
+    bulk_names = [name for name in L.BULK_CONTRACT if lmp.has_variable(name)]
+    if bulk_names and len(bulk_names) < len(L.BULK_CONTRACT):  # a bulk deck: all of them
+        missing += [name for name in L.BULK_CONTRACT if name not in bulk_names]
     if missing:
         report("error", message=f"the deck does not define the equal-style variable(s) "
                                 f"{', '.join(missing)} that vibrofeed reads (see README, Decks)")
@@ -157,6 +265,11 @@ def run(spec: dict) -> int:
     lmp.command("variable vibrofeed_step equal step")
     lmp.command("variable vibrofeed_time equal time")
 
+    bulk = None
+    if bulk_names:
+        bulk = BulkFrames(lmp, spec)
+        bulk.template_from_first_body(lmp, comm)
+
     writer = None
     if comm.rank == 0:
         variables = {name: (value, *spec["var_meta"][name]) for name, value in spec["variables"].items()}
@@ -166,7 +279,9 @@ def run(spec: dict) -> int:
             derived=derived,
             engine_version=engine_version(spec["log"]), seed=spec.get("seed"),
             ranks=comm.size, command=spec.get("command", ""), run_id=spec.get("run_id", ""),
-            capacity_hint=max(lmp.natoms, 1))
+            capacity_hint=max(lmp.natoms // (bulk.n_spheres if bulk else 1), 1),
+            **({} if bulk is None else {"track": bulk.track, "outlet": bulk.outlet.attributes(),
+                                        "body_template": bulk.template}))
         flush_on_engine_exit(writer)
 
     # The run, as (commands, steps) segments with a frame after each. A plain
@@ -194,13 +309,27 @@ def run(spec: dict) -> int:
            natoms=lmp.natoms)
     done = 0
     last_report = 0.0
+    lost_reported = False
     for k in range(len(segments) + 1):
-        parts = gather_parts(lmp, comm)
         pos, vel = surface_state(lmp)
         step = int(round(lmp.variable("vibrofeed_step")))
         t = lmp.variable("vibrofeed_time")
-        if writer is not None:
-            writer.write_frame(step, t, parts, pos, vel)
+        if bulk is None:
+            parts = gather_parts(lmp, comm)
+            if writer is not None:
+                writer.write_frame(step, t, parts, pos, vel)
+        else:
+            got = bulk.frame(lmp, comm, t)
+            if writer is not None:
+                parts, events, counts = got
+                if events is not None:
+                    writer.write_events(events)
+                writer.write_frame(step, t, parts, pos, vel, counts=counts)
+                lost = counts["lost"]
+                if lost and not lost_reported:
+                    report("warning", message=f"{lost} part(s) disappeared without crossing "
+                                              f"the outlet by t = {t:g} s (mass balance)")
+                    lost_reported = True
         now = time.monotonic()
         if k == len(segments) or now - last_report > 0.2:
             report("progress", step=done, time=t, frames=writer.frames if writer else 0,
@@ -214,6 +343,12 @@ def run(spec: dict) -> int:
         done += steps
 
     wall = time.monotonic() - started
+    if bulk is not None:
+        if bulk.outlet.not_ballistic:
+            bulk.warnings.append(f"{bulk.outlet.not_ballistic} outlet event(s) timed at their frame: "
+                                 "their free flight back never reached catch_z")
+        for message in bulk.warnings:
+            report("warning", message=message)
     if writer is not None:
         writer.finish(L.STATUS_COMPLETE, wall_seconds=wall)
     report("done", step=done, frames=n_frames, wall=wall, natoms=lmp.natoms)

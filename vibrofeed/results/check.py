@@ -156,8 +156,138 @@ class _Checker:
                 self.error(f"{L.PARTS}/position/value", "empty slots (id -1) must hold NaN")
             if np.any(~np.isfinite(pos[live])):
                 self.error(f"{L.PARTS}/position/value", "an existing particle has a non-finite position")
+        self.orientation(ids)
+        self.live = (ids != L.ID_FILL).sum(axis=1)
         live_ids = ids[ids != L.ID_FILL]
         return len(np.unique(live_ids))
+
+    # -- bulk feeders: optional sections, checked when present ----------------------
+    def orientation(self, ids):
+        path = f"{L.PARTS}/orientation"
+        if path not in self.f:
+            return
+        _, comps, unit = L.OPTIONAL_PART_ELEMENTS["orientation"]
+        v = self.time_series(path, comps, unit, n_parts=True)
+        if v is None:
+            return
+        if v.shape[:2] != ids.shape:
+            self.error(f"{path}/value", f"(frames, slots) {v.shape[:2]}, id has {ids.shape}")
+            return
+        if not np.array_equal(self.f[f"{path}/step"][()], self.f[f"{L.PARTS}/position/step"][()]):
+            self.error(f"{path}/step", "differs from position/step")
+        q = v[()]
+        live = ids != L.ID_FILL
+        if np.any(np.isfinite(q[~live])):
+            self.error(f"{path}/value", "empty slots (id -1) must hold NaN")
+        norm = np.linalg.norm(q[live], axis=-1)
+        if np.any(~np.isfinite(norm)) or np.any(np.abs(norm - 1) > 1e-6):
+            self.error(f"{path}/value", "an existing part's orientation is not a unit quaternion")
+
+    def outlet(self):
+        if L.OUTLET not in self.f:
+            return 0
+        if not self.need(L.OUTLET, h5py.Group):
+            return 0
+        g = self.f[L.OUTLET]
+        for name in L.OUTLET_ATTRIBUTES:
+            if name not in g.attrs:
+                self.error(L.OUTLET, f"attribute {name!r} missing")
+        n = None
+        table = {}
+        for name, (_, comps, unit) in L.OUTLET_ELEMENTS.items():
+            path = f"{L.OUTLET}/{name}"
+            if not self.need(path, h5py.Dataset):
+                continue
+            ds = g[name]
+            expected = (comps,) if comps else ()
+            if ds.ndim != 1 + bool(comps) or ds.shape[1:] != expected:
+                self.error(path, f"shape {ds.shape}, expected (E{', ' + str(comps) if comps else ''})")
+                continue
+            if unit and _text(ds.attrs.get("unit", "")) != unit:
+                self.error(path, f"unit attribute must be {unit!r}")
+            if n is not None and ds.shape[0] != n:
+                self.error(L.OUTLET, "the event datasets differ in length")
+                return 0
+            n = ds.shape[0]
+            table[name] = ds[()]
+        if "id" in table and len(np.unique(table["id"])) != len(table["id"]):
+            self.error(f"{L.OUTLET}/id", "a part left the track more than once")
+        for name, values in table.items():
+            if values.dtype.kind == "f" and np.any(~np.isfinite(values)):
+                self.error(f"{L.OUTLET}/{name}", "non-finite values")
+        if "orientation" in table and len(table["orientation"]):
+            norm = np.linalg.norm(table["orientation"], axis=1)
+            if np.any(np.abs(norm - 1) > 1e-6):
+                self.error(f"{L.OUTLET}/orientation", "not unit quaternions")
+        return n or 0
+
+    def mass_balance(self, events: int, status: str):
+        """The counts must add up, and no part may be lost (FORMAT.md, "Mass balance")."""
+        if L.MASS_BALANCE not in self.f:
+            return
+        counts = {}
+        for name in L.MASS_BALANCE_COUNTS:
+            path = f"{L.MASS_BALANCE}/{name}"
+            v = self.time_series(path, 0, None)
+            if v is None:
+                continue
+            if v.shape[0] != self.frames:
+                self.error(path, f"{v.shape[0]} frames, particles have {self.frames}")
+                continue
+            if v.dtype.kind not in "iu":
+                self.error(f"{path}/value", "must be of integer type")
+            if self.frames and not np.array_equal(self.f[f"{path}/step"][()],
+                                                  self.f[f"{L.PARTS}/position/step"][()]):
+                self.error(f"{path}/step", "not sampled at the particle frames")
+            counts[name] = v[()].astype(np.int64)
+        if len(counts) != len(L.MASS_BALANCE_COUNTS) or self.frames == 0:
+            return
+        if any(np.any(c < 0) for c in counts.values()):
+            self.error(L.MASS_BALANCE, "negative counts (frames without a mass balance)")
+            return
+        lost = np.nonzero(counts["lost"])[0]
+        if len(lost):
+            k = int(lost[0])
+            self.error(f"{L.MASS_BALANCE}/lost",
+                       f"{int(counts['lost'][k])} part(s) lost at frame {k} (t = "
+                       f"{self.f[f'{L.PARTS}/position/time'][k]:g} s): they disappeared without "
+                       "an outlet event")
+        for name in ("inserted", "exited"):
+            if np.any(np.diff(counts[name]) < 0):
+                self.error(f"{L.MASS_BALANCE}/{name}", "decreases")
+        if np.any(counts["inserted"] != counts["on_track"] + counts["exited"] + counts["lost"]):
+            self.error(L.MASS_BALANCE, "inserted differs from on_track + exited + lost")
+        # present parts are on the track or falling (exited, not yet removed)
+        live = getattr(self, "live", None)
+        if live is not None and len(live) == self.frames:
+            falling = live - counts["on_track"]
+            if np.any(falling < 0) or np.any(falling > counts["exited"]):
+                self.error(L.MASS_BALANCE, "on_track does not match the parts present "
+                                           "(on_track <= present <= on_track + exited)")
+        if status == L.STATUS_COMPLETE and int(counts["exited"][-1]) != events:
+            self.error(f"{L.MASS_BALANCE}/exited",
+                       f"{int(counts['exited'][-1])} exited at the last frame, {events} outlet events")
+
+    def track(self):
+        if L.TRACK in self.f and self.need(L.TRACK, h5py.Group):
+            for name in ("vertices", "triangles"):
+                self.need(f"{L.TRACK}/{name}", h5py.Dataset)
+            if {"vertices", "triangles"} <= set(self.f[L.TRACK]):
+                v, t = self.f[L.TRACK]["vertices"], self.f[L.TRACK]["triangles"]
+                if v.ndim != 2 or v.shape[1] != 3 or np.any(~np.isfinite(v[()])):
+                    self.error(f"{L.TRACK}/vertices", "must be (V, 3) finite")
+                elif t.ndim != 2 or t.shape[1] != 3 or t.dtype.kind not in "iu":
+                    self.error(f"{L.TRACK}/triangles", "must be (T, 3) integers")
+                elif t.shape[0] and (t[()].min() < 0 or t[()].max() >= v.shape[0]):
+                    self.error(f"{L.TRACK}/triangles", "index a vertex that does not exist")
+                if _text(v.attrs.get("unit", "")) != "m":
+                    self.error(f"{L.TRACK}/vertices", "unit attribute must be 'm'")
+        if L.BODY_TEMPLATE in self.f:
+            b = self.f[L.BODY_TEMPLATE]
+            if not isinstance(b, h5py.Dataset) or b.ndim != 2 or b.shape[1] != 4:
+                self.error(L.BODY_TEMPLATE, "must be an (n, 4) dataset: x, y, z, r")
+            elif np.any(~np.isfinite(b[()])) or np.any(b[()][:, 3] <= 0):
+                self.error(L.BODY_TEMPLATE, "non-finite values or radii <= 0")
 
     def surface(self):
         for name, (_, comps, unit) in L.SURFACE_ELEMENTS.items():
@@ -219,4 +349,7 @@ def check_file(path, allow_incomplete: bool = False) -> Report:
         parts = c.particles()
         c.surface()
         status = c.parameters()
+        events = c.outlet()
+        c.mass_balance(events, status)
+        c.track()
         return Report(str(path), c.problems, frames=c.frames, parts=parts, status=status)

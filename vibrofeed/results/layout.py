@@ -10,14 +10,18 @@ from __future__ import annotations
 H5MD_VERSION = (1, 1)
 UNITS_MODULE_VERSION = (1, 0)
 FORMAT_NAME = "vibrofeed-result"
-FORMAT_VERSION = (1, 1)  # 1.1: parameters/run@id, parameters/includes
+FORMAT_VERSION = (1, 2)  # 1.1: parameters/run@id, parameters/includes; 1.2: bulk feeder additions
 
 PARTS = "particles/parts"
 SURFACE = "observables/surface"
+OUTLET = "observables/outlet"
+MASS_BALANCE = "observables/mass_balance"
 PARAMETERS = "parameters"
 RUN = "parameters/run"
 VARIABLES = "parameters/variables"
 DERIVED = "parameters/derived"
+TRACK = "parameters/track"
+BODY_TEMPLATE = "parameters/body_template"
 
 # Fill values for the slots of particles that do not exist at a frame.
 ID_FILL = -1
@@ -35,6 +39,32 @@ PART_ELEMENTS = {
     "species": ("i4", 0, None),
     "id": ("i8", 0, None),
 }
+
+# Optional per-particle elements, written only by runs that have them (bulk
+# feeders): a file without them stays a valid result. The orientation is a unit
+# quaternion (w, x, y, z) rotating the body template into the simulation frame;
+# plain spheres have (1, 0, 0, 0).
+OPTIONAL_PART_ELEMENTS = {
+    "orientation": ("f8", 4, None),
+}
+IDENTITY_QUATERNION = (1.0, 0.0, 0.0, 0.0)
+
+# The outlet event table (one row per part leaving the track, not a time
+# series): name -> (dtype, components, unit).
+OUTLET_ELEMENTS = {
+    "time": ("f8", 0, "s"),
+    "id": ("i8", 0, None),
+    "position": ("f8", 3, "m"),
+    "velocity": ("f8", 3, "m s-1"),
+    "orientation": ("f8", 4, None),
+}
+OUTLET_ATTRIBUTES = ("outlet_x", "catch_z", "method")
+
+# The mass balance, one H5MD time series of int64 per count: inserted = on_track
+# + exited + lost, where exited counts the outlet events so far (parts that left
+# the track, including those still falling to the box floor) and lost the parts
+# that disappeared without an event (must stay 0).
+MASS_BALANCE_COUNTS = ("inserted", "on_track", "exited", "lost")
 
 # Time-dependent observables of the vibrating surface, shape (frames, 3).
 SURFACE_ELEMENTS = {
@@ -63,4 +93,14 @@ DECK_CONTRACT = (
     "surface_vx",
     "surface_vy",
     "surface_vz",
+)
+
+# A bulk feeder's deck defines these too (all or none): the outlet edge and the
+# catch plane [m], the parts inserted so far and the spheres per part. The
+# worker then writes bodies, outlet events and the mass balance.
+BULK_CONTRACT = (
+    "outlet_x",
+    "catch_z",
+    "n_inserted",
+    "body_spheres",
 )

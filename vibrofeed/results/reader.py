@@ -13,6 +13,12 @@ and :meth:`Result.iter_frames` the parts present at a frame, and
 whole-array properties (``position``, ``ids``, ...) read everything on first
 access and keep it. Slots of particles that do not exist at a frame hold
 ``id == -1`` and NaN.
+
+A bulk feeder's file adds (FORMAT.md, "Bulk feeders") the parts'
+``orientation`` (read like any field; a file without it reads the identity
+quaternion for every present part), the outlet events (:attr:`Result.outlet`),
+the mass balance (:attr:`Result.mass_balance`), the track mesh
+(:attr:`Result.track_mesh`) and the clump template (:attr:`Result.body_template`).
 """
 
 from __future__ import annotations
@@ -126,7 +132,7 @@ class Result:
     Whole arrays, read on first access and kept (one per field of the layout,
     see ``_whole_arrays``): ``time``, ``step``, ``ids``, ``position``,
     ``velocity``, ``angular_velocity``, ``force``, ``radius``, ``mass``,
-    ``species``, ``surface_position``, ``surface_velocity``.
+    ``species``, ``orientation``, ``surface_position``, ``surface_velocity``.
     """
 
     def __init__(self, path, allow_incomplete: bool = False):
@@ -210,15 +216,20 @@ class Result:
         return int(self.file[L.PARAMETERS]["seed"][()])
 
     # -- reading by window ----------------------------------------------------------
-    FIELDS = (*L.PART_ELEMENTS, "surface_position", "surface_velocity", "time", "step")
+    FIELDS = (*L.PART_ELEMENTS, *L.OPTIONAL_PART_ELEMENTS, "surface_position", "surface_velocity",
+              "time", "step")
     """Names :meth:`read` knows: the per-part elements (``ids`` is an alias of
     ``id``), the surface's motion and the frames' time and step."""
 
     def _dataset(self, name: str):
-        """(dataset, per_part) of a field name."""
+        """(dataset, per_part) of a field name; (None, True) for an optional
+        per-part element the file does not hold."""
         name = "id" if name == "ids" else name
         if name in L.PART_ELEMENTS:
             return self.file[L.PARTS][name]["value"], True
+        if name in L.OPTIONAL_PART_ELEMENTS:
+            group = self.file[L.PARTS].get(name)
+            return (None if group is None else group["value"]), True
         if name.startswith("surface_") and name[len("surface_"):] in L.SURFACE_ELEMENTS:
             return self.file[L.SURFACE][name[len("surface_"):]]["value"], False
         if name in ("time", "step"):
@@ -238,6 +249,8 @@ class Result:
         >>> r.read("surface_position", frames=-1)            # (3,)
         """
         ds, per_part = self._dataset(name)
+        if ds is None:  # absent optional element: its default where a part is
+            return self._default(name, self.read("id", frames, slots))
         f = _normalise(frames, ds.shape[0])
         if not per_part:
             if slots is not None:
@@ -261,6 +274,8 @@ class Result:
         ds, per_part = self._dataset(name)
         if not per_part:
             raise KeyError(f"{name!r} is not a per-part field")
+        if ds is None:
+            return self._default(name, self.gather("id", frames, slots))
         out = np.empty((len(frames), *ds.shape[2:]), dtype=ds.dtype)
         if len(frames) == 0:
             return out
@@ -268,6 +283,61 @@ class Result:
         for a, b in zip(np.r_[0, cuts], np.r_[cuts, len(frames)]):
             out[a:b] = _read_axis0(ds, frames[a:b], (int(slots[a]),))
         return out
+
+    @staticmethod
+    def _default(name: str, ids: np.ndarray) -> np.ndarray:
+        """An absent optional element read at ``ids``: identity where a part is, NaN elsewhere."""
+        _, comps, _ = L.OPTIONAL_PART_ELEMENTS[name]
+        out = np.full((*np.shape(ids), comps), np.nan)
+        out[np.asarray(ids) != L.ID_FILL] = L.IDENTITY_QUATERNION
+        return out
+
+    # -- bulk feeders ---------------------------------------------------------------
+    @cached_property
+    def outlet(self) -> dict[str, np.ndarray]:
+        """The outlet events, one row per part that left the track: ``time`` (E,) [s],
+        ``id`` (E,), ``position`` (E, 3) [m], ``velocity`` (E, 3) [m s-1],
+        ``orientation`` (E, 4); empty arrays when the file has no event table."""
+        group = self.file.get(L.OUTLET)
+        out = {}
+        for name, (dtype, comps, _) in L.OUTLET_ELEMENTS.items():
+            if group is not None and name in group:
+                out[name] = group[name][()]
+            else:
+                out[name] = np.empty((0, comps) if comps else (0,), dtype=dtype)
+        return out
+
+    @property
+    def outlet_plane(self) -> dict | None:
+        """``{"outlet_x", "catch_z", "method"}`` of the outlet, or None without one."""
+        group = self.file.get(L.OUTLET)
+        if group is None:
+            return None
+        return {"outlet_x": float(group.attrs.get("outlet_x", np.nan)),
+                "catch_z": float(group.attrs.get("catch_z", np.nan)),
+                "method": _text(group.attrs.get("method", ""))}
+
+    @cached_property
+    def mass_balance(self) -> dict[str, np.ndarray] | None:
+        """``{inserted, on_track, exited, lost}`` -> (frames,) int64, or None when absent."""
+        group = self.file.get(L.MASS_BALANCE)
+        if group is None:
+            return None
+        return {name: group[name]["value"][()] for name in L.MASS_BALANCE_COUNTS if name in group}
+
+    @cached_property
+    def track_mesh(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """(vertices (V, 3) [m], triangles (T, 3) int32) of the track at rest, or None."""
+        group = self.file.get(L.TRACK)
+        if group is None:
+            return None
+        return group["vertices"][()], group["triangles"][()]
+
+    @cached_property
+    def body_template(self) -> np.ndarray | None:
+        """(n, 4) x, y, z, r [m] of a clump's spheres in the body frame, or None."""
+        ds = self.file.get(L.BODY_TEMPLATE)
+        return None if ds is None else ds[()]
 
     @property
     def n_frames(self) -> int:
@@ -364,8 +434,8 @@ def _whole_arrays() -> dict:
     """attribute -> (field, docstring) of every whole array, from the layout."""
     out = {"time": ("time", "(frames,) simulated time of each frame [s]."),
            "step": ("step", "(frames,) engine step of each frame.")}
-    for name, (_, comps, unit) in L.PART_ELEMENTS.items():
-        shape = "(frames, slots, 3)" if comps else "(frames, slots)"
+    for name, (_, comps, unit) in (*L.PART_ELEMENTS.items(), *L.OPTIONAL_PART_ELEMENTS.items()):
+        shape = f"(frames, slots, {comps})" if comps else "(frames, slots)"
         unit = f" [{unit}]" if unit else ""
         out["ids" if name == "id" else name] = (name, f"{shape} {name} of each slot{unit}; "
                                                       "a fill value (-1 or NaN) where it is empty.")

@@ -13,6 +13,12 @@ Particles can appear and disappear during a run (insertion at a feeder's
 inlet, removal at its outlet). Each particle keeps a fixed *slot* (column)
 while it exists; free slots hold ``id = -1`` and NaN, as H5MD's fill-value
 convention prescribes, and are reused by later particles.
+
+A bulk feeder's run adds (FORMAT.md, "Bulk feeders"): the parts' orientation,
+the outlet event table (:meth:`ResultWriter.write_events`), the mass balance
+(``counts`` of :meth:`ResultWriter.write_frame`), the track mesh and the body
+template. Each is created only when the run has it, so the files of other decks
+keep the layout they always had.
 """
 
 from __future__ import annotations
@@ -50,29 +56,60 @@ def _number_or_text(value: str):
 
 
 class SlotMap:
-    """Assigns each particle id a stable column, reusing freed columns."""
+    """Assigns each particle id a stable column, reusing freed columns.
+
+    Vectorised (sorted id and slot arrays, ``np.searchsorted``): a bulk run
+    hands over tens of thousands of ids per frame, and a Python loop over them
+    would cost more than writing the frame.
+    """
 
     def __init__(self):
-        self.slot_of: dict[int, int] = {}
-        self.free: list[int] = []
+        self._ids = np.empty(0, dtype=np.int64)    # sorted ids holding a slot
+        self._slots = np.empty(0, dtype=np.int64)  # their slots
+        self.free = np.empty(0, dtype=np.int64)    # free slots, ascending
         self.capacity = 0
 
+    @property
+    def slot_of(self) -> dict[int, int]:
+        """``{id: slot}`` of the particles holding a slot now."""
+        return dict(zip(self._ids.tolist(), self._slots.tolist()))
+
     def assign(self, ids: np.ndarray) -> np.ndarray:
-        """Columns for ``ids`` at this frame; ids absent now free their columns."""
-        present = set(int(i) for i in ids)
-        for gone in [i for i in self.slot_of if i not in present]:
-            self.free.append(self.slot_of.pop(gone))
-        self.free.sort(reverse=True)  # pop() then hands out the lowest column
+        """Columns for ``ids`` at this frame; ids absent now free their columns.
+
+        New ids take the lowest free columns in the order they come, then new
+        columns at the end.
+        """
+        ids = np.asarray(ids, dtype=np.int64).ravel()
+        last = getattr(self, "_last", None)
+        if last is not None and np.array_equal(last[0], ids):
+            return last[1].copy()  # the same parts in the same order (between re-sorts)
+        order = np.argsort(ids)
+        sorted_ids = ids[order]
+        if len(ids) > 1 and np.any(sorted_ids[1:] == sorted_ids[:-1]):
+            raise ValueError("duplicate particle ids in one frame")
+        found = np.zeros(len(ids), dtype=bool)
+        kept = np.zeros(len(self._ids), dtype=bool)
+        slots_sorted = np.empty(len(ids), dtype=np.int64)
+        if len(self._ids):
+            pos = np.minimum(np.searchsorted(self._ids, sorted_ids), len(self._ids) - 1)
+            found = self._ids[pos] == sorted_ids
+            kept[pos[found]] = True
+            slots_sorted[found] = self._slots[pos[found]]
+        if not kept.all():
+            self.free = np.sort(np.concatenate([self.free, self._slots[~kept]]))
+        new = np.zeros(len(ids), dtype=bool)
+        new[order[~found]] = True
+        new_at = np.nonzero(new)[0]  # ascending: the order the new ids come in
+        take = self.free[:len(new_at)]
+        self.free = self.free[len(take):]
+        extra = len(new_at) - len(take)
         slots = np.empty(len(ids), dtype=np.int64)
-        for k, pid in enumerate(ids):
-            pid = int(pid)
-            if pid not in self.slot_of:
-                if self.free:
-                    self.slot_of[pid] = self.free.pop()
-                else:
-                    self.slot_of[pid] = self.capacity
-                    self.capacity += 1
-            slots[k] = self.slot_of[pid]
+        slots[order[found]] = slots_sorted[found]
+        slots[new_at] = np.concatenate([take, self.capacity + np.arange(extra, dtype=np.int64)])
+        self.capacity += extra
+        self._ids, self._slots = sorted_ids, slots[order]
+        self._last = (ids.copy(), slots.copy())
         return slots
 
 
@@ -101,6 +138,15 @@ class ResultWriter:
         The run's identity (hash of deck, includes, parameters and version).
     capacity_hint:
         Expected largest number of particles, to size HDF5 chunks.
+    track:
+        ``(vertices (V, 3) [m], triangles (T, 3))``: the track mesh at rest in
+        the simulation frame, stored under ``parameters/track``.
+    body_template:
+        ``(n, 4)`` x, y, z, r [m] of a clump's spheres in the body frame.
+    outlet:
+        ``{"outlet_x": m, "catch_z": m, "method": text}``: creates the (empty)
+        outlet event table at once, so that a run in which no part leaves
+        still has one. :meth:`write_events` creates it otherwise.
     """
 
     def __init__(self, path, *, deck_name: str, deck_path: str, deck_text: str,
@@ -108,13 +154,16 @@ class ResultWriter:
                  derived: Mapping[str, float],
                  engine_version: str, seed: int | None, ranks: int = 1,
                  command: str = "", run_id: str = "", capacity_hint: int = 1,
-                 max_delay: float = 0.25):
+                 max_delay: float = 0.25, track=None, body_template=None,
+                 outlet: Mapping | None = None):
         self.path = str(path)
         self.slots = SlotMap()
         self.frames = 0          # frames handed over
         self.written = 0         # frames on disk
         self.max_delay = max_delay
-        self._pending: list = []  # (step, time, {name: row}, surface_position, surface_velocity)
+        self._pending: list = []  # (step, time, {name: row}, surface_pos, surface_vel, counts)
+        self._pending_events: list = []  # event tables handed over, not yet written
+        self.events = 0          # events handed over
         self._pending_since = 0.0
         self._lock = threading.Lock()
         self._capacity = 0
@@ -133,6 +182,17 @@ class ResultWriter:
         self._surface = {name: f[L.SURFACE][name]["value"] for name in L.SURFACE_ELEMENTS}
         self._step = f[L.PARTS]["position/step"]
         self._time = f[L.PARTS]["position/time"]
+        self._counts: dict = {}  # mass-balance value datasets, once created
+        self._outlet: dict = {}  # outlet table datasets, once created
+        if track is not None:
+            self._write_track(f, *track)
+        if body_template is not None:
+            template = np.asarray(body_template, dtype="f8")
+            if template.ndim != 2 or template.shape[1] != 4:
+                raise ValueError(f"body_template must be (n, 4) x, y, z, r, got {template.shape}")
+            f.create_dataset(L.BODY_TEMPLATE, data=template).attrs["unit"] = _fixed("m")
+        if outlet is not None:
+            self._create_outlet(outlet)
         f.flush()
         # Flush from a thread too, so a frame waits at most max_delay even when
         # the next one is long in coming (the engine releases the GIL).
@@ -143,7 +203,8 @@ class ResultWriter:
     def _flush_when_due(self) -> None:
         while not self._stop.wait(self.max_delay / 4):
             with self._lock:
-                due = self._pending and _time.monotonic() - self._pending_since >= self.max_delay
+                due = ((self._pending or self._pending_events)
+                       and _time.monotonic() - self._pending_since >= self.max_delay)
             if due:
                 self.flush()
 
@@ -227,6 +288,54 @@ class ResultWriter:
             value.attrs["unit"] = _fixed(unit)
             self._step_time(g, step, time)
 
+    @staticmethod
+    def _write_track(f: h5py.File, vertices, triangles) -> None:
+        vertices = np.asarray(vertices, dtype="f8")
+        triangles = np.asarray(triangles)
+        if vertices.ndim != 2 or vertices.shape[1] != 3:
+            raise ValueError(f"track vertices must be (V, 3), got {vertices.shape}")
+        if triangles.ndim != 2 or triangles.shape[1] != 3 or triangles.dtype.kind not in "iu":
+            raise ValueError(f"track triangles must be (T, 3) integers, got {triangles.shape} "
+                             f"{triangles.dtype}")
+        g = f.create_group(L.TRACK)
+        g.create_dataset("vertices", data=vertices).attrs["unit"] = _fixed("m")
+        g.create_dataset("triangles", data=triangles.astype("i4"))
+
+    def _create_outlet(self, attrs: Mapping) -> None:
+        g = self.file.create_group(L.OUTLET)
+        g.attrs["outlet_x"] = float(attrs.get("outlet_x", np.nan))
+        g.attrs["catch_z"] = float(attrs.get("catch_z", np.nan))
+        g.attrs["method"] = str(attrs.get("method", ""))
+        for name, (dtype, comps, unit) in L.OUTLET_ELEMENTS.items():
+            shape, maxshape = ((0, comps), (None, comps)) if comps else ((0,), (None,))
+            ds = g.create_dataset(name, shape=shape, maxshape=maxshape, dtype=dtype,
+                                  chunks=(1024, comps) if comps else (1024,))
+            if unit:
+                ds.attrs["unit"] = _fixed(unit)
+            self._outlet[name] = ds
+
+    def _create_counts(self) -> None:
+        """The mass-balance series; frames written before read the fill -1."""
+        for name in L.MASS_BALANCE_COUNTS:
+            g = self.file.create_group(f"{L.MASS_BALANCE}/{name}")
+            self._counts[name] = g.create_dataset(
+                "value", shape=(self.written,), maxshape=(None,), dtype="i8", chunks=(1024,),
+                fillvalue=-1)
+            self._step_time(g, self._step, self._time)
+
+    def _create_optional(self, name: str) -> None:
+        """An optional per-part element; frames written before read its fill value."""
+        dtype, comps, unit = L.OPTIONAL_PART_ELEMENTS[name]
+        g = self.file[L.PARTS].create_group(name)
+        value = g.create_dataset(
+            "value", shape=(self.written, self._capacity, comps),
+            maxshape=(None, None, comps), dtype=dtype,
+            chunks=(self._chunk_frames, self._chunk_parts, comps), fillvalue=self._fill(name, dtype))
+        if unit:
+            value.attrs["unit"] = _fixed(unit)
+        self._step_time(g, self._step, self._time)
+        self._values[name] = value
+
     def _step_time(self, group, step, time):
         """Create step/time in the first element, hard-link them in the others."""
         if step is None:
@@ -250,34 +359,67 @@ class ResultWriter:
 
     # -- frames -------------------------------------------------------------------
     def write_frame(self, step: int, time: float, parts: Mapping[str, np.ndarray],
-                    surface_position, surface_velocity) -> None:
+                    surface_position, surface_velocity, counts: Mapping[str, int] | None = None
+                    ) -> None:
         """Hand over one frame; it reaches the disk within ``max_delay`` seconds.
 
         ``parts`` holds per-particle arrays with the same row order:
         ``id`` (required), ``species``, ``radius``, ``mass``, ``position``,
-        ``velocity``, ``angular_velocity``, ``force``; rows may come in any order.
+        ``velocity``, ``angular_velocity``, ``force`` and optionally
+        ``orientation`` (quaternions w, x, y, z); rows may come in any order.
+        ``counts`` is the mass balance at this frame: ``{"inserted", "on_track",
+        "exited", "lost"}`` (ints).
         """
-        ids = np.asarray(parts["id"], dtype=np.int64)
-        if len(np.unique(ids)) != len(ids):
-            raise ValueError("duplicate particle ids in one frame")
-        slots = self.slots.assign(ids)
-        rows = {}
-        for name, (dtype, comps, _) in L.PART_ELEMENTS.items():
-            shape = (self.slots.capacity, comps) if comps else (self.slots.capacity,)
-            row = np.full(shape, self._fill(name, dtype), dtype=dtype)
+        slots = self.slots.assign(parts["id"])  # refuses duplicate ids
+        # (slots, values) per element, scattered into the batch's block when
+        # written: one pass over the values here (a copy: the caller may reuse
+        # its arrays), none over the whole slot axis
+        rows = {"": slots}
+        for name, (dtype, _, _) in (*L.PART_ELEMENTS.items(), *L.OPTIONAL_PART_ELEMENTS.items()):
             if name in parts:
-                row[slots] = np.asarray(parts[name], dtype=dtype)
-            rows[name] = row
+                value = np.array(parts[name], dtype=dtype)
+                if value.shape[0] != len(slots):
+                    raise ValueError(f"parts[{name!r}] has {value.shape[0]} rows, id has {len(slots)}")
+                rows[name] = value
+        if counts is not None:
+            missing = [c for c in L.MASS_BALANCE_COUNTS if c not in counts]
+            if missing:
+                raise ValueError(f"counts lacks {', '.join(missing)}")
+            counts = np.array([int(counts[c]) for c in L.MASS_BALANCE_COUNTS], dtype=np.int64)
         with self._lock:
             if not self._pending:
                 self._pending_since = _time.monotonic()
             self._pending.append((int(step), float(time), rows,
                                   np.asarray(surface_position, dtype="f8"),
-                                  np.asarray(surface_velocity, dtype="f8")))
+                                  np.asarray(surface_velocity, dtype="f8"), counts))
             self.frames += 1
             due = _time.monotonic() - self._pending_since >= self.max_delay
         if due:
             self.flush()
+
+    def write_events(self, events: Mapping[str, np.ndarray]) -> None:
+        """Hand over outlet events (parts that left the track), any number at once.
+
+        ``events`` maps ``time`` (E,) [s], ``id`` (E,), ``position`` (E, 3) [m],
+        ``velocity`` (E, 3) [m s-1] and ``orientation`` (E, 4) to arrays; they
+        are written with the next frame (same delay, same flush).
+        """
+        table = {}
+        n = len(np.atleast_1d(events["id"]))
+        for name, (dtype, comps, _) in L.OUTLET_ELEMENTS.items():
+            if name == "orientation" and name not in events:  # plain spheres
+                value = np.tile(np.asarray(L.IDENTITY_QUATERNION), (n, 1))
+            else:
+                value = np.asarray(events[name], dtype=dtype)
+            value = value.reshape((n, comps) if comps else (n,))
+            table[name] = value
+        if n == 0:
+            return
+        with self._lock:
+            if not self._pending and not self._pending_events:
+                self._pending_since = _time.monotonic()
+            self._pending_events.append(table)
+            self.events += n
 
     def flush(self) -> None:
         """Write the frames handed over so far and flush the file."""
@@ -285,18 +427,39 @@ class ResultWriter:
             self._write_pending()
 
     def _write_pending(self) -> None:
-        if not self._pending or not self.file.id.valid:
+        if not self.file.id.valid or not (self._pending or self._pending_events):
             return
+        if self._pending_events:
+            if not self._outlet:
+                self._create_outlet({"method": ""})
+            for name, ds in self._outlet.items():
+                block = np.concatenate([table[name] for table in self._pending_events])
+                self._append(ds, ds.shape[0], block)
+            self._pending_events = []
+        if not self._pending:
+            self.file.flush()
+            return
+        for name in L.OPTIONAL_PART_ELEMENTS:
+            if name not in self._values and any(name in frame[2] for frame in self._pending):
+                self._create_optional(name)
+        if not self._counts and any(frame[5] is not None for frame in self._pending):
+            self._create_counts()
         if self.slots.capacity > self._capacity:
             self._grow(self.slots.capacity)
         k0, n = self.written, len(self._pending)
-        for name, (dtype, comps, _) in L.PART_ELEMENTS.items():
-            shape = (n, self._capacity, comps) if comps else (n, self._capacity)
-            block = np.full(shape, self._fill(name, dtype), dtype=dtype)
+        for name, ds in self._values.items():
+            dtype = ds.dtype
+            block = np.full((n, *ds.shape[1:]), self._fill(name, dtype), dtype=dtype)
             for i, frame in enumerate(self._pending):
-                row = frame[2][name]
-                block[i, :len(row)] = row  # frames before a growth are narrower
-            self._append(self._values[name], k0, block)
+                value = frame[2].get(name)
+                if value is not None:
+                    block[i, frame[2][""]] = value
+            self._append(ds, k0, block)
+        if self._counts:
+            counts = np.array([f[5] if f[5] is not None else np.full(len(L.MASS_BALANCE_COUNTS), -1)
+                               for f in self._pending], dtype=np.int64)
+            for j, name in enumerate(L.MASS_BALANCE_COUNTS):
+                self._append(self._counts[name], k0, counts[:, j])
         self._append(self._surface["position"], k0, np.array([f[3] for f in self._pending]))
         self._append(self._surface["velocity"], k0, np.array([f[4] for f in self._pending]))
         # step/time last: a frame counts once its step is there.

@@ -1,0 +1,102 @@
+"""Benchmark of the main job: the bulk feeder through vibrofeed vs LIGGGHTS by hand.
+
+    .venv/bin/python benchmarks/bench_bulk.py [-p NAME=VALUE ...] [--ranks N]
+
+Runs the bulk_feeder deck (defaults, or the given parameters) twice with the
+same frames: by hand (`vibrofeed prepare`, then `liggghts -in` writing a text
+dump every output_dt) and through `vibrofeed run` (H5MD frames, bodies, outlet
+events, mass balance); then times the feed-rate and singulation analyses of
+the result. Prints a Markdown table for BENCHMARKS.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "benchmarks"))
+from bench_foundation import machine  # noqa: E402
+
+
+def _loop(text: str) -> tuple[float, int]:
+    """(seconds, steps) of the last `Loop time` line of a LIGGGHTS output (the vibration run)."""
+    found = re.findall(r"Loop time of ([0-9.e+-]+) on \d+ procs for (\d+) steps", text)
+    return float(found[-1][0]), int(found[-1][1])
+
+
+def by_hand(tmp: Path, params: list[str], ranks: int) -> tuple[float, float, int]:
+    """(wall s, vibration-run s, steps) of liggghts -in on the prepared geometry."""
+    mesh = tmp / "mesh"
+    line = subprocess.run([sys.executable, "-m", "vibrofeed.cli", "prepare", "bulk_feeder",
+                           "-o", str(mesh), *params], check=True, capture_output=True,
+                          text=True).stdout.strip().splitlines()[-1]
+    words = line.split() + ["-var", "dump_file", str(tmp / "d.dump"), "-log", str(tmp / "log"),
+                            "-nocite"]
+    if ranks > 1:
+        words = ["mpirun", "-n", str(ranks), "--oversubscribe"] + words
+    t0 = time.monotonic()
+    out = subprocess.run(words, check=True, capture_output=True, text=True, cwd=tmp).stdout
+    wall = time.monotonic() - t0
+    seconds, steps = _loop(out)
+    return wall, seconds, steps
+
+
+def through_vibrofeed(tmp: Path, params: list[str], ranks: int) -> tuple[float, Path]:
+    out = tmp / "bulk.h5"
+    args = [sys.executable, "-m", "vibrofeed.cli", "run", "bulk_feeder", "-q", "-o", str(out),
+            "-n", str(ranks)]
+    for p in params[1::2]:
+        args += ["-p", p]
+    t0 = time.monotonic()
+    subprocess.run(args, check=True, capture_output=True)
+    return time.monotonic() - t0, out
+
+
+def analyses(path: Path) -> float:
+    from vibrofeed.postproc.feedrate import FeedRate
+    from vibrofeed.postproc.singulation import Singulation
+    from vibrofeed.results.reader import Result
+
+    t0 = time.perf_counter()
+    with Result(path) as r:
+        FeedRate(r).run().summary()
+        Singulation(r).run().summary()
+    return time.perf_counter() - t0
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("-p", "--param", action="append", default=[], metavar="NAME=VALUE")
+    ap.add_argument("--ranks", type=int, default=1)
+    a = ap.parse_args()
+    params = [w for p in a.param for w in ("-p", p)]
+    with tempfile.TemporaryDirectory() as d:
+        tmp = Path(d)
+        (tmp / "hand").mkdir()
+        wall_hand, loop_hand, steps = by_hand(tmp / "hand", params, a.ranks)
+        wall_vf, out = through_vibrofeed(tmp, params, a.ranks)
+        from vibrofeed.results.reader import Result
+
+        with Result(out) as r:
+            parts = int(r.mass_balance["inserted"][-1])
+            frames = r.n_frames
+            sim = float(r.time[-1] - r.time[0])
+        t_an = analyses(out)
+    print(f"machine: {machine()}; ranks {a.ranks}; parameters: {' '.join(a.param) or 'defaults'}")
+    print("| measurement | result |\n|---|---|")
+    print(f"| parts, simulated time, frames | {parts}, {sim:g} s, {frames} |")
+    print(f"| `liggghts -in` by hand, whole run (settle + vibration, text dump) | {wall_hand:.1f} s |")
+    print(f"| by hand, vibration run only | {loop_hand:.1f} s, {steps / loop_hand:.0f} steps/s, "
+          f"{parts * steps / loop_hand / 1e6:.2f} M particle-steps/s (initial parts) |")
+    print(f"| `vibrofeed run`, whole run | {wall_vf:.1f} s (ratio to by hand {wall_vf / wall_hand:.3f}) |")
+    print(f"| feed-rate + singulation analyses | {t_an:.2f} s ({t_an / wall_vf:.1%} of the run) |")
+
+
+if __name__ == "__main__":
+    main()

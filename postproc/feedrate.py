@@ -1,0 +1,457 @@
+"""Feed rate of a bulk feeder: parts and mass per second at the outlet, conveying speed.
+
+What is measured
+----------------
+* **Feed rate** from the outlet's event table (``observables/outlet``): every
+  part that left the track has one row with the exact time its centre
+  crossed the catch plane, so the rate does not depend on the frame spacing.
+  Mass per second weighs each event with the part's recorded mass.
+* **Conveying velocity** from the frames: the displacement along the track
+  of each part present at both ends of a frame interval that spans a whole
+  number of vibration periods, divided by its duration. Over whole periods the
+  part's oscillation with the track cancels; over other intervals it would
+  alias into the speed (frames every 0.7 periods sample the cycle at drifting
+  phases). Parts beyond the outlet edge are falling, not conveyed, and are
+  left out. The profile along the track bins these speeds by the interval's
+  mid-point along x in the track's frame.
+
+Steady window
+-------------
+A feeder starts empty at its outlet (the front must travel to the edge) and a
+pre-filled track runs out at the end, so the rate is measured over a window
+detected from the data. The events are counted in bins of whole vibration
+periods (feeding is phase-locked to the vibration: bins of fractional periods
+would add a beat to the counts), ~10 events per bin on average so that a
+transient stands out of a bin's Poisson noise (the reason MSER-5 averages
+batches of 5 observations). The window is the Marginal Standard Error Rule's
+(MSER; White, 1997, "An effective truncation heuristic for bias reduction in
+simulation output"): the cuts d at the start and e at the end minimising the
+variance of the kept bins divided by their number squared, i.e. the squared
+standard error of their mean, which falls as bins are kept and rises as
+transient bins are. Both ends are searched together (the run-out of the fill
+is a transient too, and a transient left at one end hides the other from a
+one-sided search), keeping at least half the bins as MSER prescribes.
+``start``/``end`` replace the detection.
+
+Uncertainty
+-----------
+Batch means: the window is split into ``batches`` contiguous batches of whole
+periods (lengths differing by at most one period), each gives a rate, and the
+error (1 sigma) is their standard deviation over sqrt(batches). Arrivals of
+touching parts are correlated over a few parts; batches of many periods are
+nearly independent, so the error includes that correlation, which a Poisson
+sqrt(N)/T would not. The conveying velocity's error is the batch means of its
+whole-period intervals, the same way.
+
+The dilute-limit comparison with the single-part model (Khan & Sarma, §2.3.2)
+needs the models of ``vibrofeed.validation``, which this layer does not import:
+``vibrofeed feedrate`` makes it from ``mean_velocity`` here.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import InputError
+from ..results import layout as L
+from .base import AnalysisBase
+
+# Frames read at once: blocks of at most this many slot values.
+_BLOCK_VALUES = 1 << 22
+# The count series: bins of ~10 events, so that a transient stands out of one
+# bin's Poisson noise (the reason MSER-5 averages batches of 5 observations);
+# within 10 .. 200 bins (MSER's resolution, its cost).
+_BIN_EVENTS, _MIN_BINS, _MAX_BINS = 10, 10, 200
+# A frame lag is "whole periods" when it is within this fraction of a period of one.
+_PERIOD_TOLERANCE = 1e-4
+# Longest frame lag searched for a whole number of periods.
+_MAX_LAG = 1000
+# Keys of the command's summary (JSON and table), in order.
+SUMMARY_KEYS = ("parts_per_s", "parts_per_s_err", "mass_per_s", "mass_per_s_err", "mean_velocity",
+                "mean_velocity_err", "steady_from", "steady_to", "n_events", "inserted", "exited",
+                "on_track", "lost", "bin_width", "velocity_lag", "profile_x", "profile_velocity",
+                "profile_count")
+
+
+# ----------------------------------------------------------------- figures
+def pyplot():
+    """matplotlib.pyplot on the file-only backend (imported only when drawing)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def save(fig, folder, name: str):
+    """Write ``fig`` to ``folder/name`` (PNG), close it and return the path."""
+    from pathlib import Path
+
+    path = Path(folder) / name
+    fig.savefig(path, dpi=120, bbox_inches="tight")
+    pyplot().close(fig)
+    return path
+
+
+# ----------------------------------------------------------------- the event table
+def require_outlet(result) -> None:
+    """Refuse a result without an outlet event table (e.g. a single-part run)."""
+    if result.outlet_plane is None:
+        raise InputError(f"{result.path}: no outlet data (/{L.OUTLET}): deck "
+                         f"{result.deck_name or '?'!r} is not a feeder; feed rate and singulation "
+                         "need a bulk_feeder result")
+
+
+def outlet_events(result, t_lo: float = -math.inf, t_hi: float = math.inf) -> dict[str, np.ndarray]:
+    """The outlet events with t_lo < time <= t_hi, sorted by time (stable)."""
+    require_outlet(result)
+    ev = result.outlet
+    keep = (ev["time"] > t_lo) & (ev["time"] <= t_hi)
+    order = np.argsort(ev["time"][keep], kind="stable")
+    return {name: np.asarray(values)[keep][order] for name, values in ev.items()}
+
+
+def outlet_x(result) -> float:
+    """x of the outlet edge [m]: the table's attribute, else the deck's track_length."""
+    plane = result.outlet_plane or {}
+    x = plane.get("outlet_x", math.nan)
+    if not math.isfinite(x):
+        x = float(result.parameters.get("track_length", math.nan))
+    return x
+
+
+def values_at(result, frames, ids, names) -> dict[str, np.ndarray]:
+    """Per-part fields ``names`` of parts ``ids`` (E,) at ``frames`` (E,).
+
+    Rows where the part is not present at that frame hold NaN (and ``found``
+    says which). Each distinct frame is read once, in blocks of bounded size.
+    """
+    frames = np.asarray(frames, dtype=np.int64)
+    ids = np.asarray(ids, dtype=np.int64)
+    out = {}
+    for name in names:
+        shape = result.read(name, frames=slice(0, 0)).shape[2:]  # per-part components
+        out[name] = np.full((len(ids), *shape), np.nan)
+    found = np.zeros(len(ids), dtype=bool)
+    if len(ids) == 0:
+        out["found"] = found
+        return out
+    unique, inverse = np.unique(frames, return_inverse=True)
+    per_block = max(1, _BLOCK_VALUES // max(3 * result.n_slots, 1))
+    for a in range(0, len(unique), per_block):
+        block = unique[a:a + per_block]
+        row_ids = result.read("id", frames=block)
+        values = {name: result.read(name, frames=block) for name in names}
+        for k in range(len(block)):
+            wanted = np.nonzero(inverse == a + k)[0]
+            sorter = np.argsort(row_ids[k], kind="stable")
+            pos = np.searchsorted(row_ids[k], ids[wanted], sorter=sorter)
+            slot = sorter[np.minimum(pos, len(sorter) - 1)]
+            hit = row_ids[k][slot] == ids[wanted]
+            found[wanted[hit]] = True
+            for name in names:
+                out[name][wanted[hit]] = values[name][k][slot[hit]]
+    out["found"] = found
+    return out
+
+
+# ----------------------------------------------------------------- steady window
+def mser(series, cut_start: bool = True, cut_end: bool = True) -> tuple[int, int]:
+    """(d, e): the MSER cut of a series at its start and at its end.
+
+    Minimises SSD(y[d:n-e]) / (n - d - e)^2 (the variance of the mean of the
+    kept values, as a function of what is cut) over d + e <= n/2: at least
+    half the series is kept, MSER's rule against "truncating" noise at the
+    far end. Both cuts are searched jointly, since a transient left at one end
+    hides the other from a one-sided search.
+    """
+    y = np.asarray(series, dtype=float)
+    n = len(y)
+    if n < 3:
+        return 0, 0
+    yc = y - y.mean()  # the variance is shift-free; centring keeps the sums accurate
+    c1 = np.r_[0.0, np.cumsum(yc)]
+    c2 = np.r_[0.0, np.cumsum(yc ** 2)]
+    d = np.arange(n // 2 + 1)[:, None] if cut_start else np.zeros((1, 1), dtype=int)
+    e = np.arange(n // 2 + 1)[None, :] if cut_end else np.zeros((1, 1), dtype=int)
+    m = n - d - e
+    valid = (d + e) <= n // 2
+    hi = n - e
+    s1 = c1[hi] - c1[d]
+    s2 = c2[hi] - c2[d]
+    stat = np.where(valid, (s2 - s1 ** 2 / np.maximum(m, 1)) / np.maximum(m, 1) ** 2, np.inf)
+    k = np.unravel_index(int(np.argmin(stat)), stat.shape)  # first minimum: the smallest cuts
+    return int(d[k[0], 0]), int(e[0, k[1]])
+
+
+def bin_width(t_lo: float, t_hi: float, freq: float, n_events: int = 0) -> float:
+    """Width [s] of the count bins: whole periods, holding ~``_BIN_EVENTS``
+    events on average (at most ``_MAX_BINS`` bins, at least ``_MIN_BINS``)."""
+    span = t_hi - t_lo
+    n_bins = int(np.clip(n_events // _BIN_EVENTS, _MIN_BINS, _MAX_BINS))
+    if freq > 0:
+        periods = math.floor(span * freq + 1e-9)
+        return max(1, round(periods / n_bins)) / freq if periods >= 1 else span
+    return span / n_bins
+
+
+def steady_window(times, t_lo: float, t_hi: float, freq: float, start: float | None = None,
+                  end: float | None = None) -> tuple[float, float, float, np.ndarray]:
+    """(t_a, t_b, width, counts) of the steady feeding window (module docstring).
+
+    ``counts`` are the events per bin over the whole span, bins of ``width``
+    from ``t_lo``; t_a and t_b fall on bin edges unless ``start``/``end`` are given.
+    """
+    times = np.asarray(times, dtype=float)
+    width = bin_width(t_lo, t_hi, freq, len(times))
+    n = max(1, int(math.floor((t_hi - t_lo) / width + 1e-9)))
+    edges = t_lo + width * np.arange(n + 1)
+    counts = np.histogram(times, bins=edges)[0]
+    # Bins cut at the start (d) and at the end (e): detected unless given.
+    lo = 0 if start is None else int(np.clip(np.searchsorted(edges, start - 1e-12), 0, n))
+    hi = n if end is None else int(np.clip(np.searchsorted(edges, end + 1e-12) - 1, lo, n))
+    d, e = mser(counts[lo:hi], start is None, end is None)
+    d, e = lo + d, n - hi + e
+    t_a = edges[d] if start is None else float(start)
+    t_b = edges[n - e] if end is None else float(end)
+    if t_b <= t_a:
+        raise InputError(f"no steady window: start {t_a:g} s is not before end {t_b:g} s")
+    return float(t_a), float(t_b), float(width), counts
+
+
+def batch_rate(times, weights, t_a: float, t_b: float, freq: float, batches: int):
+    """(rate, error) of weighted events in [t_a, t_b) per second, error by batch means.
+
+    The window is split into ``batches`` contiguous batches of whole periods
+    (lengths differing by at most one period; 1/200 of the window without a
+    frequency); the error is the standard deviation of their rates over
+    sqrt(batches); NaN when the window holds fewer than two periods.
+    """
+    times = np.asarray(times, dtype=float)
+    weights = np.asarray(weights, dtype=float)
+    inside = (times >= t_a) & (times < t_b)
+    rate = float(weights[inside].sum() / (t_b - t_a))
+    units = max(1, int(round((t_b - t_a) * freq))) if freq > 0 else 200
+    b = min(int(batches), units)
+    if b < 2:
+        return rate, math.nan
+    sizes = [len(c) for c in np.array_split(np.arange(units), b)]  # periods per batch, +-1
+    cuts = t_a + (t_b - t_a) * np.r_[0, np.cumsum(sizes)] / units
+    sums = np.histogram(times[inside], bins=cuts, weights=weights[inside])[0]
+    rates = sums / np.diff(cuts)
+    return rate, float(rates.std(ddof=1) / math.sqrt(b))
+
+
+# ----------------------------------------------------------------- conveying speed
+def period_lag(times, freq: float) -> tuple[int, float]:
+    """(m, alias) of the shortest frame lag m spanning a whole number of periods.
+
+    ``alias`` is the lag's distance from whole periods (fraction of a period,
+    0 when one within ``_PERIOD_TOLERANCE`` exists). Without one up to
+    ``_MAX_LAG`` frames, the lag with the smallest alias per period spanned.
+    Uniform frame spacing is assumed (the driver writes every output_every steps).
+    """
+    times = np.asarray(times, dtype=float)
+    if len(times) < 2:
+        return 1, math.nan
+    if not freq > 0:
+        return 1, 0.0
+    dt = float(np.median(np.diff(times)))
+    lags = np.arange(1, min(_MAX_LAG, len(times) - 1) + 1)
+    cycles = lags * dt * freq
+    off = np.abs(cycles - np.round(cycles))
+    whole = np.nonzero((off <= _PERIOD_TOLERANCE) & (np.round(cycles) >= 1))[0]
+    if len(whole):
+        return int(lags[whole[0]]), 0.0
+    k = int(np.argmin(off / np.maximum(cycles, 1e-300)))
+    return int(lags[k]), float(off[k])
+
+
+def period_velocities(result, frames, axis: int = 0, x_max: float = math.inf):
+    """Whole-period speeds of the parts: (x_mid, velocity, interval) arrays.
+
+    ``frames`` are frame indices in increasing order; the intervals chain
+    frames[0], frames[m], frames[2m], ... with m from :func:`period_lag`. One
+    row per part present at both ends of an interval and on the track
+    (x <= x_max in the track's frame) at both: the mid-point along ``axis`` in
+    the track's frame [m], the speed [m/s], and the interval's number.
+    Returns also (m, alias).
+    """
+    frames = np.asarray(frames, dtype=np.int64)
+    freq = float(result.parameters.get("freq", 0.0))
+    m, alias = period_lag(result.time[frames], freq)
+    chain = frames[::m]
+    xs, vs, ks = [], [], []
+    if len(chain) < 2:
+        return np.empty(0), np.empty(0), np.empty(0, dtype=np.int64), (m, alias)
+    per_block = max(2, _BLOCK_VALUES // max(4 * result.n_slots, 1))
+    for a in range(0, len(chain) - 1, per_block - 1):
+        block = chain[a:a + per_block]
+        ids = result.read("id", frames=block)
+        x = result.read("position", frames=block)[..., axis]
+        track_x = x - result.read("surface_position", frames=block)[:, axis][:, None]
+        t = result.time[block]
+        same = (ids[:-1] == ids[1:]) & (ids[:-1] != L.ID_FILL)
+        same &= (track_x[:-1] <= x_max) & (track_x[1:] <= x_max)
+        k, slot = np.nonzero(same)
+        xs.append(0.5 * (track_x[k, slot] + track_x[k + 1, slot]))
+        vs.append((x[k + 1, slot] - x[k, slot]) / (t[k + 1] - t[k]))
+        ks.append(a + k)
+    return np.concatenate(xs), np.concatenate(vs), np.concatenate(ks), (m, alias)
+
+
+def _mean_and_batch_error(values, groups, batches: int) -> tuple[float, float]:
+    """Mean of ``values`` and its batch-means error over contiguous groups
+    (``groups``: the interval number of each value, non-decreasing)."""
+    if len(values) == 0:
+        return math.nan, math.nan
+    mean = float(values.mean())
+    uniq = np.unique(groups)
+    b = min(int(batches), len(uniq))
+    if b < 2:
+        return mean, math.nan
+    first = [part[0] for part in np.array_split(uniq, b)]  # first interval of each batch
+    cuts = np.r_[np.searchsorted(groups, first), len(groups)]
+    means = np.add.reduceat(values, cuts[:-1]) / np.diff(cuts)
+    return mean, float(means.std(ddof=1) / math.sqrt(b))
+
+
+class FeedRate(AnalysisBase):
+    """Parts and mass per second leaving the track, and the conveying speed.
+
+    See the module's docstring for what is measured, the steady window and the
+    uncertainty. Frames (``run(start, stop, step)``) bound the time span: events
+    after the first analysed frame and up to the last count.
+
+    Parameters
+    ----------
+    result:
+        A bulk-feeder :class:`~vibrofeed.results.reader.Result` (with an outlet).
+    start, end:
+        The steady window [s]; default: detected (MSER, module docstring).
+    batches:
+        Number of batches of the batch-means errors (default 10).
+    bins:
+        Number of bins of the velocity profile along the track (default 20),
+        from x = 0 to the outlet edge.
+    axis:
+        Component along the track (0: x).
+
+    Results: ``parts_per_s``, ``parts_per_s_err``, ``mass_per_s``,
+    ``mass_per_s_err`` (1 sigma, batch means); ``steady_from``, ``steady_to``
+    [s], ``bin_width`` [s] and ``counts`` (events per bin from the first
+    frame); ``event_times`` (sorted) and ``n_events``; ``mean_velocity``,
+    ``mean_velocity_err`` [m/s] over the steady window, ``velocity_lag``
+    (frames per whole-period interval) and ``velocity_alias`` (its distance
+    from whole periods, in periods); ``profile_edges``, ``profile_x``,
+    ``profile_velocity``, ``profile_count``; the mass balance at the last frame
+    analysed: ``inserted``, ``on_track``, ``exited``, ``lost`` (None without one).
+
+    >>> fr = FeedRate(result).run()
+    >>> fr.results.parts_per_s, fr.results.parts_per_s_err, fr.results.steady_from
+    """
+
+    def __init__(self, result, start: float | None = None, end: float | None = None,
+                 batches: int = 10, bins: int = 20, axis: int = 0):
+        super().__init__(result)
+        require_outlet(result)
+        if batches < 2:
+            raise InputError(f"batches must be at least 2, not {batches}")
+        if bins < 1:
+            raise InputError(f"bins must be at least 1, not {bins}")
+        self.start, self.end, self.batches, self.bins, self.axis = start, end, batches, bins, axis
+
+    def _compute(self, frames: np.ndarray) -> None:
+        if len(frames) < 2:
+            raise InputError("feed rate: at least two frames are needed")
+        r = self.results
+        result = self.result
+        t_lo, t_hi = float(self.times[0]), float(self.times[-1])
+        freq = float(result.parameters.get("freq", 0.0))
+        ev = outlet_events(result, t_lo, t_hi)
+        times = ev["time"]
+        r.event_times, r.n_events = times, len(times)
+        t_a, t_b, width, counts = steady_window(times, t_lo, t_hi, freq, self.start, self.end)
+        r.steady_from, r.steady_to, r.bin_width, r.counts = t_a, t_b, width, counts
+        r.parts_per_s, r.parts_per_s_err = batch_rate(times, np.ones(len(times)), t_a, t_b, freq,
+                                                      self.batches)
+        # Each event's mass: the part at the first frame at or after its crossing
+        # (the frame that reported it), else the frame before.
+        after = np.minimum(np.searchsorted(result.time, times, side="left"), result.n_frames - 1)
+        mass = values_at(result, after, ev["id"], ["mass"])
+        missing = ~mass["found"]
+        if missing.any():
+            before = values_at(result, np.maximum(after[missing] - 1, 0), ev["id"][missing], ["mass"])
+            mass["mass"][missing] = before["mass"]
+        r.event_mass = mass["mass"]
+        if np.isnan(r.event_mass).any():
+            r.mass_per_s, r.mass_per_s_err = math.nan, math.nan
+        else:
+            r.mass_per_s, r.mass_per_s_err = batch_rate(times, r.event_mass, t_a, t_b, freq,
+                                                        self.batches)
+        self._velocities(frames, t_a, t_b)
+        self._mass_balance(frames)
+
+    def _velocities(self, frames: np.ndarray, t_a: float, t_b: float) -> None:
+        r = self.results
+        edge = outlet_x(self.result)
+        window = frames[(self.times >= t_a - 1e-12) & (self.times <= t_b + 1e-12)]
+        x_mid, v, interval, (m, alias) = period_velocities(self.result, window, self.axis,
+                                                           edge if math.isfinite(edge) else math.inf)
+        r.velocity_lag, r.velocity_alias = m, alias
+        r.mean_velocity, r.mean_velocity_err = _mean_and_batch_error(v, interval, self.batches)
+        hi = edge if math.isfinite(edge) else (float(x_mid.max()) if len(x_mid) else 1.0)
+        lo = min(0.0, float(x_mid.min())) if len(x_mid) else 0.0
+        edges = np.linspace(lo, hi, self.bins + 1)
+        which = np.clip(np.searchsorted(edges, x_mid, side="right") - 1, 0, self.bins - 1)
+        count = np.bincount(which, minlength=self.bins)
+        total = np.bincount(which, weights=v, minlength=self.bins)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            r.profile_velocity = np.where(count > 0, total / np.maximum(count, 1), np.nan)
+        r.profile_edges, r.profile_x, r.profile_count = edges, 0.5 * (edges[1:] + edges[:-1]), count
+
+    def _mass_balance(self, frames: np.ndarray) -> None:
+        balance = self.result.mass_balance
+        last = int(frames[-1])
+        for name in L.MASS_BALANCE_COUNTS:
+            value = None if balance is None or name not in balance else int(balance[name][last])
+            self.results[name] = value
+
+    # -- views ----------------------------------------------------------------------
+    def summary(self) -> dict:
+        """The command's figures (JSON-ready)."""
+        return self.as_dict([k for k in SUMMARY_KEYS if k in self.results])
+
+    def plot(self, folder) -> list:
+        """Cumulative exits with the steady window and the fitted rate, and the
+        velocity profile along the track: two PNGs in ``folder``; their paths."""
+        plt = pyplot()
+        r = self.results
+        out = []
+        fig, ax = plt.subplots(figsize=(7, 4), layout="constrained")
+        t = np.concatenate([[self.times[0]], r.event_times])
+        n = np.arange(len(t))
+        ax.step(t, n, where="post", color="tab:blue", lw=1.2, label="exits")
+        ax.axvspan(r.steady_from, r.steady_to, color="tab:green", alpha=0.12, label="steady window")
+        n_a = np.searchsorted(r.event_times, r.steady_from, side="left")
+        tt = np.array([r.steady_from, r.steady_to])
+        ax.plot(tt, n_a + r.parts_per_s * (tt - r.steady_from), "k--", lw=1.0,
+                label=f"{r.parts_per_s:.4g} ± {r.parts_per_s_err:.2g} parts/s")
+        ax.set_xlabel("time [s]")
+        ax.set_ylabel("parts exited")
+        ax.legend(loc="upper left", fontsize=8)
+        out.append(save(fig, folder, "feedrate_cumulative.png"))
+
+        fig, ax = plt.subplots(figsize=(7, 4), layout="constrained")
+        ax.plot(r.profile_x * 1e3, r.profile_velocity * 1e3, "o-", color="tab:red", ms=3,
+                label="whole-period displacement")
+        ax.axhline(r.mean_velocity * 1e3, color="k", ls="--", lw=1.0,
+                   label=f"mean {r.mean_velocity * 1e3:.3g} mm/s")
+        ax.set_xlabel("position along the track x [mm]")
+        ax.set_ylabel("conveying velocity [mm/s]")
+        ax.legend(fontsize=8)
+        out.append(save(fig, folder, "feedrate_velocity_profile.png"))
+        return out

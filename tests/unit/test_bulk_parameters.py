@@ -1,0 +1,153 @@
+"""The bulk feeder's parameters: the one-line refusals, named shapes, and the deck's own
+derived formulas (sjkr cohesion from the surface energy, timestep, outlet and box floor),
+evaluated from decks/bulk_feeder.liggghts as LIGGGHTS would."""
+
+import math
+import re
+
+import numpy as np
+import pytest
+
+from vibrofeed.decks import Deck
+from vibrofeed.errors import ParameterError
+from vibrofeed.geometry import chip_template, disc_template
+from vibrofeed.parameters import resolve
+
+DECK = Deck.find("bulk_feeder")
+_FUNCTIONS = {"sqrt": math.sqrt, "abs": abs, "ceil": math.ceil, "floor": math.floor,
+              "round": round, "sin": math.sin, "cos": math.cos, "pi": math.pi}
+
+
+def derived(**given):
+    """The deck's equal-style constants for parameters ``given``, evaluated in Python
+    (LIGGGHTS' ^ as **), with what its ``if`` lines and prepared.in set."""
+    values = {k: float(v) for k, v in resolve(DECK, {k: str(v) for k, v in given.items()}).items()
+              if k in DECK.variables and DECK.variables[k].is_numeric}
+    shape = int(values["shape"])
+    size, thick = values["part_size"], values["part_thickness"]
+    env = dict(values)
+    clumps = {1: chip_template, 2: disc_template}
+    env["body_spheres"] = len(clumps[shape](size, thick)) if shape else 1
+    if env["youngs_track"] <= 0:
+        env["youngs_track"] = env["youngs"] * 70 / 130
+    cache = {}
+
+    def value(name):
+        if name in env:
+            return env[name]
+        if name not in cache:
+            formula = DECK.formulas[name].replace("^", "**").replace("PI", "pi")
+            formula = re.sub(r"\bv_(\w+)", r"V('\1')", formula)
+            cache[name] = float(eval(formula, {"V": value, **_FUNCTIONS}))
+        return cache[name]
+
+    return value
+
+
+def sjkr_pulloff(k, r_star, e_star):
+    """The largest tension of Hertz + sjkr, F = 4/3 E* sqrt(R*) d^1.5 - k 2 pi R* d, over the
+    overlap d (sjkr's contact area 2 pi R* d), found numerically."""
+    d_min = (math.pi * k * math.sqrt(r_star) / e_star) ** 2  # the minimum, for the grid's scale
+    d = np.linspace(0, 4 * d_min, 400_001)
+    force = 4 / 3 * e_star * math.sqrt(r_star) * d**1.5 - 2 * math.pi * k * r_star * d
+    return -force.min()
+
+
+@pytest.mark.parametrize("youngs", ["5e7", "1e9", "1.3e11"])
+@pytest.mark.parametrize("shape", ["sphere", "chip"])
+def test_sjkr_energy_density_gives_the_jkr_pulloff(youngs, shape):
+    v = derived(youngs=youngs, shape=shape, surface_energy=0.05, surface_energy_pp=0.02)
+    for pair, gamma in (("pp", 0.02), ("pw", 0.05)):
+        k, rs, es = v(f"k_{pair}"), v(f"Rs_{pair}"), v(f"E_star_{pair}")
+        jkr = 1.5 * math.pi * gamma * rs
+        assert v(f"pulloff_{pair}") == pytest.approx(jkr)
+        # the closed form of the measured relation, and the force law's minimum itself
+        assert 2 / 3 * math.pi**3 * k**3 * rs**2 / es**2 == pytest.approx(jkr, rel=1e-12)
+        assert sjkr_pulloff(k, rs, es) == pytest.approx(jkr, rel=1e-6)
+    # R*: the contact sphere (the part, or one sphere of a clump), halved between two parts
+    r = 1.5e-4 if shape == "sphere" else 0.75e-4
+    assert (v("Rs_pp"), v("Rs_pw")) == pytest.approx((r / 2, r))
+
+
+def test_track_material_follows_the_parts_softening():
+    v = derived(youngs="5e7")
+    assert v("E_track") == pytest.approx(5e7 * 70 / 130)
+    e = 1 / ((1 - 0.28**2) / 5e7 + (1 - 0.33**2) / (5e7 * 70 / 130))
+    assert v("E_star_pw") == pytest.approx(e)
+    assert derived(youngs_track="2e8")("E_track") == pytest.approx(2e8)
+    assert derived()("k_pp") == 0 and derived()("k_pw") == 0  # no cohesion by default
+
+
+def test_timestep_from_the_hertz_time_with_both_fractions():
+    v = derived()
+    assert v("t_hertz") == pytest.approx(min(v("t_hertz_pp"), v("t_hertz_pw")), rel=1e-12)
+    steps = v("output_dt") / v("dt_used")
+    assert steps == pytest.approx(round(steps), rel=1e-9)  # whole steps per frame
+    assert 1 / 50 * (1 - 1 / steps) <= v("dt_hertz_fraction") <= 1 / 50
+    assert v("dt_rayleigh_fraction") == pytest.approx(v("dt_used") / v("t_rayleigh"))
+    assert v("dt_rayleigh_fraction") < 0.2  # LIGGGHTS' check/timestep/gran warns beyond 0.2
+    # a size spread: the smallest sphere sets the contact time
+    assert derived(size_spread=0.2)("t_hertz") == pytest.approx(0.8 * v("t_hertz"), rel=1e-9)
+
+
+@pytest.mark.parametrize("given", [{}, {"shape": "chip"}, {"amp_n": "2e-4", "output_dt": "0.02"},
+                                   {"incline": "10"}])
+def test_outlet_catch_plane_and_box_floor(given):
+    v = derived(**given)
+    assert v("outlet_x") == v("track_length")
+    # below catch_z a part's top is under the lowest floor position (-amp_n), with room to spare
+    assert v("catch_z") + v("r_ext") < -v("amp_n")
+    # the contract's floor rule
+    odt, g = v("output_dt"), v("g")
+    fall = v("v_max") * odt + g / 2 * odt**2 + 2 * v("part_size")
+    assert v("fall_depth") == pytest.approx(fall)
+    assert v("box_zlo") <= v("catch_z") - fall * (1 - 1e-12)
+    assert v("v_max") >= 2 * v("v_peak") + math.sqrt(2 * g * (v("box_zhi") - v("catch_z")))
+    assert v("box_xhi") > v("outlet_x") + v("catch_size")
+
+
+@pytest.mark.parametrize("given, fragment", [
+    ({"n_parts": "0", "inlet_rate": "0"}, "n_parts=0 and inlet_rate=0"),
+    ({"shape": "chip", "part_thickness": "4e-4"}, "part_thickness=0.0004"),
+    ({"track_width": "2e-4"}, "track_width=0.0002 m is narrower than a part"),
+    ({"size_spread": "0.5", "track_width": "4e-4"}, "track_width=0.0004 m is narrower"),
+    ({"gate_width": "1e-4"}, "gate_width=0.0001 m is narrower than a part"),
+    ({"gate_width": "2e-3"}, "gate_width=0.002 m must be narrower than track_width"),
+    ({"gate_width": "8e-4", "gate_at": "0.99", "fill_to": "0.5"}, "gate_at=0.99"),
+    ({"gate_width": "8e-4"}, "fill_to=0.9 reaches into the gate"),
+    ({"fill_from": "0.5", "fill_to": "0.5"}, "fill_from=0.5 must be below fill_to"),
+    ({"shape": "disc", "size_spread": "0.1"}, "size_spread=0.1 applies to spheres only"),
+    ({"wall_height": "1e-4"}, "wall_height=0.0001 m is no higher than a part's centre"),
+    ({"n_parts": "5000"}, "n_parts=5000 settle"),
+    ({"shape": "cube"}, "shape='cube' must be one of sphere (0), chip (1), disc (2)"),
+    ({"shape": "3"}, "shape=3 must be one of 0, 1, 2"),
+    ({"size_spread": "1"}, "size_spread=1"),
+    ({"youngs_track": "1e6"}, "youngs_track=1e6"),
+    ({"restitution_pp": "0.01"}, "restitution_pp=0.01"),
+    ({"surface_energy": "-0.1"}, "surface_energy=-0.1"),
+    ({"n_parts": "10.5"}, "n_parts=10.5"),
+    ({"mesh_dir": "x"}, "set by vibrofeed itself"),
+])
+def test_bad_bulk_parameters_are_refused_in_one_line(given, fragment):
+    with pytest.raises(ParameterError) as info:
+        resolve(DECK, given)
+    assert fragment in str(info.value)
+    assert "\n" not in str(info.value)
+
+
+def test_valid_combinations_resolve():
+    assert resolve(DECK, {"shape": "chip"})["shape"] == "1"
+    assert resolve(DECK, {"shape": "Disc", "part_thickness": "1e-4"})["shape"] == "2"
+    resolve(DECK, {"n_parts": "0", "inlet_rate": "200"})
+    resolve(DECK, {"gate_width": "8e-4", "fill_to": "0.6"})
+    resolve(DECK, {"size_spread": "0.2", "youngs_track": "0"})
+
+
+def test_deck_declares_its_prepare_hook_and_generated_include():
+    assert DECK.prepare_target == "vibrofeed.geometry:prepare_bulk_feeder"
+    assert DECK.generated == ["${mesh_dir}/prepared.in"]
+    assert "mesh_dir" not in DECK.tunables and "outlet_file" not in DECK.tunables
+    for name in ("outlet_x", "catch_z", "body_spheres", "k_pp", "k_pw", "pulloff_pp", "pulloff_pw",
+                 "dt_hertz_fraction", "dt_rayleigh_fraction", "fall_depth", "n_prefilled"):
+        assert name in DECK.constants, name
+    assert "parts_present" not in DECK.constants  # follows `atoms`

@@ -1,0 +1,211 @@
+"""Feed rate on synthetic bulk-feeder results whose answers are known by construction
+(tests/bulk_synthetic.py: parts entering at the inlet, leaving over the edge at given times)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from bulk_synthetic import OUTLET_X, feeder, poisson_times
+from helpers import parts, write_result
+from vibrofeed.errors import InputError
+from vibrofeed.postproc import FeedRate
+from vibrofeed.postproc.feedrate import mser, period_lag, steady_window
+from vibrofeed.results.reader import Result
+
+FREQ = 100.0
+FRAMES = np.arange(0, 1.0 + 1e-9, 0.01)  # one frame per period
+
+
+def open_feeder(tmp_path, exit_times, name="feed.h5", frames=FRAMES, **kw):
+    return Result(feeder(tmp_path / name, frames, exit_times, freq=FREQ, **kw))
+
+
+# -- steady window and rate ----------------------------------------------------------
+def test_periodic_exits_after_a_start_up_give_the_rate_and_the_start(tmp_path):
+    rate, t0 = 250.0, 0.213  # no exit before t0 (the front travels to the edge), then steady
+    exits = t0 + np.arange(400) / rate
+    with open_feeder(tmp_path, exits, amp=4e-5) as r:
+        fr = FeedRate(r).run().results
+    width = fr.bin_width
+    assert width * FREQ == pytest.approx(round(width * FREQ))        # bins of whole periods
+    assert t0 - width <= fr.steady_from <= t0 + 2 * width
+    assert fr.steady_to == pytest.approx(1.0)                         # no run-out: to the end
+    n_in = ((exits >= fr.steady_from) & (exits < fr.steady_to)).sum()
+    assert fr.parts_per_s == pytest.approx(n_in / (fr.steady_to - fr.steady_from), rel=1e-12)
+    assert abs(fr.parts_per_s - rate) <= 1.0 / (fr.steady_to - fr.steady_from) + 1e-9
+    assert 0 <= fr.parts_per_s_err < 0.02 * rate      # periodic: batches agree to one part
+    assert fr.n_events == (exits <= 1.0).sum()
+    assert np.all(np.diff(fr.event_times) >= 0)
+
+
+def test_the_run_out_of_the_fill_ends_the_window(tmp_path):
+    rate, t0, t_out = 300.0, 0.15, 0.7  # the pre-fill is exhausted at t_out
+    exits = t0 + np.arange(int((t_out - t0) * rate)) / rate
+    with open_feeder(tmp_path, exits) as r:
+        fr = FeedRate(r).run().results
+        forced = FeedRate(r, start=0.3, end=0.6).run().results
+    w = fr.bin_width
+    assert t0 - w <= fr.steady_from <= t0 + 2 * w
+    assert t_out - 2 * w <= fr.steady_to <= t_out + w
+    assert fr.parts_per_s == pytest.approx(rate, rel=0.03)
+    # a given window is used as it is
+    assert (forced.steady_from, forced.steady_to) == (0.3, 0.6)
+    assert forced.parts_per_s == pytest.approx(rate, abs=1 / 0.3)
+
+
+def test_the_error_bar_covers_poisson_feeding_in_most_seeds(tmp_path):
+    rate, t0, seeds = 300.0, 0.2, 16
+    covered, ratio, starts = 0, [], []
+    for seed in range(seeds):
+        exits = poisson_times(rate, t0, 1.0, np.random.default_rng(seed))
+        with open_feeder(tmp_path, exits, name=f"p{seed}.h5") as r:
+            fr = FeedRate(r).run().results
+        covered += abs(fr.parts_per_s - rate) <= 2 * fr.parts_per_s_err
+        # Poisson's own standard error over the window
+        span = fr.steady_to - fr.steady_from
+        ratio.append(fr.parts_per_s_err / (math.sqrt(rate * span) / span))
+        starts.append(fr.steady_from)
+    print(f"2-sigma coverage {covered}/{seeds}, error / Poisson's {np.median(ratio):.2f}")
+    assert covered >= 0.65 * seeds                   # ~90 % expected (10 batches, 2 sigma)
+    assert 0.6 < np.median(ratio) < 1.4              # not an inflated (useless) error bar
+    assert min(starts) >= t0 - 0.05                  # the start-up is never counted
+    assert np.median(starts) <= t0 + 0.05
+
+
+def test_mser_cuts_transients_at_either_end():
+    rng = np.random.default_rng(2)
+    steady = rng.poisson(12, 80)
+    assert mser(np.r_[np.zeros(15), steady]) == (15, 0)
+    d, e = mser(np.r_[np.zeros(10), steady, np.zeros(12)])
+    assert (d, e) == (10, 12)
+    # a steady series keeps (nearly) everything
+    d, e = mser(steady)
+    assert d + e <= 8
+    # never cuts more than half
+    d, e = mser(np.r_[np.zeros(60), steady[:40]])
+    assert d + e <= 50
+    assert mser([1.0, 2.0]) == (0, 0)
+
+
+def test_steady_window_without_exits_is_the_whole_run():
+    t_a, t_b, width, counts = steady_window(np.empty(0), 0.0, 1.0, FREQ)
+    assert (t_a, t_b) == (0.0, 1.0) and counts.sum() == 0
+    with pytest.raises(InputError, match="no steady window"):
+        steady_window(np.empty(0), 0.0, 1.0, FREQ, start=0.6, end=0.5)
+
+
+def test_mass_per_second_weighs_each_part(tmp_path):
+    rate, t0 = 200.0, 0.1
+    exits = t0 + np.arange(300) / rate
+    masses = np.where(np.arange(300) % 2, 3e-7, 1e-7)  # alternating: mean 2e-7 kg
+    with open_feeder(tmp_path, exits, mass=masses) as r:
+        fr = FeedRate(r).run().results
+    inside = (exits >= fr.steady_from) & (exits < fr.steady_to)
+    assert fr.mass_per_s == pytest.approx(masses[inside].sum() / (fr.steady_to - fr.steady_from),
+                                          rel=1e-12)
+    assert fr.mass_per_s == pytest.approx(2e-7 * fr.parts_per_s, rel=0.02)
+    assert np.allclose(fr.event_mass, masses[exits <= 1.0])
+
+
+def test_mass_balance_is_read_at_the_last_frame_analysed(tmp_path):
+    exits = 0.1 + np.arange(200) / 200.0
+    with open_feeder(tmp_path, exits) as r:
+        fr = FeedRate(r).run().results
+        half = FeedRate(r).run(stop=51).results  # frames 0..50: t <= 0.5 s
+    # every part is on the track from the start (the schedule reaches back beyond t = 0)
+    in_at = lambda t: int(((OUTLET_X - 0.02 * (exits - t)) >= 0).sum() + 0)  # noqa: E731
+    assert fr.exited == (exits <= 1.0).sum() and fr.lost == 0
+    assert fr.inserted == int(((OUTLET_X - 0.02 * (exits - 1.0) >= 0) | (exits <= 1.0)).sum())
+    assert fr.on_track == fr.inserted - fr.exited
+    assert half.exited == (exits <= 0.5).sum() and half.n_events == half.exited
+    assert half.inserted == in_at(0.5)
+
+
+# -- conveying velocity ----------------------------------------------------------------
+@pytest.mark.parametrize("spacing, lag", [(0.01, 1), (0.005, 2), (0.013, 10)])
+def test_mean_velocity_over_whole_periods_whatever_the_frame_spacing(tmp_path, spacing, lag):
+    # 0.013 s frames alias the 10 ms period: only 10 frames (13 periods) apart cancel it
+    frames = np.arange(0, 1.0 + 1e-9, spacing)
+    v, amp = 0.02, 5e-5
+    exits = 0.05 + np.arange(150) / 150.0
+    with open_feeder(tmp_path, exits, frames=frames, speed=v, amp=amp) as r:
+        fr = FeedRate(r).run().results
+    assert fr.velocity_lag == lag and fr.velocity_alias == 0.0
+    assert fr.mean_velocity == pytest.approx(v, rel=1e-9)  # parts falling off (2 v) left out
+    assert fr.mean_velocity_err < 1e-9
+    if lag == 10:  # one frame apart, the track's oscillation would not cancel
+        naive = amp * (np.sin(2 * np.pi * FREQ * (frames[1:] - 0)) - np.sin(2 * np.pi * FREQ * frames[:-1]))
+        assert np.abs(naive / spacing).max() > 0.1 * v
+
+
+def test_velocity_profile_of_parts_at_known_speeds(tmp_path):
+    # Parts sit in the profile's bins (1 mm wide), 20 um past a bin's start, and move
+    # at their bin's speeds, slowly enough to stay inside over the run; nobody leaves.
+    # The track swings them 50 um either way: bins are in the track's frame.
+    rng = np.random.default_rng(5)
+    bins = 20
+    edges = np.linspace(0, OUTLET_X, bins + 1)
+    which = np.repeat(np.arange(bins), 3)
+    speeds = rng.uniform(1e-4, 6e-4, len(which))
+    x0 = edges[which] + 2e-5
+    exits = (OUTLET_X - x0) / speeds          # when they would reach the edge: after the run
+    assert exits.min() > 1.0
+    lanes = np.tile([0.0, 1e-3, 2e-3], bins)  # side by side, not in each other's way
+    # aliasing spacing, from three quarters of a period: the track is 50 um back at
+    # every whole-period frame
+    frames = 0.0075 + np.arange(0, 0.6, 0.013)
+    with open_feeder(tmp_path, exits, frames=frames, speed=speeds, amp=5e-5, lanes=lanes) as r:
+        assert r.surface_position[::10, 0] == pytest.approx(-5e-5)
+        fr = FeedRate(r, bins=bins).run().results
+    expected = np.array([speeds[which == b].mean() for b in range(bins)])
+    assert fr.profile_edges == pytest.approx(edges)
+    assert fr.profile_velocity == pytest.approx(expected, rel=1e-9)
+    chain = len(frames[::10]) - 1
+    assert fr.profile_count.tolist() == [3 * chain] * bins
+    assert fr.mean_velocity == pytest.approx(speeds.mean(), rel=1e-9)
+    assert fr.n_events == 0 and fr.parts_per_s == 0.0
+
+
+def test_period_lag_finds_whole_periods_or_the_least_alias():
+    assert period_lag(np.arange(50) * 0.01, 100.0) == (1, 0.0)
+    assert period_lag(np.arange(50) * 0.0025, 100.0) == (4, 0.0)
+    assert period_lag(np.arange(50) * 0.013, 100.0) == (10, 0.0)
+    assert period_lag(np.arange(50) * 0.01, 0.0) == (1, 0.0)  # no vibration
+    # irrational spacing: never whole; the smallest alias per period spanned
+    m, alias = period_lag(np.arange(2000) * 0.01 * math.sqrt(2), 100.0)
+    assert 0 < alias < 1e-2 and m > 1
+
+
+# -- windows, not whole datasets ---------------------------------------------------------
+def test_many_parts_are_read_by_windows(tmp_path, monkeypatch):
+    rng = np.random.default_rng(11)
+    exits = np.sort(rng.uniform(0.05, 3.0, 3000))   # ~1000 parts/s; later ones still on the track
+    frames = np.arange(0, 1.0 + 1e-9, 0.01)
+    path = feeder(tmp_path / "many.h5", frames, exits, speed=0.05, freq=FREQ, amp=3e-5)
+    reads = []
+    original = Result.read
+
+    def spy(self, name, frames=None, slots=None):
+        reads.append((name, frames))
+        return original(self, name, frames, slots)
+
+    monkeypatch.setattr(Result, "read", spy)
+    with Result(path) as r:
+        fr = FeedRate(r).run().results
+        assert not {"ids", "position", "mass"} & set(vars(r))   # no whole array kept
+    assert all(f is not None for name, f in reads if name in ("id", "position", "mass"))
+    assert fr.mean_velocity == pytest.approx(0.05, rel=1e-9)
+    assert fr.parts_per_s == pytest.approx(1000, rel=0.15)
+
+
+def test_a_result_without_an_outlet_is_refused(tmp_path):
+    path = write_result(tmp_path / "one.h5", [(k, k * 0.01, parts([1], [[0, 0, 0]])) for k in range(5)])
+    with Result(path) as r:
+        with pytest.raises(InputError, match="no outlet data"):
+            FeedRate(r).run()
+    with open_feeder(tmp_path, [0.5]) as r:
+        with pytest.raises(InputError, match="batches"):
+            FeedRate(r, batches=1)
+        with pytest.raises(InputError, match="two frames"):
+            FeedRate(r).run(stop=1)

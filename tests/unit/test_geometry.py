@@ -1,0 +1,180 @@
+"""The bulk feeder's geometry (vibrofeed.geometry): the track mesh is one connected
+surface open only at the outlet and along the wall tops, has the asked dimensions and gate,
+and the clump templates have the part's outline and thickness."""
+
+import json
+from collections import Counter
+
+import numpy as np
+import pytest
+
+from vibrofeed.errors import ParameterError
+from vibrofeed.geometry import (
+    CLUMP_SPACING,
+    Prepared,
+    catch_face,
+    chip_template,
+    disc_template,
+    insertion_seeds,
+    prepare_bulk_feeder,
+    shape_code,
+    track_mesh,
+    write_stl,
+)
+
+L, W, H = 0.02, 2e-3, 1e-3
+
+
+def edge_counts(triangles):
+    """How many triangles hold each (sorted) edge."""
+    edges = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
+    return Counter(map(tuple, np.sort(edges, axis=1)))
+
+
+def open_edges(vertices, triangles):
+    return [vertices[list(e)] for e, n in edge_counts(triangles).items() if n == 1]
+
+
+@pytest.mark.parametrize("gate", [0.0, 8e-4])
+def test_track_dimensions(gate):
+    v, t = track_mesh(L, W, H, gate_width=gate, gate_x=0.7 * L)
+    assert v.dtype == np.float64 and t.dtype == np.int32 and v.shape[1] == t.shape[1] == 3
+    assert np.allclose(v.min(axis=0), [0, -W / 2, 0]) and np.allclose(v.max(axis=0), [L, W / 2, H])
+    floor = v[np.isclose(v[:, 2], 0)]
+    assert np.isclose(floor[:, 0].max(), L)  # the floor reaches the outlet edge
+
+
+@pytest.mark.parametrize("gate", [0.0, 8e-4])
+def test_floor_and_walls_share_whole_edges(gate):
+    v, t = track_mesh(L, W, H, gate_width=gate, gate_x=0.7 * L)
+    counts = edge_counts(t)
+    assert set(counts.values()) <= {1, 2}  # no edge of three faces, none doubled
+    # no T-junction: no vertex lies inside an edge it is not an end of
+    for (a, b) in counts:
+        d = v[b] - v[a]
+        rel = (v - v[a]) @ d / (d @ d)
+        off = np.linalg.norm(v - v[a] - np.outer(rel, d), axis=1)
+        assert not np.any((rel > 1e-9) & (rel < 1 - 1e-9) & (off < 1e-12))
+    # open edges: the outlet (floor edge and the walls' ends at x = L) and the wall tops
+    for p, q in open_edges(v, t):
+        at_outlet = np.isclose(p[0], L) and np.isclose(q[0], L)
+        on_top = np.isclose(p[2], H) and np.isclose(q[2], H)
+        assert at_outlet or on_top, (p, q)
+    outlet = [e for e in open_edges(v, t) if np.isclose(e[0][2], 0) and np.isclose(e[1][2], 0)]
+    assert len(outlet) == 1 and np.allclose(outlet[0][:, 0], L)  # the floor's one open edge
+
+
+def test_track_is_consistently_wound_with_normals_into_the_track():
+    trimesh = pytest.importorskip("trimesh")
+    v, t = track_mesh(L, W, H)
+    m = trimesh.Trimesh(v, t, process=False)
+    assert m.is_winding_consistent
+    centre = m.triangles_center
+    n = m.face_normals
+    floor = np.isclose(centre[:, 2], 0)
+    assert np.allclose(n[floor], [0, 0, 1])
+    back = np.isclose(centre[:, 0], 0) & ~floor
+    assert np.allclose(n[back], [1, 0, 0])
+    side = ~floor & ~back
+    assert np.all(n[side, 1] * centre[side, 1] < 0)  # the side walls face the centre line
+
+
+def test_gate_width_and_taper():
+    gate, gate_x = 6e-4, 0.7 * L
+    v, t = track_mesh(L, W, H, gate_width=gate, gate_x=gate_x)
+    at = lambda x: np.abs(v[np.isclose(v[:, 0], x) & np.isclose(v[:, 2], 0), 1]).max()  # noqa: E731
+    assert np.isclose(at(L), gate / 2)
+    assert np.isclose(at(gate_x), W / 2)
+    taper_end = gate_x + (W - gate) / 2  # 45 degrees
+    assert np.isclose(at(taper_end), gate / 2)
+    # no gate when it is as wide as the track
+    v0, _ = track_mesh(L, W, H, gate_width=W)
+    assert np.allclose(np.abs(v0[:, 1]), W / 2)
+
+
+def test_a_gate_that_does_not_fit_is_refused():
+    with pytest.raises(ParameterError, match="gate"):
+        track_mesh(L, W, H, gate_width=2e-4, gate_x=L - 1e-4)
+
+
+def test_catch_face_is_a_unit_rectangle_facing_down(tmp_path):
+    v, t = catch_face()
+    assert np.allclose(v.min(axis=0), [0, -0.5, 0]) and np.allclose(v.max(axis=0), [1, 0.5, 0])
+    normals = np.cross(v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]])
+    assert np.all(normals[:, 2] < 0)
+
+
+def test_stl_round_trip(tmp_path):
+    from stl import mesh as stl_mesh
+
+    v, t = track_mesh(L, W, H, gate_width=8e-4)
+    path = write_stl(v, t, tmp_path / "track.stl")
+    m = stl_mesh.Mesh.from_file(str(path))
+    assert np.allclose(m.vectors, v[t], atol=1e-9)
+    expected = np.cross(v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]])
+    assert np.all(np.einsum("ij,ij->i", m.normals, expected) > 0)
+
+
+@pytest.mark.parametrize("edge, thickness, n", [(3e-4, 1.5e-4, 9), (3e-4, 1e-4, 16), (1e-3, 1e-4, 169)])
+def test_chip_outline_is_the_die(edge, thickness, n):
+    rows = chip_template(edge, thickness)
+    assert rows.shape == (n, 4)
+    x, y, z, r = rows.T
+    assert np.allclose(r, thickness / 2)
+    assert np.isclose((x - r).min(), -edge / 2) and np.isclose((x + r).max(), edge / 2)
+    assert np.isclose((y - r).min(), -edge / 2) and np.isclose((y + r).max(), edge / 2)
+    assert np.isclose((z + r).max() - (z - r).min(), thickness)  # the die's thickness
+    assert np.allclose(rows[:, :3].mean(axis=0), 0, atol=1e-18)  # centred: body frame
+    spacing = np.diff(np.unique(np.round(x, 15)))
+    assert np.allclose(spacing, spacing[0]) and spacing[0] <= CLUMP_SPACING * thickness + 1e-15
+
+
+def test_disc_outline_and_thickness():
+    d, t = 5e-4, 1e-4
+    rows = disc_template(d, t)
+    x, y, z, r = rows.T
+    rho = np.hypot(x, y)
+    assert np.isclose((rho + r).max(), d / 2)
+    assert np.allclose(z, 0) and np.allclose(r, t / 2)
+    assert np.allclose(rows[:, :3].mean(axis=0), 0, atol=1e-18)
+    # neighbours on the outer ring are no further apart than the spacing rule
+    outer = np.sort(np.arctan2(y, x)[np.isclose(rho, rho.max())])
+    chord = 2 * rho.max() * np.sin(np.diff(outer).max() / 2)
+    assert chord <= CLUMP_SPACING * t + 1e-12
+
+
+def test_shape_codes():
+    assert [shape_code(s) for s in ("sphere", "chip", "disc", "0", "1", "2.0")] == [0, 1, 2, 0, 1, 2]
+    with pytest.raises(ParameterError, match="shape"):
+        shape_code("cube")
+
+
+def test_insertion_seeds_are_distinct_primes_liggghts_accepts():
+    for seed in (1, 5489, 199_999, 10**9):
+        seeds = insertion_seeds(seed, 6)
+        assert len(set(seeds)) == 6
+        assert all(10_000 < p < 2**31 for p in seeds)
+        assert all(all(p % d for d in range(2, int(p**0.5) + 1)) for p in seeds)
+    assert insertion_seeds(1, 6) != insertion_seeds(2, 6)
+
+
+VALUES = {"track_length": "0.02", "track_width": "0.002", "wall_height": "0.001",
+          "gate_width": "0", "gate_at": "0.7", "part_size": "3e-4", "part_thickness": "1.5e-4",
+          "shape": "1", "seed": "5489"}
+
+
+def test_prepare_writes_the_files_and_describes_them(tmp_path):
+    p = prepare_bulk_feeder(VALUES, tmp_path / "m")
+    assert isinstance(p, Prepared)
+    names = sorted(f.name for f in (tmp_path / "m").iterdir())
+    assert names == ["catch.stl", "chip.multisphere", "disc.multisphere", "prepared.in", "track.stl"]
+    assert p.variables == {"mesh_dir": str((tmp_path / "m").resolve())}
+    text = (tmp_path / "m" / "prepared.in").read_text()
+    assert "variable n_sph_chip equal 9" in text and "variable seed_6 equal" in text
+    assert np.allclose(p.body_template, chip_template(3e-4, 1.5e-4))
+    assert np.allclose(np.loadtxt(tmp_path / "m" / "chip.multisphere"), p.body_template)
+    spec = json.loads(json.dumps(p.to_spec()))  # what the runner hands the worker
+    assert np.allclose(np.array(spec["track"][0]), p.track[0])
+    assert spec["variables"]["mesh_dir"] == p.variables["mesh_dir"]
+    sphere = prepare_bulk_feeder({**VALUES, "shape": "0"}, tmp_path / "s")
+    assert sphere.body_template is None and sphere.to_spec()["body_template"] is None

@@ -1,0 +1,183 @@
+"""Singulation on synthetic bulk-feeder results whose answers are known by construction
+(tests/bulk_synthetic.py): arrival patterns, planted doubles, clusters of known sizes, chips."""
+
+import numpy as np
+import pytest
+
+from bulk_synthetic import OUTLET_X, RADIUS, feeder, poisson_times
+from vibrofeed.errors import InputError
+from vibrofeed.postproc import Singulation
+from vibrofeed.postproc.singulation import face_orientation, thin_axis
+from vibrofeed.results.reader import Result
+
+FREQ = 100.0
+FRAMES = np.arange(0, 1.0 + 1e-9, 0.01)
+D = 2 * RADIUS
+
+
+def open_feeder(tmp_path, exit_times, name="feed.h5", frames=FRAMES, **kw):
+    return Result(feeder(tmp_path / name, frames, exit_times, freq=FREQ, **kw))
+
+
+# -- inter-arrival times -------------------------------------------------------------
+def test_random_arrivals_have_cv_one_and_periodic_ones_cv_zero(tmp_path):
+    rng = np.random.default_rng(4)
+    exits = poisson_times(400.0, 0.0, 1.0, rng)
+    lanes = np.arange(len(exits)) % 7 * 1e-3   # spread out: few touch
+    with open_feeder(tmp_path, exits, name="poisson.h5", speed=0.05, lanes=lanes) as r:
+        sg = Singulation(r, start=0.0, end=1.0).run().results
+    assert sg.n_arrivals == len(exits)
+    assert sg.interarrival == pytest.approx(np.diff(exits))
+    assert sg.cv_interarrival == pytest.approx(1.0, abs=0.1)   # ~400 intervals: +-0.05
+    assert sg.mean_interarrival == pytest.approx(np.diff(exits).mean())
+    periodic = 0.05 + np.arange(300) / 300.0
+    with open_feeder(tmp_path, periodic, name="periodic.h5", speed=0.5) as r:
+        sg = Singulation(r).run().results
+    assert sg.cv_interarrival < 1e-9
+    assert sg.n_doubles == 0 and sg.singulated_fraction == 1.0 and sg.doubles_rate == 0.0
+
+
+# -- doubles and gaps ----------------------------------------------------------------
+def planted(period=0.02, n=45, at=(5, 12, 30), lag=1e-3, lane=1e-3, t0=0.05):
+    """Periodic arrivals with a second part ``lag`` seconds after arrivals ``at``, in ``lane``."""
+    exits = list(t0 + period * np.arange(n))
+    lanes = [0.0] * n
+    for k in at:
+        exits.append(exits[k] + lag)
+        lanes.append(lane)
+    order = np.argsort(exits)
+    return np.asarray(exits)[order], np.asarray(lanes)[order]
+
+
+def test_doubles_planted_at_known_times_are_found_by_time_and_by_distance(tmp_path):
+    v = 0.05  # regular spacing 1 mm, clear gap 0.7 mm; planted partners 50 um behind, 1 mm aside
+    exits, lanes = planted()
+    with open_feeder(tmp_path, exits, speed=v, lanes=lanes) as r:
+        by_time = Singulation(r, gap=2e-3, start=0.0, end=1.0).run().results
+        by_distance = Singulation(r, start=0.0, end=1.0).run().results   # no clear track between
+        roomy = Singulation(r, gap_distance=0.71e-3, start=0.0, end=1.0).run().results
+        loose = Singulation(r, gap=0.9e-3, start=0.0, end=1.0).run().results
+    pairs = len(exits) - 1
+    for sg in (by_time, by_distance):
+        assert sg.n_doubles == 3 and not sg.touching.any()
+        assert sg.doubles_rate == pytest.approx(3 / pairs)
+        assert sg.singulated_fraction == pytest.approx((len(exits) - 6) / len(exits))
+        assert sg.doubles_per_s == pytest.approx(3 / 1.0)
+        first = np.nonzero(sg.doubles)[0]
+        assert sg.arrival_times[first] == pytest.approx(exits[[5, 13, 32]])
+    assert by_distance.gap_distance == 0.0 and by_distance.gap is None
+    # asking for more than the regular 0.7 mm of clear track makes every pair a double
+    assert roomy.n_doubles == pairs and roomy.singulated_fraction == 0.0
+    assert loose.n_doubles == 0 and loose.gap_distance is None  # 1 ms apart is not < 0.9 ms
+    # gaps: clear distance along the track from the edge speed (exact here)
+    assert by_time.edge_velocity == pytest.approx(v, rel=1e-9)
+    assert by_time.gaps == pytest.approx(np.diff(exits) * v - D, rel=1e-9, abs=1e-12)
+    assert by_time.mean_gap == pytest.approx((np.diff(exits) * v - D).mean(), rel=1e-9)
+
+
+def test_touching_parts_are_doubles_whatever_the_gap(tmp_path):
+    v = 0.05
+    tol = 0.01 * D
+    # same lane: a partner exactly one diameter behind touches, one diameter plus
+    # two tolerances behind does not
+    exits_t, lanes_t = planted(at=(4, 20), lag=D / v, lane=0.0)
+    exits_n, lanes_n = planted(at=(4, 20), lag=(D + 2 * tol) / v, lane=0.0)
+    with open_feeder(tmp_path, exits_t, name="t.h5", speed=v, lanes=lanes_t) as r:
+        touching = Singulation(r, gap=1e-6, start=0.0, end=1.0).run().results
+    with open_feeder(tmp_path, exits_n, name="n.h5", speed=v, lanes=lanes_n) as r:
+        near = Singulation(r, gap=1e-6, start=0.0, end=1.0).run().results
+        wide = Singulation(r, gap=1e-6, tolerance=3 * tol, start=0.0, end=1.0).run().results
+    assert touching.tolerance == pytest.approx(tol)
+    assert touching.n_doubles == 2 and touching.touching.sum() == 2
+    assert near.n_doubles == 0
+    assert wide.n_doubles == 2
+
+
+# -- clusters on the track -------------------------------------------------------------
+def test_cluster_sizes_of_chains_on_the_track(tmp_path):
+    v = 0.005
+    # chains of 1..5 parts touching along the track, 2 mm apart, all on the track for
+    # the whole run (the first reaches the edge after it, the last is past the inlet)
+    exits, lanes, start = [], [], 1.2
+    for size in range(1, 6):
+        for j in range(size):
+            exits.append(start + j * D / v)
+            lanes.append(0.0)
+        start += (size - 1) * D / v + 2e-3 / v
+    with open_feeder(tmp_path, np.array(exits), speed=v, lanes=np.array(lanes), amp=3e-5) as r:
+        sg = Singulation(r, cluster_frames=7).run().results
+    assert sg.cluster_frames == 7
+    assert sg.cluster_sizes == {1: 1.0, 2: 1.0, 3: 1.0, 4: 1.0, 5: 1.0}
+    assert sg.track_singulated_fraction == pytest.approx(1 / 15)
+    assert sg.n_arrivals == 0
+
+
+def test_parts_falling_off_are_not_on_the_track(tmp_path):
+    # every part leaves within the run; the falling ones are beyond the edge
+    exits = 0.055 + np.arange(90) / 100.0
+    with open_feeder(tmp_path, exits, speed=0.3) as r:
+        sg = Singulation(r, cluster_frames=101, start=0.0, end=1.0).run().results
+        on_track = r.mass_balance["on_track"]
+    # parts 3 mm apart: all alone; the count per frame is the mass balance's on_track
+    assert set(sg.cluster_sizes) == {1}
+    assert sg.cluster_sizes[1] == pytest.approx(on_track.mean())
+
+
+# -- chips --------------------------------------------------------------------------------
+R_S = 75e-6
+CHIP = np.array([[x, y, 0.0, R_S] for x in (-1e-4, 0, 1e-4) for y in (-1e-4, 0, 1e-4)])
+
+
+def q_axis(axis, angle):
+    axis = np.asarray(axis, float) / np.linalg.norm(axis)
+    return np.r_[np.cos(angle / 2), np.sin(angle / 2) * axis]
+
+
+def q_mul(a, b):
+    w1, x1, y1, z1 = a
+    w2, x2, y2, z2 = b
+    return np.array([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+                     w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2])
+
+
+def test_chip_faces_and_alignment_at_the_outlet(tmp_path):
+    deg = np.pi / 180
+    yaw = [0, 30, 100, -50, 5, 185, 92]                 # face up, turned about z
+    quats = [q_axis([0, 0, 1], a * deg) for a in yaw]
+    quats += [q_mul(q_axis([0, 0, 1], 20 * deg), q_axis([1, 0, 0], np.pi))] * 2   # face down
+    quats += [q_axis([1, 0, 0], np.pi / 2)]              # on edge
+    quats = np.array(quats)
+    exits = 0.1 + 0.08 * np.arange(len(quats))
+    lanes = np.arange(len(quats)) * 1e-3
+    with open_feeder(tmp_path, exits, speed=0.05, orientations=quats, body_template=CHIP,
+                     lanes=lanes) as r:
+        sg = Singulation(r, start=0.0, end=1.0).run().results
+    assert sg.face_up_fraction == pytest.approx(0.7)
+    assert sg.face_down_fraction == pytest.approx(0.2)
+    assert sg.on_edge_fraction == pytest.approx(0.1)
+    assert sg.cos_tilt == pytest.approx([1] * 7 + [-1, -1, 0], abs=1e-12)
+    # yaw folded by the square's quarter-turn symmetry into (-45, 45]
+    assert sg.yaw_deg[:7] == pytest.approx([0, 30, 10, 40, 5, 5, 2], abs=1e-9)
+    assert sg.aligned_fraction == pytest.approx(6 / 10)   # 0, 10, 5, 5, 2 face up; 20 face down
+
+
+def test_thin_axis_and_orientation_of_a_template():
+    assert thin_axis(CHIP) == pytest.approx([0, 0, 1])
+    tilted = CHIP[:, [2, 0, 1, 3]]           # the same chip lying in the yz plane
+    assert thin_axis(tilted) == pytest.approx([1, 0, 0])
+    cos_tilt, yaw = face_orientation([q_axis([0, 1, 0], np.pi / 2)], tilted)
+    assert cos_tilt == pytest.approx([-1.0])  # x turned onto -z: face down
+
+
+def test_spheres_have_no_face(tmp_path):
+    with open_feeder(tmp_path, 0.1 + np.arange(50) / 60) as r:
+        sg = Singulation(r).run().results
+    assert sg.face_up_fraction is None and sg.yaw_deg is None
+
+
+def test_settings_are_checked(tmp_path):
+    with open_feeder(tmp_path, [0.5]) as r:
+        for bad in ({"gap": 0.0}, {"gap_distance": -1e-4}, {"cluster_frames": 0}, {"edge_length": 0}):
+            with pytest.raises(InputError):
+                Singulation(r, **bad)
+    assert OUTLET_X > 0

@@ -1,0 +1,138 @@
+"""Transport over random synthetic conveyors whose answers are known by construction.
+
+Each part ``k + 1`` moves as ``x = k mm + v_k t + amp sin(2 pi f t)`` between the
+frames where it enters and leaves (``helpers.write_conveyor``). What Transport
+promises (its docstring):
+
+* the window ends at the last frame analysed and starts at the frame nearest
+  to ``end - P T``, P the largest number of whole periods T = 1/f that fit
+  after ``start`` (never before it);
+* ``start`` defaults to the time of the middle frame analysed;
+* only parts present at both ends of the window count, each with its
+  displacement over the window divided by the window's length.
+
+With frames that divide the period the oscillation cancels and every counted
+part's speed is its v_k exactly; with frames that alias the period the
+window is whole periods only to within half a frame.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
+
+from helpers import write_conveyor
+from vibrofeed.errors import InputError
+from vibrofeed.postproc import Transport
+from vibrofeed.results.reader import Result
+
+AMP = 1e-3
+
+
+@st.composite
+def conveyors(draw, aliasing: bool):
+    freq = draw(st.sampled_from([20.0, 50.0, 60.0, 137.0]))
+    period = 1 / freq
+    if aliasing:  # any spacing, down to a few frames per period and up to 1.7 periods
+        dt = period * draw(st.floats(0.07, 1.7))
+    else:
+        dt = period / draw(st.integers(3, 25))
+    n_frames = draw(st.integers(8, 160))
+    n_parts = draw(st.integers(1, 30))
+    first = draw(st.lists(st.integers(0, n_frames - 1), min_size=n_parts, max_size=n_parts))
+    spans = draw(st.lists(st.integers(0, n_frames), min_size=n_parts, max_size=n_parts))
+    lifetimes = np.array([(a, min(a + s, n_frames - 1)) for a, s in zip(first, spans)])
+    speeds = np.array(draw(st.lists(st.floats(-0.05, 0.05), min_size=n_parts, max_size=n_parts)))
+    step = draw(st.integers(1, 3)) if aliasing else 1  # a step of 2 frames of T/5 aliases too
+    times = np.arange(n_frames) * dt
+    analysed = np.arange(n_frames)[::step]
+    start = draw(st.none() | st.floats(0.0, float(times[analysed[-1]])))
+    return dict(freq=freq, dt=dt, times=times, lifetimes=lifetimes, speeds=speeds, step=step,
+                analysed=analysed, start=start, seed=draw(st.integers(0, 1000)))
+
+
+def position(c, k, t):
+    return k * 1e-3 + c["speeds"][k] * t + AMP * np.sin(2 * np.pi * c["freq"] * t)
+
+
+def check_transport(tmp_path, c, exact_periods: bool):
+    path = write_conveyor(tmp_path / "c.h5", c["times"], c["lifetimes"], c["speeds"], amp=AMP,
+                          freq=c["freq"], seed=c["seed"])
+    t = c["times"][c["analysed"]]
+    end = t[-1]
+    start = t[len(t) // 2] if c["start"] is None else c["start"]
+    period = 1 / c["freq"]
+    whole = math.floor((end - start) / period + 1e-9)  # periods after start
+    with Result(path) as r:
+        tr = Transport(r, start=c["start"])
+        target = end - whole * period if whole >= 1 else start
+        nearest = np.abs(t - target).min()
+        if np.argmin(np.abs(t - target)) == len(t) - 1:
+            with pytest.raises(InputError, match="no time window"):
+                tr.run(step=c["step"])
+            return
+        res = tr.run(step=c["step"]).results
+    i0, i1 = res.window_frames
+    t0, t1 = res.window
+    assert i1 == c["analysed"][-1] and t1 == pytest.approx(end)
+    assert i0 in c["analysed"] and t0 == pytest.approx(c["times"][i0])
+    assert abs(t0 - target) == pytest.approx(nearest, abs=1e-12)  # the frame nearest the target
+    assert t0 >= start - c["dt"] * c["step"] / 2 - 1e-12           # never a period before start
+    if whole >= 1:
+        assert abs((t1 - t0) - whole * period) <= c["dt"] * c["step"] / 2 + 1e-12
+    alive = (c["lifetimes"][:, 0] <= i0) & (c["lifetimes"][:, 1] >= i1)
+    counted = np.nonzero(alive)[0]
+    assert res.ids.tolist() == (counted + 1).tolist()
+    expected = (position(c, counted, t1) - position(c, counted, t0)) / (t1 - t0)
+    assert np.allclose(res.velocities, expected, rtol=1e-9, atol=1e-12)
+    if exact_periods and whole >= 1:
+        assert np.allclose(res.velocities, c["speeds"][counted], rtol=1e-6, atol=1e-9)
+    if len(counted):
+        assert res.mean_velocity == pytest.approx(expected.mean(), rel=1e-9, abs=1e-12)
+    else:
+        assert math.isnan(res.mean_velocity)
+
+
+@settings(max_examples=40, deadline=None)
+@given(c=conveyors(aliasing=False))
+def test_whole_periods_give_each_part_its_speed(tmp_path_factory, c):
+    check_transport(tmp_path_factory.mktemp("tr"), c, exact_periods=True)
+
+
+@settings(max_examples=40, deadline=None)
+@given(c=conveyors(aliasing=True))
+def test_frames_that_alias_the_period(tmp_path_factory, c):
+    assume(len(c["analysed"]) >= 2)
+    check_transport(tmp_path_factory.mktemp("tr"), c, exact_periods=False)
+
+
+def test_window_never_starts_before_start(tmp_path):
+    """Many parts, a start between frames: 0.1 s - 0.0137 s holds 4.3 periods -> 4."""
+    times = np.arange(1001) * 1e-4
+    n = 60
+    rng = np.random.default_rng(7)
+    lifetimes = np.column_stack([rng.integers(0, 300, n), rng.integers(700, 1001, n)])
+    lifetimes[:10] = (0, 1000)
+    speeds = rng.uniform(-0.02, 0.04, n)
+    with Result(write_conveyor(tmp_path / "c.h5", times, lifetimes, speeds, amp=AMP)) as r:
+        res = Transport(r, start=0.0137).run().results
+        assert res.window == pytest.approx((0.02, 0.1)) and res.window_frames == (200, 1000)
+        alive = np.nonzero((lifetimes[:, 0] <= 200) & (lifetimes[:, 1] >= 1000))[0]
+        assert res.ids.tolist() == (alive + 1).tolist()
+        assert np.allclose(res.velocities, speeds[alive], rtol=1e-9)
+        # default start: the middle frame, 0.05 s; 2.5 periods after it -> 2
+        default = Transport(r).run().results
+        assert default.window == pytest.approx((0.06, 0.1))
+        # a start on a period boundary keeps the whole span
+        assert Transport(r, start=0.02).run().results.window_frames == (200, 1000)
+
+
+def test_an_empty_frame_selection_is_refused(tmp_path):
+    times = np.arange(11) * 1e-3
+    with Result(write_conveyor(tmp_path / "c.h5", times, [(0, 10)], [0.01])) as r:
+        with pytest.raises(InputError, match="no frame selected"):
+            Transport(r).run(start=5, stop=5)

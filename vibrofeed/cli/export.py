@@ -1,0 +1,44 @@
+"""``vibrofeed export``: a result as a ParaView time series (.pvd of VTK files)."""
+
+from __future__ import annotations
+
+DESCRIPTION = ("Write a result as a ParaView time series: DIR/RUN.pvd referencing, per frame, the "
+               "parts as points with their fields (id, radius, velocity, speed, orientation "
+               "quaternion, glyph-ready axes and shape tensor), the parts' real shapes as "
+               "triangles and the track mesh at the frame's position (DIR/RUN/*.vtp); outlet "
+               "events, if any, in DIR/RUN_outlet.vtp. Open the .pvd in ParaView as it is.")
+
+
+def add_arguments(p) -> None:
+    p.add_argument("result", metavar="RUN.h5", help="result file")
+    p.add_argument("-o", "--output", metavar="DIR", default=".",
+                   help="folder to write into (created if needed; default: here)")
+    p.add_argument("--every", type=int, default=1, metavar="N", help="export every N-th frame (default 1)")
+    p.add_argument("--no-shapes", action="store_true",
+                   help="leave out the parts' triangle meshes (points with their fields only)")
+    p.add_argument("--allow-incomplete", action="store_true",
+                   help="also export results of runs that were killed or failed")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+
+
+def run(args) -> int:
+    import sys
+
+    from ..pictures.export import export
+    from ..results.reader import Result
+
+    with Result(args.result, allow_incomplete=args.allow_incomplete) as result:
+        bar = None
+        if not args.quiet and sys.stderr.isatty():
+            from tqdm import tqdm
+
+            bar = tqdm(total=len(range(0, result.n_frames, max(args.every, 1))), unit="frame",
+                       desc="export", leave=False, file=sys.stderr)
+        try:
+            done = export(result, args.output, every=args.every, shapes=not args.no_shapes,
+                          progress=bar.update if bar else None)
+        finally:
+            if bar is not None:
+                bar.close()
+    print(f"wrote {done.pvd} ({done.frames} frames, {done.files} files, {done.seconds:.1f} s)")
+    return 0

@@ -1,0 +1,65 @@
+"""``vibrofeed render``: a picture (PNG) of one frame or a movie (MP4) of a run."""
+
+from __future__ import annotations
+
+DESCRIPTION = ("Draw a result off-screen (no display needed): the track at the frame's surface "
+               "position and the parts with their real shapes (spheres; chips as boxes, discs as "
+               "cylinders, oriented), coloured by speed or by cluster of touching parts. "
+               "FILE.png draws one frame (default: the last), FILE.mp4 every frame.")
+
+
+def size(text: str) -> tuple[int, int]:
+    """argparse type of --size: WIDTHxHEIGHT in pixels."""
+    import argparse
+
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be WIDTHxHEIGHT in pixels, got {text!r}") from None
+    return w, h
+
+
+def add_arguments(p) -> None:
+    p.add_argument("result", metavar="RUN.h5", help="result file")
+    p.add_argument("-o", "--output", metavar="FILE.png|FILE.mp4",
+                   help="picture (.png) or movie (.mp4) to write (default: RUN.png here)")
+    p.add_argument("--frame", type=int, default=-1, metavar="K",
+                   help="frame to draw in a PNG, from 0; negative counts from the end (default -1)")
+    p.add_argument("--color", choices=("speed", "cluster"), default="speed",
+                   help="colour the parts by speed [m/s] or by the size of their cluster of "
+                        "touching parts (default speed)")
+    p.add_argument("--size", type=size, default=(1280, 720), metavar="WxH",
+                   help="picture size in pixels (default 1280x720)")
+    p.add_argument("--every", type=int, default=1, metavar="N",
+                   help="movie: draw every N-th frame (default 1)")
+    p.add_argument("--fps", type=float, default=25.0, help="movie: frames per second (default 25)")
+    p.add_argument("--allow-incomplete", action="store_true",
+                   help="also draw results of runs that were killed or failed")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar for movies")
+
+
+def run(args) -> int:
+    import sys
+    from pathlib import Path
+
+    from ..pictures.render import render
+    from ..results.reader import Result
+
+    output = args.output or f"{Path(args.result).stem}.png"
+    with Result(args.result, allow_incomplete=args.allow_incomplete) as result:
+        bar = None
+        if output.lower().endswith(".mp4") and not args.quiet and sys.stderr.isatty():
+            from tqdm import tqdm
+
+            bar = tqdm(total=len(range(0, result.n_frames, max(args.every, 1))), unit="frame",
+                       desc="render", leave=False, file=sys.stderr)
+        try:
+            done = render(result, output, frame=args.frame, color=args.color, size=args.size,
+                          every=args.every, fps=args.fps, progress=bar.update if bar else None)
+        finally:
+            if bar is not None:
+                bar.close()
+    w, h = done.size
+    what = "1 frame" if done.frames == 1 else f"{done.frames} frames"
+    print(f"wrote {done.path} ({what}, {w}x{h}, {done.seconds:.1f} s)")
+    return 0

@@ -1,0 +1,93 @@
+"""``vibrofeed singulation``: how well separated a bulk feeder delivers its parts."""
+
+from __future__ import annotations
+
+import json
+import math
+
+DESCRIPTION = ("Singulation of a bulk-feeder result over the steady window: inter-arrival times at "
+               "the outlet (coefficient of variation), doubles (parts closer than a gap, or touching), "
+               "gaps between consecutive parts, cluster sizes on the track (contact graph), and for "
+               "chips the face-up fraction and the alignment with the track at the outlet.")
+
+
+def add_arguments(p) -> None:
+    p.add_argument("result", metavar="RUN.h5", help="result of a bulk-feeder deck")
+    p.add_argument("--gap", type=float, metavar="S",
+                   help="doubles: arrivals less than S seconds apart")
+    p.add_argument("--gap-distance", type=float, metavar="M",
+                   help="doubles: less than M metres of clear track between consecutive parts "
+                        "(default 0, i.e. abreast or overlapping along the track, unless --gap "
+                        "is given)")
+    p.add_argument("--tolerance", type=float, metavar="M",
+                   help="touching: centre distance <= r_i + r_j + M (default 1%% of a diameter)")
+    p.add_argument("--start", type=float, metavar="S", help="start of the window [s] (default: "
+                   "the detected steady window)")
+    p.add_argument("--end", type=float, metavar="S", help="end of the window [s]")
+    p.add_argument("--cluster-frames", type=int, default=20, metavar="N",
+                   help="frames sampled for the cluster sizes (default 20)")
+    p.add_argument("--json", action="store_true", help="print the figures as JSON")
+    p.add_argument("--plot", metavar="DIR",
+                   help="write the figures (PNG) into DIR (created if missing; its parent must exist)")
+
+
+def _fmt(value, scale: float = 1.0, spec: str = ".4g") -> str:
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return "n/a"
+    return format(value * scale, spec)
+
+
+def table(s: dict) -> str:
+    """The figures as the command prints them."""
+    if s["gap"] is not None:
+        rule = f"closer than {_fmt(s['gap'], 1e3)} ms"
+        if s["gap_distance"] is not None:
+            rule += f" or {_fmt(s['gap_distance'], 1e6)} um"
+    elif s["gap_distance"]:
+        rule = f"closer than {_fmt(s['gap_distance'], 1e6)} um of clear track"
+    else:
+        rule = "abreast or overlapping along the track"
+    shown = list(s["cluster_sizes"].items())
+    sizes = ", ".join(f"{k}: {v:.3g}" for k, v in shown[:8]) or "none"
+    if len(shown) > 8:
+        sizes += f", ... up to {shown[-1][0]}"
+    lines = [
+        f"window         {_fmt(s['steady_from'])} .. {_fmt(s['steady_to'])} s, "
+        f"{s['n_arrivals']} arrivals",
+        f"inter-arrival  mean {_fmt(s['mean_interarrival'], 1e3)} ms, "
+        f"CV {_fmt(s['cv_interarrival'], spec='.3f')} (1: random, 0: periodic)",
+        f"doubles        {_fmt(s['doubles_rate'], 100, '.1f')} % of consecutive pairs "
+        f"({s['n_doubles']}, {_fmt(s['doubles_per_s'])} /s; {rule}, or touching)",
+        f"singulated     {_fmt(s['singulated_fraction'], 100, '.1f')} % of the parts at the outlet; "
+        f"mean clear gap {_fmt(s['mean_gap'], 1e6)} um "
+        f"(edge speed {_fmt(s['edge_velocity'], 1e3)} mm/s)",
+        f"clusters       per frame on the track, size: number = {sizes}; alone "
+        f"{_fmt(s['track_singulated_fraction'], 100, '.1f')} %",
+    ]
+    if s.get("face_up_fraction") is not None:
+        lines.append(f"orientation    face up {_fmt(s['face_up_fraction'], 100, '.1f')} %, face down "
+                     f"{_fmt(s['face_down_fraction'], 100, '.1f')} %, on edge "
+                     f"{_fmt(s['on_edge_fraction'], 100, '.1f')} %; aligned with the track "
+                     f"{_fmt(s['aligned_fraction'], 100, '.1f')} %")
+    return "\n".join(lines)
+
+
+def run(args) -> int:
+    from ..postproc.singulation import Singulation
+    from ..results.reader import Result
+    from .feedrate import plot_folder
+
+    folder = plot_folder(args.plot)
+    with Result(args.result) as result:
+        sg = Singulation(result, gap=args.gap, gap_distance=args.gap_distance,
+                         tolerance=args.tolerance, start=args.start, end=args.end,
+                         cluster_frames=args.cluster_frames).run()
+        summary = sg.summary()
+        figures = sg.plot(folder) if folder is not None else []
+    if args.json:
+        print(json.dumps(summary, indent=2))
+    else:
+        print(table(summary))
+        for path in figures:
+            print(f"figure: {path}")
+    return 0

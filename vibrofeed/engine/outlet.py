@@ -1,0 +1,97 @@
+"""Parts leaving a bulk feeder's track: outlet events and the mass balance.
+
+A part has left the track when its centre is beyond the outlet edge
+(``x > outlet_x``) and below the catch plane (``z < catch_z``). The driver
+looks at every frame; a part seen there for the first time is an *event*, and
+the moment it crossed the catch plane is found exactly by following its free
+flight backwards from the frame's state under the deck's gravity
+(:func:`ballistic_crossing`): below the outlet edge nothing but gravity acts
+on it. The orientation is the body's at the frame (a free body's rotation is
+not reconstructed). FORMAT.md, "Bulk feeders", describes the result.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+METHOD = ("ballistic: crossing of z = catch_z reconstructed by free flight back from the first "
+          "frame that sees the part beyond outlet_x and below catch_z; orientation at that frame")
+
+
+def gravity_vector(g: float, incline_deg: float) -> np.ndarray:
+    """Gravity in the simulation (track) frame: a track inclined by beta tilts it
+    to g (-sin beta, 0, -cos beta), as the decks do (FORMAT.md, Frames)."""
+    beta = math.radians(incline_deg)
+    return g * np.array([-math.sin(beta), 0.0, -math.cos(beta)])
+
+
+def ballistic_crossing(position: np.ndarray, velocity: np.ndarray, catch_z: float,
+                       gravity: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """When (tau <= 0, relative to the frame), where and how fast parts crossed
+    z = catch_z on the way down, following x(tau) = x + v tau + g tau^2 / 2 back.
+
+    ``position``, ``velocity`` (E, 3) at the frame, below the plane. The
+    descending root of z(tau) = catch_z is tau = 2 d / (sqrt(D) - v_z), with
+    d = z - catch_z < 0 and D = v_z^2 - 2 g_z d (the form without
+    cancellation). A part whose free flight never reaches the plane (D < 0,
+    or rising with no gravity) gets tau = 0: the frame's own state.
+    """
+    position = np.asarray(position, dtype=float).reshape(-1, 3)
+    velocity = np.asarray(velocity, dtype=float).reshape(-1, 3)
+    gravity = np.asarray(gravity, dtype=float)
+    d = position[:, 2] - catch_z
+    vz = velocity[:, 2]
+    disc = vz * vz - 2.0 * gravity[2] * d
+    denom = np.sqrt(np.maximum(disc, 0.0)) - vz
+    with np.errstate(divide="ignore", invalid="ignore"):
+        tau = np.where((disc >= 0) & (denom > 0), 2.0 * d / denom, 0.0)
+    tau = np.minimum(tau, 0.0)
+    crossing = position + velocity * tau[:, None] + 0.5 * gravity * tau[:, None] ** 2
+    return tau, crossing, velocity + gravity * tau[:, None]
+
+
+class Outlet:
+    """Detects outlet events frame by frame and keeps the mass balance.
+
+    ``step(time, parts, inserted)`` returns the new events (a table for
+    ``ResultWriter.write_events``, None when there are none) and the counts of
+    that frame (``inserted``, ``on_track``, ``exited``, ``lost``): exited = all
+    events so far, on_track = present parts without an event, lost = inserted
+    - on_track - exited, the parts that vanished without an event.
+    """
+
+    def __init__(self, outlet_x: float, catch_z: float, gravity):
+        self.outlet_x = float(outlet_x)
+        self.catch_z = float(catch_z)
+        self.gravity = np.asarray(gravity, dtype=float)
+        self.exited = np.empty(0, dtype=np.int64)  # ids with an event, sorted
+        # events whose free flight back never reached the plane (timed at their
+        # frame): something other than gravity acted below the edge
+        self.not_ballistic = 0
+
+    def attributes(self) -> dict:
+        return {"outlet_x": self.outlet_x, "catch_z": self.catch_z, "method": METHOD}
+
+    def step(self, time: float, parts: dict, inserted: int) -> tuple[dict | None, dict]:
+        ids = np.asarray(parts["id"], dtype=np.int64)
+        x = np.asarray(parts["position"], dtype=float).reshape(-1, 3)
+        reported = np.isin(ids, self.exited, assume_unique=True)
+        new = (x[:, 0] > self.outlet_x) & (x[:, 2] < self.catch_z) & ~reported
+        events = None
+        if new.any():
+            v = np.asarray(parts["velocity"], dtype=float).reshape(-1, 3)[new]
+            tau, pos, vel = ballistic_crossing(x[new], v, self.catch_z, self.gravity)
+            self.not_ballistic += int(np.count_nonzero(tau == 0))
+            order = np.argsort(tau, kind="stable")  # in the order they crossed
+            q = parts.get("orientation")
+            q = np.tile([1.0, 0.0, 0.0, 0.0], (int(new.sum()), 1)) if q is None else np.asarray(q)[new]
+            events = {"time": (time + tau)[order], "id": ids[new][order], "position": pos[order],
+                      "velocity": vel[order], "orientation": q[order]}
+            self.exited = np.union1d(self.exited, ids[new])
+        on_track = int(len(ids) - reported.sum() - new.sum())
+        exited = len(self.exited)
+        counts = {"inserted": int(inserted), "on_track": on_track, "exited": exited,
+                  "lost": int(inserted) - on_track - exited}
+        return events, counts

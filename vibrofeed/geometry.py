@@ -1,0 +1,267 @@
+"""Geometry of the bulk feeder: the track mesh, the catch face and the clump templates.
+
+Frame (the deck's): x along the track (parts convey towards +x), y across, z normal to
+the floor (floor at z = 0 at rest). The track runs from a back wall at x = 0 to the
+outlet edge at x = track_length, which has no wall: parts fall off there. An optional
+singulation gate narrows the walls at 45 degrees from ``gate_x`` to ``gate_width`` and
+keeps them narrow to the outlet.
+
+Meshes are indexed triangle sets ``(vertices (V, 3) float64 [m], triangles (T, 3) int32)``:
+the floor and the walls share their edge vertices, so the only open edges of the track
+are the outlet edge and the walls' top edges (LIGGGHTS' mesh/surface then sees one
+connected surface, without seams between floor and walls). They are written as STL with
+numpy-stl. Multisphere parts (chips, discs) are clumps of spheres of diameter
+``part_thickness`` whose outline is the part's, given as ``(n, 4)`` rows x, y, z, r in
+the body frame (the part's centre at the origin, its flat faces normal to z).
+
+:func:`prepare_bulk_feeder` is the prepare hook that decks/bulk_feeder.liggghts declares:
+the runner calls it before a run (and ``vibrofeed prepare`` for a run by hand).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .errors import ParameterError
+
+# Largest spacing of a clump's spheres, as a fraction of their diameter: the faces stay
+# within 4 % of the thickness of flat (the bumps between spheres are shallow).
+CLUMP_SPACING = 0.75
+# A part's catch face, written at unit size: the deck scales it to its width and places it
+# below the outlet edge (fix mesh/surface ... scale ... move ...).
+CATCH_LENGTH = 1.0
+SHAPES = {"sphere": 0, "chip": 1, "disc": 2}
+
+
+@dataclass
+class Prepared:
+    """What a deck's prepare hook made for one run.
+
+    ``variables``: extra ``-var`` values for LIGGGHTS (e.g. ``mesh_dir``); ``track``:
+    the track mesh at rest (vertices (V, 3) [m], triangles (T, 3) int32) or None;
+    ``body_template``: (n, 4) x, y, z, r [m] of a clump's spheres in the body frame, in
+    the order LIGGGHTS stores them (a body's atom ids follow the template), or None for
+    plain spheres.
+    """
+
+    variables: dict[str, str] = field(default_factory=dict)
+    track: tuple[np.ndarray, np.ndarray] | None = None
+    body_template: np.ndarray | None = None
+
+    def to_spec(self) -> dict:
+        """The JSON-ready form the runner hands to the worker (spec["prepared"])."""
+        track = None
+        if self.track is not None:
+            track = [self.track[0].tolist(), self.track[1].tolist()]
+        template = None if self.body_template is None else self.body_template.tolist()
+        return {"variables": dict(self.variables), "track": track, "body_template": template}
+
+
+# ------------------------------------------------------------------ meshes
+class _Builder:
+    """Collects triangles over shared vertices (a vertex is shared when its coordinates
+    agree to 1e-12 m)."""
+
+    def __init__(self):
+        self.vertices: list[tuple[float, float, float]] = []
+        self.index: dict[tuple[float, float, float], int] = {}
+        self.triangles: list[tuple[int, int, int]] = []
+
+    def vertex(self, p) -> int:
+        key = tuple(round(float(c), 12) + 0.0 for c in p)  # + 0.0: -0.0 and 0.0 are one vertex
+        if key not in self.index:
+            self.index[key] = len(self.vertices)
+            self.vertices.append(key)
+        return self.index[key]
+
+    def quad(self, a, b, c, d) -> None:
+        """Two triangles a-b-c, a-c-d (corners in order around the quad)."""
+        i, j, k, m = (self.vertex(p) for p in (a, b, c, d))
+        self.triangles += [(i, j, k), (i, k, m)]
+
+    def mesh(self) -> tuple[np.ndarray, np.ndarray]:
+        return (np.array(self.vertices, dtype=np.float64).reshape(-1, 3),
+                np.array(self.triangles, dtype=np.int32).reshape(-1, 3))
+
+
+def wall_stations(track_length: float, track_width: float, gate_width: float = 0.0,
+                  gate_x: float | None = None, spacing: float | None = None):
+    """x stations along the track and the walls' half width at each.
+
+    Uniform stations at most ``spacing`` apart (default: the track width, at most 1 mm),
+    plus the gate's two kinks when there is a gate (0 < gate_width < track_width).
+    """
+    spacing = spacing or min(track_width, 1e-3)
+    n = max(1, math.ceil(track_length / spacing - 1e-9))
+    xs = np.linspace(0.0, track_length, n + 1)
+    if not 0 < gate_width < track_width:
+        return xs, np.full_like(xs, track_width / 2)
+    gate_x = 0.7 * track_length if gate_x is None else gate_x
+    taper_end = gate_x + (track_width - gate_width) / 2  # 45 degrees
+    if not 0 <= gate_x < taper_end <= track_length:
+        raise ParameterError(
+            f"the gate does not fit on the track: its taper runs from x = {gate_x:g} m to "
+            f"{taper_end:g} m, the track ends at {track_length:g} m; lower gate_at")
+    xs = np.unique(np.round(np.concatenate([xs, [gate_x, taper_end]]), 12))
+    half = np.interp(xs, [0.0, gate_x, taper_end, track_length],
+                     [track_width / 2, track_width / 2, gate_width / 2, gate_width / 2])
+    return xs, half
+
+
+def track_mesh(track_length: float, track_width: float, wall_height: float,
+               gate_width: float = 0.0, gate_x: float | None = None,
+               spacing: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The track: floor, two side walls and the back wall at x = 0, no wall at the
+    outlet edge x = track_length. Floor and walls share vertices along their common
+    edges (whole edges: no vertex lies inside another face's edge)."""
+    xs, half = wall_stations(track_length, track_width, gate_width, gate_x, spacing)
+    b = _Builder()
+    for x0, x1, h0, h1 in zip(xs[:-1], xs[1:], half[:-1], half[1:]):
+        b.quad((x0, -h0, 0), (x1, -h1, 0), (x1, h1, 0), (x0, h0, 0))  # floor, normal +z
+        b.quad((x0, h0, 0), (x1, h1, 0), (x1, h1, wall_height), (x0, h0, wall_height))  # y > 0
+        b.quad((x1, -h1, 0), (x0, -h0, 0), (x0, -h0, wall_height), (x1, -h1, wall_height))
+    w = half[0]
+    b.quad((0, -w, 0), (0, w, 0), (0, w, wall_height), (0, -w, wall_height))  # back wall, normal +x
+    return b.mesh()
+
+
+def catch_face(length: float = CATCH_LENGTH, width: float = 1.0,
+               z: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """A horizontal rectangle from x = 0 to ``length``, y in +-width/2, at height ``z``
+    (normal -z: parts cross it downwards)."""
+    b = _Builder()
+    h = width / 2
+    b.quad((0, -h, z), (0, h, z), (length, h, z), (length, -h, z))
+    return b.mesh()
+
+
+def write_stl(vertices: np.ndarray, triangles: np.ndarray, path: str | Path,
+              name: str = "vibrofeed") -> Path:
+    """Write an indexed mesh as a binary STL (numpy-stl), normals from the corner order."""
+    from stl import mesh as stl_mesh
+
+    m = stl_mesh.Mesh(np.zeros(len(triangles), dtype=stl_mesh.Mesh.dtype), name=name)
+    m.vectors[:] = vertices[triangles]
+    m.update_normals()
+    path = Path(path)
+    m.save(str(path))
+    return path
+
+
+# ------------------------------------------------------------------ clumps
+def chip_template(edge: float, thickness: float) -> np.ndarray:
+    """A flat square die (edge x edge x thickness) as a grid of spheres of diameter
+    ``thickness`` in the plane z = 0. The centres span edge - thickness, so the clump's
+    outline is the die's square; their spacing is at most CLUMP_SPACING x thickness."""
+    span = edge - thickness
+    n = max(2, math.ceil(span / (CLUMP_SPACING * thickness) - 1e-9) + 1) if span > 0 else 1
+    c = np.linspace(-span / 2, span / 2, n)
+    gx, gy = np.meshgrid(c, c, indexing="ij")
+    return np.column_stack([gx.ravel(), gy.ravel(), np.zeros(gx.size), np.full(gx.size, thickness / 2)])
+
+
+def disc_template(diameter: float, thickness: float) -> np.ndarray:
+    """A flat disc (diameter x thickness): a centre sphere and rings of spheres of
+    diameter ``thickness``; the outer ring's spheres touch the disc's rim."""
+    rows = [[0.0, 0.0, 0.0, thickness / 2]]
+    outer = (diameter - thickness) / 2
+    n_rings = math.ceil(outer / (CLUMP_SPACING * thickness) - 1e-9) if outer > 0 else 0
+    for k in range(1, n_rings + 1):
+        rk = outer * k / n_rings
+        m = max(6, math.ceil(2 * math.pi * rk / (CLUMP_SPACING * thickness) - 1e-9))
+        for j in range(m):
+            a = 2 * math.pi * j / m
+            rows.append([rk * math.cos(a), rk * math.sin(a), 0.0, thickness / 2])
+    return np.array(rows)
+
+
+def write_template(rows: np.ndarray, path: str | Path, name: str) -> Path:
+    """A clump template as LIGGGHTS' particletemplate/multisphere reads it (x y z r per
+    line; used with ``scale 1``)."""
+    path = Path(path)
+    np.savetxt(path, rows, fmt="%.17g", header=f"{name}: x y z r [m], {len(rows)} spheres")
+    return path
+
+
+# ------------------------------------------------------------------ seeds
+def _is_prime(n: int) -> bool:
+    if n < 2:
+        return False
+    if n % 2 == 0:
+        return n == 2
+    return all(n % d for d in range(3, math.isqrt(n) + 1, 2))
+
+
+def insertion_seeds(seed: int, count: int) -> list[int]:
+    """``count`` distinct primes above 10000 and below 2**31 derived from ``seed``:
+    LIGGGHTS' insertion and particle-template fixes take only such seeds."""
+    base = 10007 + (seed % 200_000) * 9973
+    out: list[int] = []
+    n = base
+    while len(out) < count:
+        if _is_prime(n):
+            out.append(n)
+            n += 1009  # spread them out: neighbouring primes would do as well, but read alike
+        n += 1
+    return out
+
+
+# ------------------------------------------------------------------ the hook
+def _number(values: Mapping[str, str], name: str) -> float:
+    try:
+        return float(values[name])
+    except KeyError:
+        raise ParameterError(f"the bulk feeder's geometry needs the parameter {name!r}") from None
+    except ValueError:
+        raise ParameterError(f"parameter {name}={values[name]!r} is not a number") from None
+
+
+def shape_code(value: str) -> int:
+    """``shape`` as the deck's integer code: 0 sphere, 1 chip, 2 disc (names accepted)."""
+    text = str(value).strip().lower()
+    if text in SHAPES:
+        return SHAPES[text]
+    try:
+        code = float(text)
+    except ValueError:
+        code = -1.0
+    if code not in (0.0, 1.0, 2.0):
+        raise ParameterError(f"parameter shape={value} must be sphere, chip or disc (0, 1 or 2)")
+    return int(code)
+
+
+def prepare_bulk_feeder(values: Mapping[str, str], folder: str | Path) -> Prepared:
+    """Write the bulk feeder's geometry for one run into ``folder`` and describe it.
+
+    Files: ``track.stl`` (the track at rest), ``catch.stl`` (a unit catch face the deck
+    scales and places), ``chip.multisphere`` and ``disc.multisphere`` (clump templates),
+    ``prepared.in`` (LIGGGHTS variables: the templates' sphere counts and the insertion
+    seeds; the deck includes it, since a file-style variable crashes LIGGGHTS 3.8 at exit).
+    """
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    length, width = _number(values, "track_length"), _number(values, "track_width")
+    gate_width = _number(values, "gate_width")
+    gate_x = _number(values, "gate_at") * length
+    size, thickness = _number(values, "part_size"), _number(values, "part_thickness")
+    shape = shape_code(values.get("shape", "0"))
+
+    vertices, triangles = track_mesh(length, width, _number(values, "wall_height"), gate_width, gate_x)
+    write_stl(vertices, triangles, folder / "track.stl", "track")
+    write_stl(*catch_face(), folder / "catch.stl", "catch")
+    templates = {"chip": chip_template(size, thickness), "disc": disc_template(size, thickness)}
+    for name, rows in templates.items():
+        write_template(rows, folder / f"{name}.multisphere", name)
+    lines = ["# written by vibrofeed.geometry.prepare_bulk_feeder for one run\n"]
+    lines += [f"variable n_sph_{name} equal {len(rows)}\n" for name, rows in templates.items()]
+    seed = int(_number(values, "seed")) if "seed" in values else 5489
+    lines += [f"variable seed_{k} equal {p}\n" for k, p in enumerate(insertion_seeds(seed, 6), 1)]
+    (folder / "prepared.in").write_text("".join(lines))
+    template = {0: None, 1: templates["chip"], 2: templates["disc"]}[shape]
+    return Prepared(variables={"mesh_dir": str(folder.resolve())}, track=(vertices, triangles),
+                    body_template=template)

@@ -1,0 +1,191 @@
+"""Write a result as a ParaView time series: ``DIR/RUN.pvd`` and VTK files per frame.
+
+LIGGGHTS users look at their runs in ParaView; ``File > Open`` on the ``.pvd``
+gives a time series whose every step is a multiblock of
+
+- ``parts`` (``RUN/parts_NNNNNN.vtp``): one point per part with the fields
+  ``id``, ``species``, ``radius``, ``diameter``, ``mass``, ``velocity``,
+  ``speed``, ``velocity_rel`` (relative to the track), ``angular_velocity``,
+  ``force``, ``orientation`` (quaternion w, x, y, z) and glyph-ready arrays:
+  ``normal`` and ``axis_x`` (the body's face normal and first in-plane axis,
+  for the Glyph filter's orientation), ``shape_tensor`` (R diag(extents):
+  ParaView's Tensor Glyph filter with Glyph Type Box, "Extract Eigenvalues"
+  off and Scale Factor 1 draws each part's oriented box, checked with
+  ParaView 5.11);
+- ``shapes`` (``RUN/shapes_NNNNNN.vtp``): the parts' real shapes as triangles
+  (spheres, chips as boxes, discs as cylinders), with ``id``, ``speed`` and
+  ``velocity`` on their points, ready to colour;
+- ``track`` (``RUN/track_NNNNNN.vtp``): the track mesh at the frame's surface
+  position, with the surface velocity on its points (runs without a track mesh
+  have no track block).
+
+The outlet events, when the run has them, go to ``RUN_outlet.vtp`` (one point
+per exit, at the crossing, with ``time``, ``id``, ``velocity``,
+``orientation``). Every VTK file carries its time as the field ``TimeValue``.
+"""
+
+from __future__ import annotations
+
+import time as _time
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import OutputError, UsageError
+from .scene import FrameData, body_axes, part_shape, read_frame, shape_mesh, shape_tensors, track_mesh
+
+
+@dataclass(frozen=True)
+class Exported:
+    """What :func:`export` wrote: the ``.pvd``, the number of frames and of files, the seconds spent."""
+
+    pvd: Path
+    frames: int
+    files: int
+    seconds: float
+
+
+def _polydata(points: np.ndarray, triangles: np.ndarray | None = None):
+    """vtkPolyData of points, as vertices (triangles None) or as a triangle mesh.
+
+    Built with VTK directly: a frame may hold no part, and its files must still
+    carry every array (empty) so that ParaView keeps the same fields over time.
+    """
+    from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
+    from vtkmodules.vtkCommonCore import vtkPoints
+    from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData
+
+    points = np.ascontiguousarray(points, dtype=float).reshape(-1, 3)
+    data = vtkPolyData()
+    vtk_points = vtkPoints()
+    vtk_points.SetData(numpy_to_vtk(points, deep=True))
+    data.SetPoints(vtk_points)
+    if triangles is None:
+        connectivity, size = np.arange(len(points)), 1
+    else:
+        connectivity, size = np.asarray(triangles).ravel(), 3
+    offsets = np.arange(0, len(connectivity) + 1, size)
+    cells = vtkCellArray()
+    cells.SetData(numpy_to_vtkIdTypeArray(offsets.astype(np.int64), deep=True),
+                  numpy_to_vtkIdTypeArray(connectivity.astype(np.int64), deep=True))
+    (data.SetVerts if triangles is None else data.SetPolys)(cells)
+    return data
+
+
+def _add(data, name: str, values, field: bool = False) -> None:
+    """Add a named point array (or a field array) to a vtkPolyData; empty arrays included."""
+    from vtkmodules.util.numpy_support import numpy_to_vtk
+
+    values = np.asarray(values)
+    if values.dtype.kind in "iu":
+        values = values.astype(np.int64)
+    components = int(np.prod(values.shape[1:]))  # 1 for scalars
+    array = numpy_to_vtk(np.ascontiguousarray(values.reshape(len(values), components)), deep=True)
+    array.SetName(name)
+    (data.GetFieldData() if field else data.GetPointData()).AddArray(array)
+
+
+def _write_vtp(mesh, path: Path, time: float) -> None:
+    """Binary, zlib-compressed VTK XML PolyData with the time as field ``TimeValue``."""
+    from vtkmodules.vtkIOXML import vtkXMLPolyDataWriter
+
+    _add(mesh, "TimeValue", np.array([time]), field=True)
+    writer = vtkXMLPolyDataWriter()
+    writer.SetFileName(str(path))
+    writer.SetInputData(mesh)
+    writer.SetDataModeToBinary()
+    writer.SetCompressorTypeToZLib()
+    if writer.Write() != 1:
+        raise OutputError(f"VTK could not write {path}")
+
+
+def parts_points(frame: FrameData, shape):
+    """The parts of a frame as points with their fields (see the module's docstring)."""
+    mesh = _polydata(frame.position)
+    normal, axis_x = body_axes(frame, shape)
+    fields = {
+        "id": frame.ids, "species": frame.species,
+        "radius": frame.radius, "diameter": 2 * frame.radius, "mass": frame.mass,
+        "velocity": frame.velocity, "speed": frame.speed,
+        "velocity_rel": frame.velocity - frame.surface_velocity,
+        "angular_velocity": frame.angular_velocity, "force": frame.force,
+        "orientation": frame.orientation, "normal": normal, "axis_x": axis_x,
+        "shape_tensor": shape_tensors(frame, shape)}
+    for name, values in fields.items():
+        _add(mesh, name, values)
+    return mesh
+
+
+def parts_shapes(frame: FrameData, shape):
+    """The parts' real shapes as one triangle mesh, with per-part values on the points."""
+    shapes = shape_mesh(frame, shape)
+    mesh = _polydata(shapes.points, shapes.triangles)
+    _add(mesh, "id", frame.ids[shapes.owner])
+    _add(mesh, "speed", frame.speed[shapes.owner])
+    _add(mesh, "velocity", frame.velocity[shapes.owner])
+    _add(mesh, "Normals", shapes.normals)
+    mesh.GetPointData().SetActiveNormals("Normals")  # ParaView shades the shapes with them
+    return mesh
+
+
+def _dataset(collection, time: float, part: int, name: str, file: str) -> None:
+    ET.SubElement(collection, "DataSet", timestep=repr(float(time)), group="", part=str(part),
+                  name=name, file=file)
+
+
+def _write_outlet(result, path: Path) -> bool:
+    events = result.outlet
+    if len(events["time"]) == 0:
+        return False
+    mesh = _polydata(events["position"])
+    for name in ("time", "id", "velocity", "orientation"):
+        _add(mesh, name, events[name])
+    _write_vtp(mesh, path, float(events["time"][-1]))
+    return True
+
+
+def export(result, folder, every: int = 1, shapes: bool = True, progress=None) -> Exported:
+    """Write ``folder/RUN.pvd`` and its VTK files for every ``every``-th frame of a Result.
+
+    ``shapes=False`` leaves out the parts' triangle meshes (the points keep
+    every field). ``progress(n)`` is called after each frame.
+    """
+    if every < 1:
+        raise UsageError(f"--every must be >= 1, got {every}")
+    start = _time.perf_counter()
+    folder = Path(folder)
+    stem = Path(result.path).stem
+    try:
+        (folder / stem).mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"cannot create {folder / stem}: {exc}") from exc
+    shape = part_shape(result.parameters, result.body_template)
+    root = ET.Element("VTKFile", type="Collection", version="0.1", byte_order="LittleEndian")
+    collection = ET.SubElement(root, "Collection")
+    frames = np.arange(0, result.n_frames, every)
+    files = 0
+    for k in frames:
+        frame = read_frame(result, int(k))
+        blocks = [("parts", parts_points(frame, shape))]
+        if shapes:
+            blocks.append(("shapes", parts_shapes(frame, shape)))
+        placed = track_mesh(result, frame)
+        if placed is not None:
+            track = _polydata(*placed)
+            _add(track, "velocity", np.tile(frame.surface_velocity, (len(placed[0]), 1)))
+            blocks.append(("track", track))
+        for part, (name, mesh) in enumerate(blocks):
+            relative = f"{stem}/{name}_{int(k):06d}.vtp"
+            _write_vtp(mesh, folder / relative, frame.time)
+            _dataset(collection, frame.time, part, name, relative)
+            files += 1
+        if progress:
+            progress(1)
+    if _write_outlet(result, folder / f"{stem}_outlet.vtp"):
+        files += 1
+    ET.indent(root)
+    pvd = folder / f"{stem}.pvd"
+    ET.ElementTree(root).write(pvd, encoding="utf-8", xml_declaration=True)
+    return Exported(pvd, len(frames), files + 1, _time.perf_counter() - start)

@@ -1,0 +1,323 @@
+"""Draw a result off-screen with pyvista: a PNG of one frame, an MP4 of many.
+
+The track is drawn at the frame's surface position, the parts with their real
+shapes (:mod:`.scene`), coloured by speed (a colour bar in m/s) or by the size
+of the cluster of touching parts they belong to (single parts grey), seen
+obliquely from the front, above the inlet end, with the time in the title.
+
+No display is needed: without ``DISPLAY`` VTK is asked for its EGL window
+(Mesa's software renderer, Debian packages ``libegl1`` and
+``libgl1-mesa-dri``), which renders to memory. Movies are encoded by the
+ffmpeg that the ``imageio-ffmpeg`` package ships (or one on the PATH).
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import time as _time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import OutputError, UsageError
+from .scene import FrameData, floor_patch, part_shape, read_frame, shape_mesh, track_mesh
+
+COLORINGS = ("speed", "cluster")
+DEFAULT_SIZE = (1280, 720)   # multiples of 16: what H.264 encoders want
+TRACK_COLOR = "#9aa3ad"
+SINGLE_COLOR = "#d0d0d0"     # parts not touching any other (cluster of one)
+BACKGROUND = "white"
+# Parts closer than this fraction of the mean part diameter count as touching for
+# --color cluster: the default of the singulation analysis (postproc/singulation.py),
+# so that the picture shows the clusters it counts.
+TOUCH_DIAMETERS = 0.01
+# Direction from the track's centre to the camera: in front (-y), above (+z),
+# a little towards the inlet (-x), so the whole length is seen and the parts stand out.
+VIEW_DIRECTION = np.array([-0.3, -0.8, 1.0])
+
+
+@dataclass(frozen=True)
+class Rendered:
+    """What :func:`render` wrote: the file, the frames drawn, the picture size, the seconds spent."""
+
+    path: Path
+    frames: int
+    size: tuple[int, int]
+    seconds: float
+
+
+def _offscreen_pyvista():
+    """pyvista set up for drawing without a display."""
+    if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
+        from ctypes.util import find_library
+
+        # VTK would first try X and warn that there is no server; EGL needs none. Without
+        # libEGL, VTK's own fallback (OSMesa, if installed) is left to choose.
+        if find_library("EGL"):
+            os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+    import pyvista as pv
+
+    pv.OFF_SCREEN = True
+    return pv
+
+
+def _polydata(pv, points: np.ndarray, triangles: np.ndarray):
+    faces = np.column_stack([np.full(len(triangles), 3), triangles]).ravel()
+    return pv.PolyData(np.asarray(points, dtype=float), faces=faces)
+
+
+def _cluster_sizes(result, frame: FrameData) -> np.ndarray:
+    """(N,) the number of parts in the cluster of touching parts each part belongs to
+    (clumps touch when any of their spheres touch, as the singulation analysis counts)."""
+    from ..postproc.clusters import clump_labels, cluster_labels
+
+    if len(frame) == 0:
+        return np.zeros(0)
+    tolerance = TOUCH_DIAMETERS * 2 * float(np.mean(frame.radius))
+    if result.body_template is not None:
+        labels = clump_labels(frame.position, frame.orientation, result.body_template, tolerance)
+    else:
+        labels = cluster_labels(frame.position, frame.radius, tolerance)
+    return np.bincount(labels)[labels].astype(float)
+
+
+def _speed_limit(result, frames: np.ndarray) -> float:
+    """Top of the speed colour scale for a movie: the largest per-frame 99th percentile
+    (fixed over the movie so that colours compare between frames; a few fast falling
+    parts past the outlet do not wash out the rest)."""
+    top = 0.0
+    for k in range(0, len(frames), 256):
+        v = result.read("velocity", frames=frames[k:k + 256])
+        speed = np.linalg.norm(v, axis=-1)
+        for row in speed:
+            row = row[np.isfinite(row)]
+            if len(row):
+                top = max(top, float(np.percentile(row, 99)))
+    return top if top > 0 else 1e-3
+
+
+def _view_bounds(result, frames: np.ndarray) -> np.ndarray:
+    """(xmin, xmax, ymin, ymax, zmin, zmax) the camera frames: the track at rest, or without
+    a track the parts' range over the frames drawn."""
+    mesh = result.track_mesh
+    if mesh is not None:
+        v = np.asarray(mesh[0], dtype=float)
+        lo, hi = v.min(axis=0), v.max(axis=0)
+    else:
+        lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
+        for k in range(0, len(frames), 256):
+            p = result.read("position", frames=frames[k:k + 256]).reshape(-1, 3)
+            p = p[np.isfinite(p).all(axis=1)]
+            if len(p):
+                lo, hi = np.minimum(lo, p.min(axis=0)), np.maximum(hi, p.max(axis=0))
+        if not np.isfinite(lo).all():
+            lo, hi = np.full(3, -1e-3), np.full(3, 1e-3)
+        pad = 0.1 * max(float((hi - lo).max()), 1e-3)
+        lo, hi = lo - pad, hi + pad
+    return np.column_stack([lo, hi]).ravel()
+
+
+class _Painter:
+    """One off-screen plotter drawing frame after frame of one result."""
+
+    def __init__(self, result, color: str, size, frames: np.ndarray, part_color=None):
+        if color not in COLORINGS:
+            raise UsageError(f"--color must be one of {', '.join(COLORINGS)}, got {color!r}")
+        self.pv = pv = _offscreen_pyvista()
+        self.result, self.color, self.part_color = result, color, part_color
+        self.shape = part_shape(result.parameters, result.body_template)
+        self.bounds = _view_bounds(result, frames)
+        # A movie keeps one colour scale over its frames, so that colours compare.
+        movie = len(frames) > 1
+        self.speed_top = _speed_limit(result, frames) if movie and color == "speed" else None
+        self.cluster_top = (max(_cluster_sizes(result, read_frame(result, int(k))).max(initial=1)
+                                for k in frames) if movie and color == "cluster" else None)
+        self.deck = result.deck_name or Path(result.path).stem
+        self.plotter = pv.Plotter(off_screen=True, window_size=list(size))
+        self.plotter.set_background(BACKGROUND)
+        # No multisampling: with Mesa's software renderer pyvista's default 8x MSAA makes a
+        # picture 3-5 times slower for edges hardly smoother at this size.
+        self.plotter.ren_win.SetMultiSamples(1)
+        self._camera_set = False
+
+    def _floor(self, frame: FrameData):
+        placed = track_mesh(self.result, frame)
+        if placed is not None:
+            return placed
+        return floor_patch(frame, self.bounds[:4])  # steady under the camera over a movie
+
+    def _part_mesh(self, frame: FrameData):
+        """The parts' shapes with their colouring values, and the add_mesh keywords for them."""
+        shapes = shape_mesh(frame, self.shape)
+        owner = shapes.owner
+        mesh = _polydata(self.pv, shapes.points, shapes.triangles)
+        mesh.point_data["Normals"] = shapes.normals
+        mesh.point_data.active_normals_name = "Normals"
+        if self.part_color is not None:
+            return mesh, {"color": self.part_color}
+        bar = {"color": "black", "vertical": True, "position_x": 0.9, "position_y": 0.2,
+               "width": 0.05, "height": 0.6, "title_font_size": 16, "label_font_size": 14}
+        if self.color == "speed":
+            mesh.point_data["speed"] = frame.speed[owner]
+            top = self.speed_top or (float(frame.speed.max()) if len(frame) else 0.0) or 1e-3
+            return mesh, {"scalars": "speed", "cmap": "viridis", "clim": (0.0, top),
+                          "scalar_bar_args": {**bar, "title": "speed [m/s]", "fmt": "%.3g"}}
+        sizes = _cluster_sizes(self.result, frame)
+        mesh.point_data["cluster size"] = sizes[owner]
+        top = int(max(self.cluster_top or sizes.max(initial=1), 3))
+        # One colour per size, centred on the integers; single parts fall below the scale
+        # and take the grey below_color.
+        style = {"scalars": "cluster size", "cmap": "plasma", "clim": (1.5, top + 0.5),
+                 "below_color": SINGLE_COLOR, "n_colors": top - 1,
+                 "scalar_bar_args": {**bar, "title": "parts per cluster", "fmt": "%.0f",
+                                     "below_label": "1"}}
+        if top <= 16:
+            style["annotations"] = {float(s): str(s) for s in range(2, top + 1)}
+            style["scalar_bar_args"]["n_labels"] = 0
+        return mesh, style
+
+    def _set_camera(self) -> None:
+        lo, hi = self.bounds[0::2], self.bounds[1::2]
+        centre = (lo + hi) / 2
+        direction = VIEW_DIRECTION / np.linalg.norm(VIEW_DIRECTION)
+        extent = float(np.linalg.norm(hi - lo))
+        self.plotter.camera_position = [tuple(centre + direction * extent), tuple(centre), (0, 0, 1)]
+        self.plotter.reset_camera(bounds=tuple(self.bounds))
+        self.plotter.camera.zoom(1.5)  # reset_camera fits the bounding sphere: a long track is thin
+        self.plotter.camera.SetWindowCenter(0.08, 0.0)  # the scene a little left of the colour bar
+        self._camera_set = True
+
+    def draw(self, frame: FrameData) -> None:
+        p = self.plotter
+        vertices, triangles = self._floor(frame)
+        # render=False everywhere: one render per picture, in image(), not one per actor.
+        p.add_mesh(_polydata(self.pv, vertices, triangles), color=TRACK_COLOR, name="track",
+                   smooth_shading=False, show_scalar_bar=False, render=False)
+        if len(frame):
+            mesh, style = self._part_mesh(frame)
+            # The mesh brings its normals: no smoothing pass over all the parts' points.
+            p.add_mesh(mesh, name="parts", smooth_shading=False, render=False, **style)
+        else:
+            p.remove_actor("parts", render=False)
+        p.add_text(f"{self.deck}   t = {frame.time:.4f} s   frame {frame.index}/{frame.n_frames - 1}"
+                   f"   {len(frame)} parts", position="upper_left", font_size=12, color="black",
+                   name="title", render=False)
+        if not self._camera_set:
+            self._set_camera()
+
+    def image(self) -> np.ndarray:
+        """(height, width, 3) uint8 of what is drawn."""
+        self.plotter.render()  # screenshot() renders by itself only the first time
+        return self.plotter.screenshot(return_img=True)
+
+    def close(self) -> None:
+        self.plotter.close()
+
+
+def render_frame(result, frame: int = -1, color: str = "speed", size=DEFAULT_SIZE,
+                 part_color=None) -> np.ndarray:
+    """(height, width, 3) uint8 picture of one frame; ``part_color`` (a colour name or
+    ``#rrggbb``) paints every part in that colour instead of ``color``'s scale."""
+    data = read_frame(result, frame)
+    painter = _Painter(result, color, size, np.array([data.index]), part_color)
+    try:
+        painter.draw(data)
+        return painter.image()
+    finally:
+        painter.close()
+
+
+def _ffmpeg() -> str:
+    try:
+        import imageio_ffmpeg
+
+        return imageio_ffmpeg.get_ffmpeg_exe()
+    except (ImportError, RuntimeError):
+        found = shutil.which("ffmpeg")
+        if found is None:
+            raise OutputError("writing MP4 needs ffmpeg: pip install imageio-ffmpeg "
+                              "(or put ffmpeg on the PATH)") from None
+        return found
+
+
+def _write_png(image: np.ndarray, path: Path) -> None:
+    """Write an RGB image as PNG through VTK (already loaded for the drawing)."""
+    from vtkmodules.util.numpy_support import numpy_to_vtk
+    from vtkmodules.vtkCommonDataModel import vtkImageData
+    from vtkmodules.vtkIOImage import vtkPNGWriter
+
+    h, w, c = image.shape
+    data = vtkImageData()
+    data.SetDimensions(w, h, 1)
+    pixels = numpy_to_vtk(np.ascontiguousarray(image[::-1]).reshape(-1, c), deep=True)
+    data.GetPointData().SetScalars(pixels)
+    writer = vtkPNGWriter()
+    writer.SetFileName(str(path))
+    writer.SetInputData(data)
+    writer.Write()
+
+
+def _write_mp4(painter: _Painter, frames: np.ndarray, path: Path, fps: float, size, progress) -> None:
+    import subprocess
+
+    w, h = size
+    cmd = [_ffmpeg(), "-y", "-loglevel", "error", "-f", "rawvideo", "-pix_fmt", "rgb24",
+           "-s", f"{w}x{h}", "-r", f"{fps:g}", "-i", "-", "-an", "-vcodec", "libx264",
+           "-pix_fmt", "yuv420p", "-crf", "20", str(path)]
+    proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stderr=subprocess.PIPE)
+    try:
+        for k in frames:
+            painter.draw(read_frame(painter.result, int(k)))
+            image = painter.image()
+            if image.shape[:2] != (h, w):  # the window may round its size: crop/pad to the stream's
+                canvas = np.full((h, w, 3), 255, dtype=np.uint8)
+                hh, ww = min(h, image.shape[0]), min(w, image.shape[1])
+                canvas[:hh, :ww] = image[:hh, :ww]
+                image = canvas
+            proc.stdin.write(np.ascontiguousarray(image[:, :, :3]).tobytes())
+            if progress:
+                progress(1)
+        proc.stdin.close()
+    except BrokenPipeError:
+        pass
+    err = proc.stderr.read().decode(errors="replace").strip()
+    if proc.wait() != 0:
+        raise OutputError(f"ffmpeg could not write {path}: {err.splitlines()[-1] if err else '?'}")
+
+
+def _size(size) -> tuple[int, int]:
+    w, h = (int(x) for x in size)
+    if w < 16 or h < 16 or w > 8192 or h > 8192:
+        raise UsageError(f"picture size {w}x{h} must be between 16 and 8192 pixels a side")
+    return w, h
+
+
+def render(result, output, frame: int = -1, color: str = "speed", size=DEFAULT_SIZE,
+           every: int = 1, fps: float = 25.0, part_color=None, progress=None) -> Rendered:
+    """Write ``output``: a PNG of frame ``frame`` (.png) or an MP4 of every ``every``-th
+    frame at ``fps`` frames per second (.mp4). ``progress(n)`` is called per movie frame."""
+    output = Path(output)
+    suffix = output.suffix.lower()
+    if suffix not in (".png", ".mp4"):
+        raise UsageError(f"output {output} must end in .png (one frame) or .mp4 (a movie)")
+    if every < 1 or fps <= 0:
+        raise UsageError(f"--every must be >= 1 and --fps > 0, got {every} and {fps:g}")
+    w, h = _size(size)
+    if not output.parent.is_dir():
+        raise OutputError(f"cannot write {output}: folder {output.parent} does not exist")
+    start = _time.perf_counter()
+    if suffix == ".png":
+        _write_png(render_frame(result, frame, color, (w, h), part_color), output)
+        return Rendered(output, 1, (w, h), _time.perf_counter() - start)
+    w, h = w + (-w % 16), h + (-h % 16)  # H.264 in yuv420p wants even sizes; 16 avoids rescaling
+    frames = np.arange(0, result.n_frames, every)
+    if len(frames) == 0:
+        raise UsageError(f"{result.path} has no frames to draw")
+    painter = _Painter(result, color, (w, h), frames, part_color)
+    try:
+        _write_mp4(painter, frames, output, fps, (w, h), progress)
+    finally:
+        painter.close()
+    return Rendered(output, len(frames), (w, h), _time.perf_counter() - start)
