@@ -23,6 +23,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from ..errors import InputError
+from ..rotations import quaternion_matrices  # noqa: F401 (re-exported)
 
 
 def _touching_pairs(positions: np.ndarray, radii: np.ndarray, tolerance: float) -> np.ndarray:
@@ -79,18 +80,6 @@ def cluster_labels(positions, radii, tolerance: float = 0.0) -> np.ndarray:
     """
     positions, radii = _check(positions, radii)
     return _components(len(positions), _touching_pairs(positions, radii, float(tolerance)))
-
-
-def quaternion_matrices(q) -> np.ndarray:
-    """(N, 3, 3) rotation matrices of unit quaternions q (N, 4) = (w, x, y, z)."""
-    q = np.asarray(q, dtype=float).reshape(-1, 4)
-    q = q / np.linalg.norm(q, axis=1, keepdims=True)
-    w, x, y, z = q.T
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], axis=-1),
-        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], axis=-1),
-        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], axis=-1),
-    ], axis=1)
 
 
 def clump_labels(centres, orientations, template, tolerance: float = 0.0) -> np.ndarray:

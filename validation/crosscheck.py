@@ -17,11 +17,15 @@ case's ``kind``:
     net climbing speed of a part squeezed against a vertical vibrating wall;
 ``replay``
     measured trials (``trials``) played on a vertical wall in LIGGGHTS and
-    through the vertical-transport model with the same inputs.
+    through the vertical-transport model with the same inputs;
+``pulloff``
+    the largest tension of a cohesive contact pulled apart slowly (deck
+    ``pulloff``) against JKR's pull-off force 1.5 pi gamma R*.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -118,10 +122,10 @@ class CrossCheck:
         runs = []
         for values in self.case.points():
             merged = {**self.case.parameters, **values}
-            freq = float(merged.get("freq", deck.variables["freq"].default))
             given = {}
             for key, value in merged.items():
                 if key in DERIVED_SWEEP_KEYS:  # Gamma given: the deck wants an amplitude
+                    freq = float(merged.get("freq", deck.variables["freq"].default))
                     given[DERIVED_SWEEP_KEYS[key]] = repr(float(dm.amp_from_gamma(float(value), freq)))
                 else:
                     given[key] = str(value)
@@ -417,5 +421,34 @@ def _replay(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
     out.figures.append(plot_replay(dems, fig_dir / "dem_replays.png", engine="dem"))
 
 
+# ------------------------------------------------------------------ kind: pulloff
+def jkr_pulloff(surface_energy: float, part_size: float, pair: int) -> float:
+    """JKR's pull-off force [N] 1.5 pi gamma R* of two spheres of diameter
+    ``part_size`` (pair 0: R* = R/2) or of one on a flat (pair 1: R* = R)."""
+    radius = part_size / 2
+    r_star = radius / 2 if pair == 0 else radius
+    return 1.5 * math.pi * surface_energy * r_star
+
+
+def _pulloff(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
+    from vibrofeed.results.reader import Result
+
+    from .plots import plot_pulloff
+
+    panels = []
+    for run in runs:
+        with Result(run.output) as r:
+            z = r.read("position", frames=-1)[:, 2]
+            pulled = int(np.nanargmax(z))  # the slot of the sphere moving up
+            fz = r.read("force", slots=[pulled])[:, 0, 2]
+            t = r.time
+        tension = -fz  # the contact pulls the pulled sphere back
+        model = jkr_pulloff(run.number("surface_energy"), run.number("part_size"),
+                            int(run.number("pair")))
+        out.rows.append(_row(case, "pulloff", run.label, model, float(tension.max()), "N"))
+        panels.append({"label": run.label, "t": t, "tension": tension, "model": model})
+    out.figures.append(plot_pulloff(case, panels, fig_dir / "pulloff.png"))
+
+
 KINDS = {"flights": _flights, "transport": _transport, "period": _period, "vertical": _vertical,
-         "replay": _replay}
+         "replay": _replay, "pulloff": _pulloff}

@@ -143,3 +143,20 @@ def plot_replay(results, path, engine: str = "model") -> Path:
     axes[-1, 0].set_xlabel("t [s]")
     axes[0, 0].legend(fontsize=8)
     return _save(fig, path)
+
+
+def plot_pulloff(case, panels: list[dict], path: Path) -> Path:
+    """Tension on the pulled sphere against time, with JKR's pull-off, per run."""
+    plt = _pyplot()
+    fig, axes = plt.subplots(len(panels), 1, figsize=(7, 2.4 * len(panels)), squeeze=False,
+                             layout="constrained")
+    for ax, p in zip(axes[:, 0], panels):
+        ax.plot(p["t"], 1e6 * p["tension"], **DEM_STYLE)
+        ax.axhline(1e6 * p["model"], **{**MODEL_STYLE, "label": "JKR 1.5 pi gamma R*"})
+        ax.set_ylim(-0.5e6 * p["model"], 1.3e6 * p["model"])  # the pull-off, not the initial push
+        ax.set_ylabel("tension [uN]")
+        ax.set_title(p["label"], fontsize=9, loc="left")
+        ax.legend(fontsize=8)
+    axes[-1, 0].set_xlabel("time [s]")
+    fig.suptitle(case.title, fontsize=10)
+    return _save(fig, path)

@@ -92,6 +92,9 @@ RULES: dict[str, Callable[[float], str | None]] = {
     "seed": _integer(lo=1),
     # the bulk feeder (decks/bulk_feeder.liggghts)
     "shape": _integer(choices=(0, 1, 2)),
+    "pair": _integer(choices=(0, 1)),
+    "pull_speed": _positive,
+    "overlap0": _positive,
     "part_size": _positive,
     "part_thickness": _positive,
     "size_spread": _between(0, 1, lo_open=False),
@@ -213,6 +216,12 @@ def _check_relations(p: Mapping[str, float]) -> None:
 FILL_PACKING = 0.6
 
 
+# The softest contact over which the bulk feeder's feed rate was measured to
+# stay within its own uncertainty (2e7 to 1e9 Pa, README "Decks"): softening
+# moves the realised restitution, so a softer contact is not a free choice.
+BULK_MIN_YOUNGS = 2e7  # Pa
+
+
 def _check_bulk_feeder(p: Mapping[str, float]) -> None:
     """Relations between the bulk feeder's parameters (decks/bulk_feeder.liggghts refuses
     the same for runs by hand)."""
@@ -220,6 +229,11 @@ def _check_bulk_feeder(p: Mapping[str, float]) -> None:
         return
     size, shape = p["part_size"], int(p.get("shape", 0))
     spread = p.get("size_spread", 0.0)
+    if p.get("youngs", BULK_MIN_YOUNGS) < BULK_MIN_YOUNGS:
+        raise ParameterError(
+            f"youngs={p['youngs']:g} Pa is softer than the bulk feeder is validated for: its feed "
+            f"rate was measured independent of youngs from {BULK_MIN_YOUNGS:g} to 1e9 Pa "
+            "(python -m vibrofeed.validation.studies.stiffness); stiffer is closer to silicon")
     widest = size * (1 + spread) if shape == 0 else size
     if p.get("n_parts", 1) <= 0 and p.get("inlet_rate", 1) <= 0:
         raise ParameterError("n_parts=0 and inlet_rate=0: no part would ever be fed; "

@@ -151,3 +151,17 @@ def test_deck_declares_its_prepare_hook_and_generated_include():
                  "dt_hertz_fraction", "dt_rayleigh_fraction", "fall_depth", "n_prefilled"):
         assert name in DECK.constants, name
     assert "parts_present" not in DECK.constants  # follows `atoms`
+
+
+def test_the_bulk_feeder_refuses_contacts_softer_than_its_validated_range():
+    from vibrofeed.decks import Deck
+    from vibrofeed.errors import ParameterError
+    from vibrofeed.parameters import BULK_MIN_YOUNGS, resolve
+
+    deck = Deck.find("bulk_feeder")
+    assert resolve(deck, {"youngs": repr(BULK_MIN_YOUNGS)})["youngs"] == repr(BULK_MIN_YOUNGS)
+    assert float(deck.variables["youngs"].default) >= BULK_MIN_YOUNGS  # the default is inside
+    with pytest.raises(ParameterError, match="youngs=1.9e\\+07 Pa is softer"):
+        resolve(deck, {"youngs": "1.9e7"})
+    # the single-part deck keeps LIGGGHTS' own limit only
+    assert resolve(Deck.find("single_part"), {"youngs": "1e7"})["youngs"] == "1e7"

@@ -69,6 +69,10 @@ BULK = {
     "surface_energy": (0, True, INF, False, None),
     "surface_energy_pp": (0, True, INF, False, None),
     "t_settle": (0, True, INF, False, None),
+    # the pull-off test of the same contact (decks/pulloff.liggghts)
+    "pair": (0, True, 1, True, (0, 1)),
+    "pull_speed": (0, False, INF, False, None),
+    "overlap0": (0, False, INF, False, None),
 }
 ALL = {**BOUNDS, **BULK}
 

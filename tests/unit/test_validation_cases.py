@@ -13,7 +13,8 @@ from vibrofeed.validation.models.part_on_surface import Event
 # The quantities each kind reports (a case needs a tolerance for each it uses).
 QUANTITIES = {"flights": {"landing_time", "flight_duration"}, "transport": {"mean_speed"},
               "period": {"period"}, "vertical": {"net_speed"},
-              "replay": {"mean_difference_mm", "mean_abs_error_mm", "final_displacement_mm"}}
+              "replay": {"mean_difference_mm", "mean_abs_error_mm", "final_displacement_mm"},
+              "pulloff": {"pulloff"}}
 
 
 @pytest.mark.parametrize("name", C.available())
@@ -129,3 +130,13 @@ def test_infeasible_vertical_case_is_refused_clearly():
     check_vertical_case({**base, "normal_force": "6e-5"})  # feasible: no exception
     with pytest.raises(C.CaseError, match="infeasible vertical transport"):
         check_vertical_case({**base, "normal_force": "1e-5"})  # below m g / mu
+
+
+def test_jkr_pulloff_closed_form():
+    """1.5 pi gamma R*: two 300 um spheres (R* = 75 um) at 0.05 J/m^2 pull off at
+    17.67 uN, one on a flat (R* = 150 um) at twice that."""
+    from vibrofeed.validation.crosscheck import jkr_pulloff
+
+    assert jkr_pulloff(0.05, 3e-4, 0) == pytest.approx(1.5 * 3.141592653589793 * 0.05 * 75e-6)
+    assert jkr_pulloff(0.05, 3e-4, 0) == pytest.approx(17.671e-6, rel=1e-4)
+    assert jkr_pulloff(0.05, 3e-4, 1) == pytest.approx(2 * jkr_pulloff(0.05, 3e-4, 0))

@@ -27,6 +27,11 @@ def add_arguments(p) -> None:
                    help="bins of the velocity profile along the track (default 20)")
     p.add_argument("--no-model", action="store_true",
                    help="skip the single-part model comparison")
+    add_output_arguments(p)
+
+
+def add_output_arguments(p) -> None:
+    """--json and --plot DIR, shared by the analysis commands."""
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
     p.add_argument("--plot", metavar="DIR",
                    help="write the figures (PNG) into DIR (created if missing; its parent must exist)")

@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import json
-import math
+
+from .feedrate import _fmt, add_output_arguments
 
 DESCRIPTION = ("Singulation of a bulk-feeder result over the steady window: inter-arrival times at "
                "the outlet (coefficient of variation), doubles (parts closer than a gap, or touching), "
@@ -26,15 +27,7 @@ def add_arguments(p) -> None:
     p.add_argument("--end", type=float, metavar="S", help="end of the window [s]")
     p.add_argument("--cluster-frames", type=int, default=20, metavar="N",
                    help="frames sampled for the cluster sizes (default 20)")
-    p.add_argument("--json", action="store_true", help="print the figures as JSON")
-    p.add_argument("--plot", metavar="DIR",
-                   help="write the figures (PNG) into DIR (created if missing; its parent must exist)")
-
-
-def _fmt(value, scale: float = 1.0, spec: str = ".4g") -> str:
-    if value is None or (isinstance(value, float) and not math.isfinite(value)):
-        return "n/a"
-    return format(value * scale, spec)
+    add_output_arguments(p)
 
 
 def table(s: dict) -> str:

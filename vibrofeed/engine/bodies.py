@@ -17,18 +17,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..rotations import quaternion_matrices
+
 IDENTITY = np.array([1.0, 0.0, 0.0, 0.0])
 
 
 def quaternion_matrix(q: np.ndarray) -> np.ndarray:
     """Rotation matrices (..., 3, 3) of unit quaternions (..., 4) ordered (w, x, y, z)."""
-    q = np.asarray(q, dtype=float)
-    w, x, y, z = np.moveaxis(q, -1, 0)
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
-        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
-    ], -2)
+    return quaternion_matrices(q)
 
 
 def fit_quaternions(template: np.ndarray, positions: np.ndarray) -> np.ndarray:

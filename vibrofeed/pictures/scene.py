@@ -16,6 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..rotations import quaternion_matrices
+
 # The deck's integer codes of `shape` (LIGGGHTS compares numbers, not strings).
 SHAPE_CODES = {0: "sphere", 1: "chip", 2: "disc"}
 
@@ -114,17 +116,7 @@ def part_shape(parameters: dict, template: np.ndarray | None = None) -> PartShap
 
 def rotation_matrices(quaternions: np.ndarray) -> np.ndarray:
     """(N, 3, 3) rotations of quaternions (N, 4) = (w, x, y, z); NaN or zero rows give identity."""
-    q = np.asarray(quaternions, dtype=float).reshape(-1, 4).copy()
-    norm = np.linalg.norm(q, axis=1)
-    bad = ~np.isfinite(norm) | (norm == 0)
-    q[bad] = (1.0, 0.0, 0.0, 0.0)
-    q /= np.where(bad, 1.0, norm)[:, None]
-    w, x, y, z = q.T
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], axis=-1),
-        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], axis=-1),
-        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], axis=-1),
-    ], axis=1)
+    return quaternion_matrices(np.asarray(quaternions, dtype=float).reshape(-1, 4))
 
 
 def read_frame(result, index: int) -> FrameData:
