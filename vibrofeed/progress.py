@@ -1,4 +1,4 @@
-"""Progress of a run on a terminal: simulated time, steps/s, ETA."""
+"""Progress of a run on a terminal: simulated time, steps/s, ETA; and the run's warnings."""
 
 from __future__ import annotations
 
@@ -19,9 +19,16 @@ class RunProgress:
         self.t_end = 0.0
 
     def __call__(self, event: dict) -> None:
+        kind = event["event"]
+        if kind == "warning":  # shown with or without a bar (lost parts, a missing template)
+            text = f"vibrofeed: warning: {self.label}: {event['message']}"
+            if self.bar is not None:
+                self.bar.write(text, file=self.stream)
+            else:
+                print(text, file=self.stream)
+            return
         if not self.enabled:
             return
-        kind = event["event"]
         if kind == "run":
             self.t_end = event["n_steps"] * event["dt"]
             try:  # a terminal that reports no size (0 columns) gets a fixed width
