@@ -51,10 +51,12 @@ needs the models of ``vibrofeed.validation``, which this layer does not import:
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 
 from ..errors import InputError
+from ..figures import pyplot, save
 from ..results import layout as L
 from .base import AnalysisBase
 
@@ -73,27 +75,6 @@ SUMMARY_KEYS = ("parts_per_s", "parts_per_s_err", "mass_per_s", "mass_per_s_err"
                 "mean_velocity_err", "steady_from", "steady_to", "n_events", "inserted", "exited",
                 "on_track", "lost", "bin_width", "velocity_lag", "profile_x", "profile_velocity",
                 "profile_count")
-
-
-# ----------------------------------------------------------------- figures
-def pyplot():
-    """matplotlib.pyplot on the file-only backend (imported only when drawing)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def save(fig, folder, name: str):
-    """Write ``fig`` to ``folder/name`` (PNG), close it and return the path."""
-    from pathlib import Path
-
-    path = Path(folder) / name
-    fig.savefig(path, dpi=120, bbox_inches="tight")
-    pyplot().close(fig)
-    return path
 
 
 # ----------------------------------------------------------------- the event table
@@ -443,7 +424,7 @@ class FeedRate(AnalysisBase):
         ax.set_xlabel("time [s]")
         ax.set_ylabel("parts exited")
         ax.legend(loc="upper left", fontsize=8)
-        out.append(save(fig, folder, "feedrate_cumulative.png"))
+        out.append(save(fig, Path(folder) / "feedrate_cumulative.png"))
 
         fig, ax = plt.subplots(figsize=(7, 4), layout="constrained")
         ax.plot(r.profile_x * 1e3, r.profile_velocity * 1e3, "o-", color="tab:red", ms=3,
@@ -453,5 +434,5 @@ class FeedRate(AnalysisBase):
         ax.set_xlabel("position along the track x [mm]")
         ax.set_ylabel("conveying velocity [mm/s]")
         ax.legend(fontsize=8)
-        out.append(save(fig, folder, "feedrate_velocity_profile.png"))
+        out.append(save(fig, Path(folder) / "feedrate_velocity_profile.png"))
         return out

@@ -36,10 +36,12 @@ same way unless ``start``/``end`` are given)
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 
 from ..errors import InputError
+from ..figures import pyplot, save
 from ..results import layout as L
 from .base import AnalysisBase
 from .clusters import clump_labels, cluster_labels, pairs_touch, quaternion_matrices
@@ -47,9 +49,7 @@ from .feedrate import (
     outlet_events,
     outlet_x,
     period_velocities,
-    pyplot,
     require_outlet,
-    save,
     steady_window,
     values_at,
 )
@@ -305,7 +305,7 @@ class Singulation(AnalysisBase):
         ax.set_xlabel("inter-arrival time [ms]")
         ax.set_ylabel("arrivals")
         ax.set_title(f"CV {r.cv_interarrival:.3g}, doubles {r.doubles_rate:.1%}", fontsize=9)
-        out.append(save(fig, folder, "singulation_interarrival.png"))
+        out.append(save(fig, Path(folder) / "singulation_interarrival.png"))
 
         fig, ax = plt.subplots(figsize=(7, 4), layout="constrained")
         sizes = sorted(r.cluster_sizes)
@@ -314,5 +314,5 @@ class Singulation(AnalysisBase):
         ax.set_ylabel("clusters per frame")
         ax.set_title(f"{r.cluster_frames} frames; alone on the track: "
                      f"{r.track_singulated_fraction:.1%}", fontsize=9)
-        out.append(save(fig, folder, "singulation_clusters.png"))
+        out.append(save(fig, Path(folder) / "singulation_clusters.png"))
         return out

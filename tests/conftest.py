@@ -33,3 +33,20 @@ def measured_trials_dir():
             pytest.fail(message + " (CI must have them)")
         pytest.skip(message)
     return folder
+
+
+@pytest.fixture
+def result_reads(monkeypatch):
+    """The (element, frames) of every ``Result.read`` call the test makes: to
+    check that an analysis reads windows, not whole datasets."""
+    from vibrofeed.results.reader import Result
+
+    reads = []
+    original = Result.read
+
+    def spy(self, name, frames=None, slots=None):
+        reads.append((name, frames))
+        return original(self, name, frames, slots)
+
+    monkeypatch.setattr(Result, "read", spy)
+    return reads

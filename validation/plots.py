@@ -10,31 +10,16 @@ from pathlib import Path
 
 import numpy as np
 
+from ..figures import pyplot, save
+
 DEM_STYLE = dict(color="tab:red", lw=1.2, label="DEM (LIGGGHTS)")
 MODEL_STYLE = dict(color="black", lw=1.0, ls="--", label="model")
 SURFACE_STYLE = dict(color="tab:blue", lw=0.8, alpha=0.7, label="surface")
 
 
-def _pyplot():
-    """matplotlib.pyplot on the file-only backend (no display needed)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def _save(fig, path: Path) -> Path:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120, bbox_inches="tight")
-    _pyplot().close(fig)
-    return path
-
-
 def plot_flights(case, panels: list[dict], path: Path) -> Path:
     """Height of the part's lowest point and of the surface vs time, per sweep point."""
-    plt = _pyplot()
+    plt = pyplot()
     fig, axes = plt.subplots(len(panels), 1, figsize=(8, 2.3 * len(panels)), squeeze=False,
                              layout="constrained")
     for ax, p in zip(axes[:, 0], panels):
@@ -48,7 +33,7 @@ def plot_flights(case, panels: list[dict], path: Path) -> Path:
     axes[-1, 0].set_xlabel("t / T")
     axes[0, 0].legend(fontsize=8, loc="upper right")
     fig.suptitle(case.title, fontsize=10)
-    return _save(fig, path)
+    return save(fig, path)
 
 
 def plot_speed_curve(case, runs, points, axis: str, path: Path) -> Path:
@@ -56,7 +41,7 @@ def plot_speed_curve(case, runs, points, axis: str, path: Path) -> Path:
     from . import deck_models as dm
     from .models.part_on_surface import mean_velocity
 
-    plt = _pyplot()
+    plt = pyplot()
 
     xs = np.array([float(r.values[axis]) for r, _, _ in points])
     fig, ax = plt.subplots(figsize=(6, 4))
@@ -88,12 +73,12 @@ def plot_speed_curve(case, runs, points, axis: str, path: Path) -> Path:
     ax.set_ylabel("mean speed along the track [mm/s]")
     ax.set_title(case.title, fontsize=10)
     ax.legend(fontsize=8)
-    return _save(fig, path)
+    return save(fig, path)
 
 
 def plot_bifurcation(case, grid, diagram, dem_points, path: Path) -> Path:
     """Jump lengths (flight durations in periods) vs Gamma: model and DEM."""
-    plt = _pyplot()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(7, 4.5))
     for g, jumps in zip(grid, diagram):
         ax.plot(np.full(len(jumps), g), jumps, ",", color="black")
@@ -105,12 +90,12 @@ def plot_bifurcation(case, grid, diagram, dem_points, path: Path) -> Path:
     ax.set_ylabel("jump length [periods]")
     ax.set_title(case.title, fontsize=10)
     ax.legend(fontsize=8)
-    return _save(fig, path)
+    return save(fig, path)
 
 
 def plot_vertical(case, panels: list[dict], path: Path) -> Path:
     """Part displacement up the wall vs time: DEM, model and the wall itself."""
-    plt = _pyplot()
+    plt = pyplot()
     fig, axes = plt.subplots(len(panels), 1, figsize=(8, 2.5 * len(panels)), squeeze=False,
                              layout="constrained")
     for ax, p in zip(axes[:, 0], panels):
@@ -123,12 +108,12 @@ def plot_vertical(case, panels: list[dict], path: Path) -> Path:
     axes[-1, 0].set_xlabel("t / T")
     axes[0, 0].legend(fontsize=8)
     fig.suptitle(case.title, fontsize=10)
-    return _save(fig, path)
+    return save(fig, path)
 
 
 def plot_replay(results, path, engine: str = "model") -> Path:
     """Measured and predicted part position, and the platform, per trial."""
-    plt = _pyplot()
+    plt = pyplot()
     path = Path(path)
     fig, axes = plt.subplots(len(results), 1, figsize=(8, 2.8 * len(results)), squeeze=False,
                              layout="constrained")
@@ -142,12 +127,12 @@ def plot_replay(results, path, engine: str = "model") -> Path:
                      f"mean abs error {r.mean_abs_error_mm:.3f} mm", fontsize=9, loc="left")
     axes[-1, 0].set_xlabel("t [s]")
     axes[0, 0].legend(fontsize=8)
-    return _save(fig, path)
+    return save(fig, path)
 
 
 def plot_pulloff(case, panels: list[dict], path: Path) -> Path:
     """Tension on the pulled sphere against time, with JKR's pull-off, per run."""
-    plt = _pyplot()
+    plt = pyplot()
     fig, axes = plt.subplots(len(panels), 1, figsize=(7, 2.4 * len(panels)), squeeze=False,
                              layout="constrained")
     for ax, p in zip(axes[:, 0], panels):
@@ -159,4 +144,4 @@ def plot_pulloff(case, panels: list[dict], path: Path) -> Path:
         ax.legend(fontsize=8)
     axes[-1, 0].set_xlabel("time [s]")
     fig.suptitle(case.title, fontsize=10)
-    return _save(fig, path)
+    return save(fig, path)

@@ -178,19 +178,12 @@ def test_period_lag_finds_whole_periods_or_the_least_alias():
 
 
 # -- windows, not whole datasets ---------------------------------------------------------
-def test_many_parts_are_read_by_windows(tmp_path, monkeypatch):
+def test_many_parts_are_read_by_windows(tmp_path, result_reads):
     rng = np.random.default_rng(11)
     exits = np.sort(rng.uniform(0.05, 3.0, 3000))   # ~1000 parts/s; later ones still on the track
     frames = np.arange(0, 1.0 + 1e-9, 0.01)
     path = feeder(tmp_path / "many.h5", frames, exits, speed=0.05, freq=FREQ, amp=3e-5)
-    reads = []
-    original = Result.read
-
-    def spy(self, name, frames=None, slots=None):
-        reads.append((name, frames))
-        return original(self, name, frames, slots)
-
-    monkeypatch.setattr(Result, "read", spy)
+    reads = result_reads
     with Result(path) as r:
         fr = FeedRate(r).run().results
         assert not {"ids", "position", "mass"} & set(vars(r))   # no whole array kept

@@ -213,16 +213,9 @@ def test_as_dict_is_json_ready(tmp_path):
 
 
 # -- transport of many parts ---------------------------------------------------------
-def test_transport_counts_the_parts_present_at_both_ends_of_the_window(tmp_path, monkeypatch):
+def test_transport_counts_the_parts_present_at_both_ends_of_the_window(tmp_path, result_reads):
     r, times, lifetimes, speeds = conveyor(tmp_path)
-    reads = []
-    original = Result.read
-
-    def spy(self, name, frames=None, slots=None):
-        reads.append((name, frames))
-        return original(self, name, frames, slots)
-
-    monkeypatch.setattr(Result, "read", spy)
+    reads = result_reads
     with r:
         tr = Transport(r, start=0.013).run().results
         # 0.1 s - 0.013 s holds 4 whole periods at 50 Hz: the window is 0.02 .. 0.1 s

@@ -58,15 +58,18 @@ def fit_quaternions(template: np.ndarray, positions: np.ndarray) -> np.ndarray:
     return q / np.linalg.norm(q, axis=1, keepdims=True)
 
 
-def spheres(atoms: dict) -> dict:
-    """Plain spheres as parts (each its own body, orientation the identity)."""
-    n = len(atoms["id"])
+def atom_parts(atoms: dict) -> dict:
+    """Per-atom arrays (LIGGGHTS names) as the writer's part elements, one row an atom."""
     return {
         "id": atoms["id"], "species": atoms["type"], "radius": atoms["radius"],
         "mass": atoms["rmass"], "position": atoms["x"], "velocity": atoms["v"],
         "angular_velocity": atoms["omega"], "force": atoms["f"],
-        "orientation": np.broadcast_to(IDENTITY, (n, 4)),
     }
+
+
+def spheres(atoms: dict) -> dict:
+    """Plain spheres as parts (each its own body, orientation the identity)."""
+    return {**atom_parts(atoms), "orientation": np.broadcast_to(IDENTITY, (len(atoms["id"]), 4))}
 
 
 def aggregate(atoms: dict, template: np.ndarray | None, n_spheres: int) -> tuple[dict, int]:

@@ -126,21 +126,19 @@ def _reusable(out: Path, rid: str, deck: Deck, values, ranks: int) -> RunResult 
     """A RunResult for ``out`` if it is a complete result with run id ``rid``."""
     if not out.is_file():
         return None
-    try:
-        import h5py
+    from ..errors import ResultError
+    from ..results.reader import Result
 
-        with h5py.File(out, "r") as f:
-            run = f[L.RUN].attrs
-            if str(run.get("status", "")) != L.STATUS_COMPLETE or str(run.get("id", "")) != rid:
+    try:
+        with Result(out) as r:  # refuses files of runs that did not complete
+            if r.run_id != rid:
                 return None
-            step, time_ = f[f"{L.PARTS}/position/step"], f[f"{L.PARTS}/position/time"]
-            frames = len(step)
-            ids = f[f"{L.PARTS}/id/value"]
-            natoms = int((ids[-1] != L.ID_FILL).sum()) if frames else 0
-            n_steps = int(step[-1] - step[0]) if frames else 0
-            sim_time = float(time_[-1] - time_[0]) if frames else 0.0
-            wall = float(run.get("wall_seconds", 0.0))
-    except (OSError, KeyError):
+            frames = r.n_frames
+            natoms = int(r.present(frames=[frames - 1])[0]) if frames else 0
+            n_steps = int(r.step[-1] - r.step[0]) if frames else 0
+            sim_time = float(r.time[-1] - r.time[0]) if frames else 0.0
+            wall = float(r.run_info.get("wall_seconds", 0.0))
+    except (ResultError, KeyError):
         return None
     return RunResult(output=out, log=out.with_suffix(".log"), deck=deck.name, ranks=ranks,
                      n_steps=n_steps, dt=sim_time / n_steps if n_steps else 0.0, frames=frames,

@@ -30,6 +30,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .bodies import aggregate, atom_parts, spheres
+
 MARK = "@vibrofeed "
 PER_ATOM = ("id", "type", "radius", "rmass", "x", "v", "omega", "f")
 
@@ -100,13 +102,7 @@ def gather_atoms(lmp, comm, names=PER_ATOM) -> dict | None:
 def gather_parts(lmp, comm) -> dict | None:
     """All particles on rank 0 (None elsewhere), as the writer wants them."""
     cat = gather_atoms(lmp, comm)
-    if cat is None:
-        return None
-    return {
-        "id": cat["id"], "species": cat["type"], "radius": cat["radius"], "mass": cat["rmass"],
-        "position": cat["x"], "velocity": cat["v"], "angular_velocity": cat["omega"],
-        "force": cat["f"],
-    }
+    return None if cat is None else atom_parts(cat)
 
 
 def _load_array(value, keys=()):
@@ -187,8 +183,6 @@ class BulkFrames:
         atoms = gather_atoms(lmp, comm, self.names)
         if atoms is None:
             return None
-        from .bodies import aggregate, spheres
-
         if self.n_spheres > 1:
             parts, incomplete = aggregate(atoms, self.template, self.n_spheres)
             if incomplete and not any("incomplete" in w for w in self.warnings):
