@@ -20,7 +20,8 @@ comparison settings and the tolerance of each quantity::
     [compare]             # kind-specific settings
     flights = 3
 
-    [tolerance]           # per quantity: abs (in the quantity's unit) or rel
+    [tolerance]           # per quantity: abs (in the quantity's unit), rel, or
+                          # sigma (times the combined uncertainty, DEM vs DEM)
     landing_phase = { abs = 0.01 }
     flight_duration = { rel = 0.02 }
 
@@ -46,14 +47,12 @@ DERIVED_SWEEP_KEYS = {"gamma": "amp_n", "gamma_t": "amp_t"}
 
 @dataclass(frozen=True)
 class Tolerance:
+    """``abs``: |DEM - model| <= value (the quantity's unit); ``rel``: <= value
+    |model|; ``sigma``: <= value times the comparison's combined 1-sigma
+    uncertainty (for a DEM measured against a DEM reference, each with its
+    batch-means error). ``crosscheck.Row.passed`` applies it."""
     value: float
-    kind: str  # "abs" or "rel"
-
-    def passes(self, model: float, dem: float) -> bool:
-        diff = abs(dem - model)
-        if self.kind == "abs":
-            return diff <= self.value
-        return diff <= self.value * abs(model)
+    kind: str  # "abs", "rel" or "sigma"
 
 
 @dataclass
@@ -85,10 +84,14 @@ class Case:
             raise CaseError(f"case {self.name}: no tolerance for {quantity!r} in [tolerance]") from None
 
 
+TOLERANCE_KINDS = ("abs", "rel", "sigma")
+
+
 def _tolerance(case: str, name: str, spec) -> Tolerance:
-    if not isinstance(spec, dict) or len(spec.keys() & {"abs", "rel"}) != 1:
-        raise CaseError(f"case {case}: tolerance {name} must be {{ abs = x }} or {{ rel = x }}")
-    kind = "abs" if "abs" in spec else "rel"
+    if not isinstance(spec, dict) or len(spec.keys() & TOLERANCE_KINDS) != 1:
+        raise CaseError(f"case {case}: tolerance {name} must be {{ abs = x }}, {{ rel = x }} "
+                        "or {{ sigma = x }}")
+    kind = next(k for k in TOLERANCE_KINDS if k in spec)
     value = float(spec[kind])
     if value < 0:
         raise CaseError(f"case {case}: tolerance {name} must be >= 0")

@@ -20,7 +20,12 @@ case's ``kind``:
     through the vertical-transport model with the same inputs;
 ``pulloff``
     the largest tension of a cohesive contact pulled apart slowly (deck
-    ``pulloff``) against JKR's pull-off force 1.5 pi gamma R*.
+    ``pulloff``) against JKR's pull-off force 1.5 pi gamma R*;
+``reference``
+    DEM against DEM: the bulk feeder's feed rate and conveying velocity at
+    each sweep point against those of the point ``[compare] reference`` names
+    (e.g. the default stiffness), within a multiple of their combined
+    batch-means errors (tolerance ``sigma``).
 """
 
 from __future__ import annotations
@@ -45,8 +50,9 @@ class Row:
     model: float
     dem: float
     tolerance: float
-    tolerance_type: str  # "abs" or "rel"
+    tolerance_type: str  # "abs", "rel" or "sigma" (cases.Tolerance)
     unit: str = ""
+    error: float = 0.0  # combined 1-sigma uncertainty of dem - model (tolerance "sigma")
 
     @property
     def rel_diff(self) -> float | None:
@@ -58,13 +64,19 @@ class Row:
     @property
     def passed(self) -> bool:
         diff = abs(self.dem - self.model)
-        limit = self.tolerance if self.tolerance_type == "abs" else self.tolerance * abs(self.model)
+        if self.tolerance_type == "sigma":
+            limit = self.tolerance * self.error
+        elif self.tolerance_type == "abs":
+            limit = self.tolerance
+        else:
+            limit = self.tolerance * abs(self.model)
         return bool(diff <= limit)
 
     def as_dict(self) -> dict:
         return {"case": self.case, "quantity": self.quantity, "model": self.model,
                 "dem": self.dem, "rel_diff": self.rel_diff, "tolerance": self.tolerance,
-                "tolerance_type": self.tolerance_type, "unit": self.unit, "passed": self.passed}
+                "tolerance_type": self.tolerance_type, "unit": self.unit, "error": self.error,
+                "passed": self.passed}
 
 
 @dataclass
@@ -154,10 +166,11 @@ class CrossCheck:
         return outcome
 
 
-def _row(case: Case, quantity: str, label: str, model: float, dem: float, unit: str = "") -> Row:
+def _row(case: Case, quantity: str, label: str, model: float, dem: float, unit: str = "",
+         error: float = 0.0) -> Row:
     tol = case.tolerance_of(quantity)
     name = f"{quantity}[{label}]" if label != "base" else quantity
-    return Row(case.name, name, float(model), float(dem), tol.value, tol.kind, unit)
+    return Row(case.name, name, float(model), float(dem), tol.value, tol.kind, unit, float(error))
 
 
 def _realised_restitution(case: Case, run: Run, result, out: Outcome) -> float:
@@ -450,5 +463,46 @@ def _pulloff(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
     out.figures.append(plot_pulloff(case, panels, fig_dir / "pulloff.png"))
 
 
+# ---------------------------------------------------------------- kind: reference
+# Bulk-feeder figures a reference case compares, with the key of each one's error.
+REFERENCE_QUANTITIES = {"parts_per_s": ("parts_per_s_err", "1/s"),
+                        "mean_velocity": ("mean_velocity_err", "m/s")}
+
+
+def _reference(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
+    from vibrofeed.postproc.feedrate import FeedRate
+    from vibrofeed.results.reader import Result
+
+    from .plots import plot_reference
+
+    wanted = case.compare.get("reference")
+    if not isinstance(wanted, dict) or not wanted:
+        raise CaseError(f"case {case.name}: kind reference needs [compare] reference = {{ key = value }}")
+    unknown = sorted(set(case.tolerance) - set(REFERENCE_QUANTITIES))
+    if unknown:
+        raise CaseError(f"case {case.name}: no reference quantity {', '.join(unknown)} "
+                        f"(known: {', '.join(REFERENCE_QUANTITIES)})")
+    ref = [run for run in runs
+           if all(k in run.values and float(run.values[k]) == float(v) for k, v in wanted.items())]
+    if len(ref) != 1:
+        raise CaseError(f"case {case.name}: [compare] reference {wanted} matches {len(ref)} sweep "
+                        "points, not one")
+    ref = ref[0]
+    figures = {}
+    for run in runs:
+        with Result(run.output) as r:
+            figures[run.label] = FeedRate(r).run().summary()
+    base = figures[ref.label]
+    for run in runs:
+        if run is ref:
+            continue
+        s = figures[run.label]
+        for quantity in case.tolerance:
+            err, unit = REFERENCE_QUANTITIES[quantity]
+            out.rows.append(_row(case, quantity, run.label, base[quantity], s[quantity], unit,
+                                 error=math.hypot(base[err], s[err])))
+    out.figures.append(plot_reference(case, runs, figures, ref, fig_dir / "reference.png"))
+
+
 KINDS = {"flights": _flights, "transport": _transport, "period": _period, "vertical": _vertical,
-         "replay": _replay, "pulloff": _pulloff}
+         "replay": _replay, "pulloff": _pulloff, "reference": _reference}

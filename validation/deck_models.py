@@ -73,7 +73,21 @@ def part(p: Mapping) -> PartParams:
 
 
 def mass(p: Mapping) -> float:
-    return 4.0 / 3.0 * math.pi * _f(p, "radius") ** 3 * _f(p, "density")
+    """Mass [kg] of the deck's part: the single-part deck's sphere of
+    ``radius``, or the bulk deck's ``shape`` 0 sphere (diameter ``part_size``,
+    nominal size), 1 chip (part_size^2 x part_thickness) or 2 disc."""
+    rho = _f(p, "density")
+    if "radius" in p:
+        return 4.0 / 3.0 * math.pi * _f(p, "radius") ** 3 * rho
+    shape, size = int(_f(p, "shape", 0)), _f(p, "part_size")
+    if shape == 0:
+        return math.pi / 6.0 * size ** 3 * rho
+    thickness = _f(p, "part_thickness")
+    if shape == 1:
+        return size ** 2 * thickness * rho
+    if shape == 2:
+        return math.pi / 4.0 * size ** 2 * thickness * rho
+    raise ValueError(f"shape must be 0, 1 or 2, got {shape}")
 
 
 def vertical_contact(p: Mapping) -> Contact:

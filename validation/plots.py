@@ -46,7 +46,7 @@ def plot_speed_curve(case, runs, points, axis: str, path: Path) -> Path:
     xs = np.array([float(r.values[axis]) for r, _, _ in points])
     fig, ax = plt.subplots(figsize=(6, 4))
     lo, hi = xs.min(), xs.max()
-    if hi > lo and len(points) > 1:
+    if hi > lo and len(points) > 1 and not case.zip_sweep:
         # dense model curve between the swept values, other parameters as the first run
         base = dict(points[0][0].params)
         grid = np.linspace(lo, hi, 25)
@@ -143,5 +143,39 @@ def plot_pulloff(case, panels: list[dict], path: Path) -> Path:
         ax.set_title(p["label"], fontsize=9, loc="left")
         ax.legend(fontsize=8)
     axes[-1, 0].set_xlabel("time [s]")
+    fig.suptitle(case.title, fontsize=10)
+    return save(fig, path)
+
+
+def plot_reference(case, runs, figures: dict, ref, path: Path) -> Path:
+    """Each compared quantity vs the first swept parameter: DEM points with
+    their 1-sigma errors, the reference point's value and its tolerance band
+    (the band uses the reference's own error: each point's limit also
+    includes its own, see the table)."""
+    from .crosscheck import REFERENCE_QUANTITIES
+
+    plt = pyplot()
+    axis = next(iter(case.sweep))
+    quantities = list(case.tolerance)
+    fig, axes = plt.subplots(1, len(quantities), figsize=(5 * len(quantities), 3.8), squeeze=False,
+                             layout="constrained")
+    xs = np.array([float(r.values[axis]) for r in runs])
+    for ax, q in zip(axes[0], quantities):
+        err_key, unit = REFERENCE_QUANTITIES[q]
+        scale, unit = (1e3, "mm/s") if unit == "m/s" else (1.0, unit)
+        ys = np.array([figures[r.label][q] for r in runs]) * scale
+        es = np.array([figures[r.label][err_key] for r in runs]) * scale
+        y0, e0 = figures[ref.label][q] * scale, figures[ref.label][err_key] * scale
+        k = case.tolerance_of(q).value
+        ax.axhspan(y0 - k * e0, y0 + k * e0, color="gray", alpha=0.2,
+                   label=f"reference ± {k:g} sigma")
+        ax.axhline(y0, color="black", lw=0.8, ls="--")
+        ax.errorbar(xs, ys, yerr=es, fmt="o", color=DEM_STYLE["color"], capsize=3,
+                    label="DEM ± 1 sigma (batch means)")
+        if xs.min() > 0 and xs.max() / xs.min() > 10:
+            ax.set_xscale("log")
+        ax.set_xlabel(axis)
+        ax.set_ylabel(f"{q.replace('_', ' ')} [{unit}]")
+        ax.legend(fontsize=8)
     fig.suptitle(case.title, fontsize=10)
     return save(fig, path)

@@ -233,7 +233,7 @@ def _check_bulk_feeder(p: Mapping[str, float]) -> None:
         raise ParameterError(
             f"youngs={p['youngs']:g} Pa is softer than the bulk feeder is validated for: its feed "
             f"rate was measured independent of youngs from {BULK_MIN_YOUNGS:g} to 1e9 Pa "
-            "(python -m vibrofeed.validation.studies.stiffness); stiffer is closer to silicon")
+            "(vibrofeed validate stiffness_independence); stiffer is closer to silicon")
     widest = size * (1 + spread) if shape == 0 else size
     if p.get("n_parts", 1) <= 0 and p.get("inlet_rate", 1) <= 0:
         raise ParameterError("n_parts=0 and inlet_rate=0: no part would ever be fed; "

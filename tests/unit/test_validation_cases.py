@@ -14,7 +14,7 @@ from vibrofeed.validation.models.part_on_surface import Event
 QUANTITIES = {"flights": {"landing_time", "flight_duration"}, "transport": {"mean_speed"},
               "period": {"period"}, "vertical": {"net_speed"},
               "replay": {"mean_difference_mm", "mean_abs_error_mm", "final_displacement_mm"},
-              "pulloff": {"pulloff"}}
+              "pulloff": {"pulloff"}, "reference": {"parts_per_s"}}
 
 
 @pytest.mark.parametrize("name", C.available())
@@ -84,6 +84,46 @@ def test_row_tolerances():
     assert r.rel_diff == pytest.approx(0.05)
     assert Row("c", "q", 0.0, 0.01, 0.02, "abs").rel_diff is None  # JSON null, not Infinity
     assert set(r.as_dict()) >= {"case", "quantity", "model", "dem", "rel_diff", "tolerance", "passed"}
+
+
+def test_sigma_tolerance_is_a_multiple_of_the_combined_error():
+    # |dem - model| = 0.29 against 2 sigma of a combined error 0.15 (limit 0.30) and 0.14 (0.28)
+    assert Row("c", "q", 10.0, 10.29, 2, "sigma", error=0.15).passed
+    assert not Row("c", "q", 10.0, 10.29, 2, "sigma", error=0.14).passed
+    assert not Row("c", "q", 10.0, 10.0001, 2, "sigma").passed  # no error known: nothing passes
+    assert Row("c", "q", 10.0, 10.3, 2, "sigma", error=0.15).as_dict()["error"] == 0.15
+
+
+def test_sigma_tolerance_in_a_case_file(tmp_path):
+    p = tmp_path / "c.toml"
+    p.write_text('title = "t"\nkind = "reference"\ndeck = "bulk_feeder"\n'
+                 "[tolerance]\nparts_per_s = { sigma = 2 }\n")
+    assert C.load(p).tolerance_of("parts_per_s") == C.Tolerance(2.0, "sigma")
+    p.write_text(p.read_text().replace("{ sigma = 2 }", "{ sigma = 2, rel = 0.1 }"))
+    with pytest.raises(C.CaseError, match="sigma = x"):
+        C.load(p)
+
+
+def test_reference_cases_name_one_sweep_point():
+    for name in C.available():
+        case = C.find(name)
+        if case.kind != "reference":
+            continue
+        wanted = case.compare["reference"]
+        matching = [v for v in case.points() if all(float(v[k]) == float(x) for k, x in wanted.items())]
+        assert len(matching) == 1 and len(case.points()) > 1
+
+
+@pytest.mark.parametrize("params, mass", [
+    ({"radius": 1e-3, "density": 3.0}, 4 / 3 * math.pi * 1e-9 * 3.0),          # single-part sphere
+    ({"shape": 0, "part_size": 2e-3, "density": 3.0}, 4 / 3 * math.pi * 1e-9 * 3.0),  # bulk sphere
+    ({"shape": 1, "part_size": 3e-4, "part_thickness": 1e-4, "density": 2330.0},
+     9e-8 * 1e-4 * 2330.0),                                                      # chip: a box
+    ({"shape": 2, "part_size": 2e-3, "part_thickness": 1e-3, "density": 1.0},
+     math.pi * 1e-6 * 1e-3),                                                     # disc: a cylinder
+])
+def test_mass_of_every_deck_part(params, mass):
+    assert dm.mass(params) == pytest.approx(mass, rel=1e-12)
 
 
 def test_landing_period():

@@ -43,8 +43,12 @@ def table(rows) -> list[str]:
     """The comparison rows as aligned text lines (header, rule, one line a row)."""
     lines = [("case", "quantity", "model", "DEM", "rel diff", "tolerance", "")]
     for r in rows:
-        tol = f"{_fmt(r.tolerance)} {r.unit}".strip() if r.tolerance_type == "abs" \
-            else f"{r.tolerance:.1%}"
+        if r.tolerance_type == "abs":
+            tol = f"{_fmt(r.tolerance)} {r.unit}".strip()
+        elif r.tolerance_type == "sigma":  # the limit it stands for, in the quantity's unit
+            tol = f"{_fmt(r.tolerance)} sigma = {r.tolerance * r.error:.3g} {r.unit}".strip()
+        else:
+            tol = f"{r.tolerance:.1%}"
         rel = "-" if r.rel_diff is None else f"{r.rel_diff:+.2%}"
         lines.append((r.case, r.quantity, _fmt(r.model), _fmt(r.dem), rel,
                       tol, "pass" if r.passed else "FAIL"))
