@@ -39,6 +39,7 @@ import numpy as np
 
 from ..errors import CaseError
 from . import deck_models as dm
+from . import micro_checks
 from .cases import DERIVED_SWEEP_KEYS, Case
 from .models.constants import G
 
@@ -505,4 +506,5 @@ def _reference(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None
 
 
 KINDS = {"flights": _flights, "transport": _transport, "period": _period, "vertical": _vertical,
-         "replay": _replay, "pulloff": _pulloff, "reference": _reference}
+         "replay": _replay, "pulloff": _pulloff, "reference": _reference,
+         **micro_checks.KINDS}

@@ -116,6 +116,14 @@ RULES: dict[str, Callable[[float], str | None]] = {
     "surface_energy": _non_negative,
     "surface_energy_pp": _non_negative,
     "t_settle": _non_negative,
+    # micro-scale surface forces (decks/include/surface_forces.liggghts)
+    "hamaker": _between(0, 1e-17, lo_open=False, hi_open=False,
+                        why="Hamaker constants of solids are 0.4e-19 to 4e-19 J"),
+    "roughness": _between(0, 1e-4, lo_open=False, hi_open=False,
+                          why="asperity heights are nm to um; lengths are in metres"),
+    "air_viscosity": _between(0, 1e-3, lo_open=False, hi_open=False,
+                              why="air is 1.81e-5 Pa s"),
+    "face_radius": _non_negative,
 }
 
 # Parameters that also take names; a name is replaced by the deck's number.
@@ -203,6 +211,7 @@ def _check_relations(p: Mapping[str, float]) -> None:
                 f"t_end={p['t_end']:g} s with output_dt={p['output_dt']:g} s would write "
                 f"{frames:.3g} frames (limit {MAX_FRAMES:.0e}); raise output_dt or shorten t_end")
     _check_bulk_feeder(p)
+    _check_surface_forces(p)
     dt = p.get("dt", 0.0)
     if dt > 0:
         if "output_dt" in p and p["output_dt"] < dt:
@@ -280,3 +289,49 @@ def _check_bulk_feeder(p: Mapping[str, float]) -> None:
             raise ParameterError(f"n_parts={n:g} settle {pile:.3g} m high, above the walls "
                                  f"(wall_height={p['wall_height']:g} m); fewer parts, a longer fill "
                                  "(fill_from, fill_to) or higher walls")
+
+
+# Step limits of the micro-scale surface forces, as decks/include/surface_forces.liggghts
+# derives them (validation/models/adhesion.py and squeeze_film.py hold the same laws):
+# a limit below this would mean hours of steps for a fraction of a second.
+SURFACE_FORCES_MIN_DT = 1e-9  # s
+VDW_D0 = 2e-10  # m, contact distance of smooth surfaces (Khan & Sarma, §3.1)
+AIR_MEAN_FREE_PATH = 6.8e-8  # m, the smallest air-film clearance
+
+
+def surface_forces_step_limit(p: Mapping[str, float]) -> float:
+    """Largest timestep [s] the vdW and squeeze-film forces of a single part
+    allow (inf when both are off, or without the single-part vocabulary)."""
+    hamaker, mu = p.get("hamaker", 0.0), p.get("air_viscosity", 0.0)
+    if (hamaker <= 0 and mu <= 0) or "radius" not in p or "density" not in p:
+        return math.inf
+    radius, face = p["radius"], p.get("face_radius", 0.0)
+    mass = 4 / 3 * math.pi * radius ** 3 * p["density"]
+    roughness = p.get("roughness", 0.0)
+    limit = math.inf
+    if hamaker > 0:
+        s = VDW_D0 + roughness
+        kappa = (hamaker * face ** 2 / (2 * s ** 4)) if face > 0 else hamaker * radius / (3 * s ** 3)
+        if kappa > 0:  # (not underflowed)
+            limit = math.pi / 50 * math.sqrt(mass / kappa)
+    if mu > 0:
+        h = max(roughness, AIR_MEAN_FREE_PATH)
+        c = (mu * (1.5 * math.pi * face ** 4 / h ** 3 + 16 * face) if face > 0
+             else 6 * math.pi * mu * radius * (radius / h + 1))
+        if c > 0:
+            limit = min(limit, mass / (10 * c))
+    return limit
+
+
+def _check_surface_forces(p: Mapping[str, float]) -> None:
+    """The timestep the vdW and air-film forces need (the deck refuses the same by hand)."""
+    limit = surface_forces_step_limit(p)
+    if limit < SURFACE_FORCES_MIN_DT:
+        raise ParameterError(
+            f"hamaker={p.get('hamaker', 0):g} J, air_viscosity={p.get('air_viscosity', 0):g} Pa s with "
+            f"roughness={p.get('roughness', 0):g} m need a timestep of {limit:.2g} s (below "
+            f"{SURFACE_FORCES_MIN_DT:g} s: the forces are too stiff at contact); raise roughness")
+    dt = p.get("dt", 0.0)
+    if dt > limit:
+        raise ParameterError(f"dt={dt:g} s is longer than the {limit:.3g} s the surface forces need "
+                             "(hamaker, air_viscosity); lower dt or set dt=0 (automatic)")

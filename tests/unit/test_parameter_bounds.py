@@ -43,6 +43,11 @@ BOUNDS = {
     "output_dt": (0, False, INF, False, None),
     "dt": (0, True, INF, False, None),
     "seed": (1, True, INF, False, "integers"),
+    # micro-scale surface forces (decks/include/surface_forces.liggghts)
+    "hamaker": (0, True, 1e-17, True, None),
+    "roughness": (0, True, 1e-4, True, None),
+    "air_viscosity": (0, True, 1e-3, True, None),
+    "face_radius": (0, True, INF, False, None),
 }
 
 # The bulk feeder's own parameters (decks/bulk_feeder.liggghts); their relations

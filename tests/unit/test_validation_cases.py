@@ -14,7 +14,8 @@ from vibrofeed.validation.models.part_on_surface import Event
 QUANTITIES = {"flights": {"landing_time", "flight_duration"}, "transport": {"mean_speed"},
               "period": {"period"}, "vertical": {"net_speed"},
               "replay": {"mean_difference_mm", "mean_abs_error_mm", "final_displacement_mm"},
-              "pulloff": {"pulloff"}, "reference": {"parts_per_s"}}
+              "pulloff": {"pulloff"}, "reference": {"parts_per_s"},
+              "vdw_pulloff": {"pulloff"}, "sticking": {"leaves"}, "squeeze_launch": {"deficit", "max_gap"}}
 
 
 @pytest.mark.parametrize("name", C.available())

@@ -1,0 +1,175 @@
+"""Squeeze-film air damping (validation/models/squeeze_film.py) against Khan &
+Sarma, "Vibratory Assembly Update: Part Transportation Mechanics Analysis",
+§3.2 and its Figure 13 (a silicon disc 400 um across, 200 um thick, launched at
+Gamma = 10 from several clearances).
+
+Asserted: Stefan's law from the lubrication pressure and its scaling; the
+exact momentum integral along the ODE's solution; the inverse-square
+saturated deficit (log-log slope -2); Figure 13 read at the top of the flight
+(saturated while the stroke is large against the clearance, falling where it
+is not, no hop once the deficit exceeds the launch velocity) and read as the
+report's ODE over a fixed 10 ms window (slope +1 in frequency at low
+frequency, the riding limit, saturation above); the first-order small-damping
+perturbation of the flight's height; the free-flow limit.
+"""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+from scipy.optimize import minimize_scalar
+
+from vibrofeed.validation.models import squeeze_film as sf
+from vibrofeed.validation.models.constants import G
+
+MU = sf.AIR_VISCOSITY
+M = sf.FIG13_MASS
+R = sf.FIG13_RADIUS
+
+
+def slope(x, y):
+    return np.polyfit(np.log(x), np.log(y), 1)[0]
+
+
+def test_stefan_force_is_the_integral_of_the_lubrication_pressure():
+    # Reynolds' equation for a disc approaching a plane at V: (1/rho) d/drho(rho h^3 p' / (12 mu)) = V,
+    # p(r) = 0, gives p(rho) = 3 mu V (r^2 - rho^2) / h^3; the force is its integral over the disc.
+    r, h, v = 200e-6, 5e-6, 0.1
+    force, _ = quad(lambda rho: 2 * math.pi * rho * 3 * MU * v * (r ** 2 - rho ** 2) / h ** 3, 0, r,
+                    epsabs=0, epsrel=1e-12)
+    assert sf.stefan_force(MU, r, h, v) == pytest.approx(force, rel=1e-10)
+    # Dimensions: mu [Pa s] r^4 [m^4] V [m/s] / h^3 [m^3] is Pa m^2 = N; lengths scaled
+    # by k scale the force by k; it is linear in mu and V.
+    k = 3.0
+    assert sf.stefan_force(MU, k * r, k * h, v) == pytest.approx(k * force, rel=1e-12)
+    assert sf.stefan_force(2 * MU, r, h, 3 * v) == pytest.approx(6 * force, rel=1e-12)
+
+
+def test_film_limits_at_small_and_large_gaps():
+    disc = sf.Film(MU, R, h_c=1e-6)
+    # contact: the film keeps the clearance; the force is Stefan's there
+    assert disc.thickness(-1e-7) == disc.h_c == disc.thickness(0.0)
+    stefan = sf.stefan_force(MU, R, disc.h_c, 1.0)
+    assert disc.coefficient(disc.h_c) == pytest.approx(stefan + 16 * MU * R, rel=1e-12)
+    # far away: the face-on Stokes drag of a disc, 16 mu r
+    assert disc.coefficient(10 * R) == pytest.approx(16 * MU * R, rel=1e-3)
+    sphere = sf.Film(MU, 150e-6, h_c=1e-6, flat=False)
+    assert sphere.coefficient(1e-7) == pytest.approx(6 * math.pi * MU * 150e-6 ** 2 / 1e-7, rel=1e-3)
+    assert sphere.coefficient(1e3) == pytest.approx(6 * math.pi * MU * 150e-6, rel=1e-6)
+    # the film cannot be thinner than the mean free path
+    assert sf.clearance(0.0) == sf.MEAN_FREE_PATH and sf.clearance(2e-6) == 2e-6
+    with pytest.raises(ValueError):
+        sf.saturated_deficit(sphere, M)
+
+
+@pytest.mark.parametrize("flat", [True, False])
+def test_impulse_is_the_integral_of_the_coefficient(flat):
+    film = sf.Film(MU, R, h_c=3e-6, flat=flat)
+    h0, h1 = 3e-6, 400e-6
+    # in log h, where the integrand is smooth
+    want, _ = quad(lambda u: film.coefficient(math.exp(u)) * math.exp(u), math.log(h0), math.log(h1),
+                   epsabs=0, epsrel=1e-12)
+    assert film.impulse(h0, h1) == pytest.approx(want, rel=1e-9)
+
+
+def test_the_deficit_is_a_function_of_the_gap_along_the_whole_flight():
+    # The film force is -d/dt of a function of the gap: deficit(t) = impulse(h_c, h(t)) / m,
+    # at every point of the ODE's solution, Stokes drag included.
+    film = sf.Film(MU, R, h_c=5e-6, free_flow=True)
+    run = sf.launch(film, M, 100.0, 10.0)
+    assert run.end == "apex" and len(run.t) > 50
+    want = film.impulse(film.h_c, run.gap + film.h_c) / M
+    np.testing.assert_allclose(run.deficit, want, rtol=1e-6, atol=1e-9 * run.v_launch)
+    # launch: w t0 = asin(1 / Gamma), at the surface's velocity
+    w = 2 * math.pi * 100.0
+    assert w * run.t0 == pytest.approx(math.asin(1 / 10.0), rel=1e-12)
+    assert run.v_launch == pytest.approx(10 * G / w * math.cos(math.asin(0.1)), rel=1e-12)
+
+
+def test_saturated_deficit_is_inverse_square_in_the_clearance():
+    clearances = np.geomspace(3e-6, 30e-6, 5)
+    deficits = [sf.apex_deficit(h0, 50.0).final_deficit for h0 in clearances]
+    assert slope(clearances, deficits) == pytest.approx(-2.0, abs=0.01)
+    for h0, d in zip(clearances, deficits):
+        assert d == pytest.approx(sf.saturated_deficit(sf.fig13_film(h0), M), rel=5e-3)
+
+
+def test_figure13_at_the_top_of_the_flight():
+    # Stroke a = Gamma g / w^2 against the clearance h0 decides: saturated while a >> h0
+    # (low frequencies), below the saturation where a nears h0 (high frequencies).
+    h0 = 5e-6
+    sat = sf.saturated_deficit(sf.fig13_film(h0), M)
+    freqs = [1.0, 10.0, 100.0, 300.0, 1000.0]
+    runs = [sf.apex_deficit(h0, f) for f in freqs]
+    for f, run in zip(freqs, runs):
+        stroke = sf.FIG13_GAMMA * G / (2 * math.pi * f) ** 2
+        assert run.end == "apex"
+        if stroke >= 5 * h0:
+            assert run.final_deficit == pytest.approx(sat, rel=0.02)
+        if stroke <= h0:
+            assert run.final_deficit < 0.8 * sat
+    # no low-frequency dependence: 1 to 100 Hz agree to 1e-4
+    assert np.ptp([r.final_deficit for r in runs[:3]]) < 1e-4 * sat
+    assert all(a.final_deficit >= b.final_deficit for a, b in zip(runs, runs[1:]))
+
+
+def test_no_hop_once_the_deficit_exceeds_the_launch_velocity():
+    h0 = 2e-6  # saturated deficit 0.29 m/s
+    sat = sf.saturated_deficit(sf.fig13_film(h0), M)
+    for f in (100.0, 300.0):  # launch velocities 0.155 and 0.052 m/s
+        run = sf.apex_deficit(h0, f)
+        assert run.v_launch < sat
+        # it never gets free: the gap stops growing within a few clearances (without
+        # air it would rise (v_l)^2 / 2g, tens to hundreds of clearances)
+        assert run.max_gap < 3 * h0 < 0.1 * run.v_launch ** 2 / (2 * G)
+    free = sf.apex_deficit(h0, 20.0)  # launch velocity 0.78 m/s > 0.29 m/s: it hops
+    assert free.v_launch > sat and free.end == "apex"
+    assert free.max_gap > 1000 * h0
+    assert free.final_deficit == pytest.approx(sat, rel=1e-3)
+
+
+def test_figure13_as_the_report_integrates_it_over_a_fixed_window():
+    window, h0 = 0.01, 5e-6
+    sat = sf.saturated_deficit(sf.fig13_film(h0), M)
+    low = [0.03, 0.1, 0.3]
+    d_low = [sf.window_deficit(h0, f, window) for f in low]
+    # below ~1 Hz the part still rides the surface: slope +1 in frequency, the riding limit
+    assert slope(low, d_low) == pytest.approx(1.0, abs=0.02)
+    for f, d in zip(low, d_low):
+        assert d == pytest.approx(sf.riding_deficit(f, sf.FIG13_GAMMA, window), rel=0.02)
+        assert d < 0.2 * sat
+    # above a few Hz: the limit of infinitely fast withdrawal
+    for f in (10.0, 30.0, 100.0):
+        assert sf.window_deficit(h0, f, window) == pytest.approx(sat, rel=2e-3)
+
+
+def test_small_damping_perturbs_the_flight_height_to_first_order():
+    # Weak film (large clearance): the gap is the free flight's minus the integral of
+    # the deficit; at the top the shift of the apex time is second order, so
+    # max gap = free max gap - int_{t0}^{t_apex} deficit(h_free(t)) dt + O(film^2).
+    freq, gamma, h0 = 100.0, 10.0, 60e-6
+    w = 2 * math.pi * freq
+    a = gamma * G / w ** 2
+    film = sf.fig13_film(h0)
+    run = sf.launch(film, M, freq, gamma)
+    t0, v0 = run.t0, run.v_launch
+    z0 = a * math.sin(w * t0)
+
+    def free_gap(t):
+        return z0 + v0 * (t - t0) - G / 2 * (t - t0) ** 2 - a * math.sin(w * t)
+
+    top = minimize_scalar(lambda t: -free_gap(t), bounds=(t0, t0 + 2 / freq), method="bounded",
+                          options={"xatol": 1e-12})
+    correction, _ = quad(lambda t: film.impulse(h0, free_gap(t) + h0) / M, t0, top.x, limit=200)
+    exact_change = free_gap(top.x) - run.max_gap
+    assert exact_change > 0
+    assert exact_change == pytest.approx(correction, rel=0.02)
+    assert correction / free_gap(top.x) < 0.05  # the perturbation is small indeed
+
+
+def test_film_step_limit_is_a_tenth_of_the_relaxation_time():
+    film = sf.fig13_film(1e-6)
+    dt = sf.film_step_limit(film, M)
+    assert dt * film.coefficient(film.h_c) / M == pytest.approx(0.1, rel=1e-12)
+    assert sf.film_step_limit(sf.Film(0.0, R, 1e-6), M) == math.inf
