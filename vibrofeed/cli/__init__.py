@@ -29,6 +29,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "run": ("vibrofeed.cli.run", "run a deck and write an H5MD result"),
     "check": ("vibrofeed.cli.check", "validate result files against the format"),
     "validate": ("vibrofeed.cli.validate", "run DEM and analytic model on the validation cases"),
+    "sweep": ("vibrofeed.cli.sweep", "run a deck over a design of parameters (grid, lists, replicates)"),
+    "sweep-report": ("vibrofeed.cli.sweep_report", "a sweep's table, best setting and feed-rate maps"),
     "replay": ("vibrofeed.cli.replay", "replay measured vertical-transport trials"),
     "decks": ("vibrofeed.cli.decks", "list the decks in decks/"),
     "params": ("vibrofeed.cli.params", "list a deck's parameters with defaults and units"),

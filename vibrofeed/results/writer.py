@@ -387,7 +387,7 @@ class ResultWriter:
                 raise ValueError(f"counts lacks {', '.join(missing)}")
             counts = np.array([int(counts[c]) for c in L.MASS_BALANCE_COUNTS], dtype=np.int64)
         with self._lock:
-            if not self._pending:
+            if not self._pending and not self._pending_events:  # the batch's first item
                 self._pending_since = _time.monotonic()
             self._pending.append((int(step), float(time), rows,
                                   np.asarray(surface_position, dtype="f8"),

@@ -1,0 +1,191 @@
+"""The bulk analyses at their edges: the pieces of the feed rate checked on hand-computed
+series (bins, batch means, lags), and results that lack what the usual path reads (an outlet
+edge, the part at the frame after its exit, arrivals, frames in the window)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from bulk_synthetic import RADIUS, feeder
+from helpers import parts, write_bulk_result
+from vibrofeed.errors import InputError
+from vibrofeed.postproc import FeedRate, Singulation
+from vibrofeed.postproc.feedrate import (
+    SUMMARY_KEYS,
+    _mean_and_batch_error,
+    batch_rate,
+    bin_width,
+    outlet_x,
+    period_lag,
+    period_velocities,
+)
+from vibrofeed.postproc.singulation import SUMMARY_KEYS as SINGULATION_KEYS
+from vibrofeed.results.reader import Result
+
+FREQ = 100.0
+FRAMES = np.arange(0, 1.0 + 1e-9, 0.01)
+
+
+# -- the pieces, on hand-computed series --------------------------------------------------
+def test_bins_hold_about_ten_events_in_whole_periods():
+    # 100 periods in 1 s: 1000 events -> 100 bins of one period, 500 -> 50 bins of two
+    assert bin_width(0.0, 1.0, 100.0, 1000) == pytest.approx(0.01)
+    assert bin_width(0.0, 1.0, 100.0, 500) == pytest.approx(0.02)
+    assert bin_width(0.0, 1.0, 100.0, 0) == pytest.approx(0.1)        # at least 10 bins
+    assert bin_width(0.0, 1.0, 100.0, 10 ** 6) == pytest.approx(0.01)  # never below a period
+    assert bin_width(0.0, 6.0, 100.0, 10 ** 6) == pytest.approx(0.03)  # at most 200 bins: 600/200
+    assert bin_width(0.0, 0.005, 100.0, 50) == pytest.approx(0.005)   # less than a period: the span
+    # without vibration: the span in 10 .. 200 equal bins
+    assert bin_width(0.0, 1.0, 0.0, 55) == pytest.approx(0.1)
+    assert bin_width(0.0, 1.0, 0.0, 1000) == pytest.approx(0.01)
+    assert bin_width(0.0, 2.0, 0.0, 10 ** 5) == pytest.approx(0.01)
+
+
+@pytest.mark.parametrize("freq", [4.0, 0.0])  # four one-period batches, or 200 units in 4 batches
+def test_batch_means_of_a_known_pattern(freq):
+    # 1, 3, 1, 3 events in the quarters of [0, 1): rates 4, 12, 4, 12 per s
+    times = np.array([0.1, 0.3, 0.4, 0.45, 0.6, 0.8, 0.9, 0.95])
+    rate, err = batch_rate(times, np.ones(8), 0.0, 1.0, freq, 4)
+    assert rate == pytest.approx(8.0)
+    assert err == pytest.approx(math.sqrt(4 * 4 ** 2 / 3) / 2)   # std (ddof 1) of the rates / sqrt(4)
+    # weights: mass per second; events at t_b are not in [t_a, t_b)
+    rate, _ = batch_rate(np.r_[times, 1.0], np.r_[np.full(8, 2.0), 100.0], 0.0, 1.0, freq, 4)
+    assert rate == pytest.approx(16.0)
+    rate, _ = batch_rate(np.r_[0.0, times], np.r_[5.0, np.ones(8)], 0.0, 1.0, freq, 4)
+    assert rate == pytest.approx(13.0)                               # t_a is inside
+
+
+def test_batch_means_need_two_periods():
+    rate, err = batch_rate(np.array([0.001, 0.004]), np.ones(2), 0.0, 0.01, 100.0, 10)
+    assert rate == pytest.approx(200.0) and math.isnan(err)          # one period: one batch
+    _, err = batch_rate(np.array([0.001, 0.014]), np.ones(2), 0.0, 0.02, 100.0, 10)
+    assert err == pytest.approx(0.0)                                  # two periods, one event each
+
+
+def test_mean_and_batch_error_of_grouped_values():
+    mean, err = _mean_and_batch_error(np.array([1.0, 2, 3, 4]), np.array([0, 0, 1, 1]), 10)
+    assert mean == 2.5 and err == pytest.approx(1.0)   # batch means 1.5, 3.5: std sqrt(2) / sqrt(2)
+    mean, err = _mean_and_batch_error(np.arange(1.0, 7.0), np.arange(6), 2)
+    assert mean == 3.5 and err == pytest.approx(1.5)   # batches {1,2,3}, {4,5,6}: 3 / sqrt(2) / sqrt(2)
+    mean, err = _mean_and_batch_error(np.array([1.0, 5.0]), np.array([3, 3]), 10)
+    assert mean == 3.0 and math.isnan(err)             # one interval: no spread to measure
+    mean, err = _mean_and_batch_error(np.empty(0), np.empty(0, dtype=int), 10)
+    assert math.isnan(mean) and math.isnan(err)
+
+
+def test_period_lag_of_too_few_frames():
+    assert period_lag(np.array([0.0]), 100.0)[0] == 1 and math.isnan(period_lag(np.array([0.0]), 100.0)[1])
+    assert period_lag(np.array([0.0, 0.01]), 100.0) == (1, 0.0)
+    assert period_lag(np.array([0.0, 0.005, 0.01]), 100.0) == (2, 0.0)
+
+
+# -- results lacking the usual pieces -----------------------------------------------------
+def hand_made(path, frames, events, outlet=None, variables=None):
+    variables = variables or {"freq": ("100", "Hz", "f", "100")}
+    outlet = outlet or {"outlet_x": 0.02, "catch_z": -3e-4, "method": "synthetic"}
+    return Result(write_bulk_result(path, frames, events=events, outlet=outlet, variables=variables))
+
+
+def events_of(times, ids):
+    n = len(ids)
+    return {"time": np.asarray(times, float), "id": np.asarray(ids), "position": np.zeros((n, 3)),
+            "velocity": np.zeros((n, 3)), "orientation": np.tile([1.0, 0, 0, 0], (n, 1))}
+
+
+def test_the_outlet_edge_falls_back_on_the_track_length(tmp_path):
+    frames = [(k, 0.01 * k, parts([1], [[0.001 * k, 0, RADIUS]])) for k in range(5)]
+    variables = {"freq": ("100", "Hz", "f", "100"), "track_length": ("0.015", "m", "l", "0.02")}
+    with hand_made(tmp_path / "a.h5", frames, events_of([], []), outlet={"method": "m"},
+                   variables=variables) as r:
+        assert outlet_x(r) == 0.015
+    with hand_made(tmp_path / "b.h5", frames, events_of([], [])) as r:
+        assert outlet_x(r) == 0.02
+
+
+def test_an_event_mass_comes_from_the_frame_before_when_the_part_is_gone(tmp_path):
+    # part 1 leaves at 0.025 s and is not in the next frame; part 2 leaves at 0.045 s and
+    # is in no frame at all (its mass is unknown): the mass rate is then unknown too
+    m1, m2 = 2e-7, 5e-7
+
+    def frame(k):
+        ids = [i for i, gone in ((1, 0.025), (3, 9.0)) if 0.01 * k < gone]
+        p = parts(ids, [[0.001 * i, 0, RADIUS] for i in ids], mass=m1)
+        p["mass"] = np.where(np.array(ids) == 1, m1, m2)
+        return (k, 0.01 * k, p)
+
+    frames = [frame(k) for k in range(8)]
+    with hand_made(tmp_path / "m.h5", frames, events_of([0.025], [1])) as r:
+        fr = FeedRate(r).run().results
+        assert fr.event_mass.tolist() == [m1]
+        assert fr.mass_per_s == pytest.approx(fr.parts_per_s * m1)
+    with hand_made(tmp_path / "n.h5", frames, events_of([0.025, 0.045], [1, 2])) as r:
+        fr = FeedRate(r).run().results
+        assert fr.event_mass[0] == m1 and math.isnan(fr.event_mass[1])
+        assert math.isnan(fr.mass_per_s) and math.isnan(fr.mass_per_s_err)
+        assert fr.parts_per_s > 0
+
+
+def test_feed_rate_summary_holds_the_contract_keys_json_ready(tmp_path):
+    exits = 0.1 + np.arange(200) / 250.0
+    with Result(feeder(tmp_path / "s.h5", FRAMES, exits, freq=FREQ)) as r:
+        fa = FeedRate(r)
+        assert repr(fa).endswith("not run>")
+        fa.run()
+        assert repr(fa).endswith(f"{len(FRAMES)} frames>")
+        with pytest.raises(InputError, match="bins must be at least 1"):
+            FeedRate(r, bins=0)
+    summary = fa.summary()
+    assert list(summary) == list(SUMMARY_KEYS)
+    assert summary["parts_per_s"] == fa.results.parts_per_s
+    assert isinstance(summary["profile_x"], list) and summary["n_events"] == 200
+
+
+def test_a_window_of_one_frame_has_no_speed(tmp_path):
+    exits = 0.1 + np.arange(40) / 50.0
+    with Result(feeder(tmp_path / "w.h5", FRAMES, exits, freq=FREQ, speed=0.05)) as r:
+        x, v, k, (m, alias) = period_velocities(r, [20])
+        assert (len(x), len(v), len(k), m) == (0, 0, 0, 1) and math.isnan(alias)
+        fr = FeedRate(r, start=0.511, end=0.525).run().results   # holds frame 52 only
+    assert math.isnan(fr.mean_velocity) and math.isnan(fr.mean_velocity_err)
+    assert fr.profile_count.sum() == 0 and np.isnan(fr.profile_velocity).all()
+    assert fr.parts_per_s == pytest.approx(1 / 0.014)   # one arrival inside: at 0.52 s
+
+
+def test_singulation_without_an_outlet_edge_has_no_speed_and_counts_every_part(tmp_path):
+    # two parts touching, one alone; no outlet_x and no track_length: no edge to measure at
+    pos = [[0.0, 0, RADIUS], [2 * RADIUS, 0, RADIUS], [0.01, 0, RADIUS]]
+    frames = [(k, 0.01 * k, parts([1, 2, 3], pos, radius=RADIUS)) for k in range(6)]
+    with hand_made(tmp_path / "e.h5", frames, events_of([0.012, 0.031], [1, 3]),
+                   outlet={"method": "m"}) as r:
+        sg = Singulation(r, start=0.0, end=0.05).run().results
+    assert math.isnan(sg.edge_velocity) and np.isnan(sg.gaps).all() and math.isnan(sg.mean_gap)
+    assert sg.cluster_sizes == {1: 1.0, 2: 1.0}
+    assert sg.n_arrivals == 2 and sg.n_doubles == 0
+
+
+def test_singulation_tolerance_from_the_parts_on_the_track_when_none_arrives(tmp_path):
+    exits = np.array([5.0, 5.01, 5.02])          # after the run: nobody arrives
+    with Result(feeder(tmp_path / "t.h5", FRAMES, exits, freq=FREQ, speed=0.001, radius=RADIUS)) as r:
+        sg = Singulation(r).run().results
+    assert sg.n_arrivals == 0 and sg.tolerance == pytest.approx(0.01 * 2 * RADIUS)
+    assert math.isnan(sg.cv_interarrival) and math.isnan(sg.mean_interarrival)
+    assert math.isnan(sg.doubles_rate) and math.isnan(sg.singulated_fraction)
+    # no part at all: no size to take a tolerance from
+    frames = [(k, 0.01 * k, parts([], np.zeros((0, 3)))) for k in range(4)]
+    with hand_made(tmp_path / "none.h5", frames, events_of([], [])) as r:
+        sg = Singulation(r).run().results
+    assert sg.tolerance == 0.0 and sg.cluster_sizes == {}
+    assert math.isnan(sg.track_singulated_fraction)
+
+
+def test_singulation_between_two_frames_samples_clusters_from_all_frames(tmp_path):
+    exits = 0.1 + np.arange(40) / 50.0
+    with Result(feeder(tmp_path / "b.h5", FRAMES, exits, freq=FREQ, speed=0.05)) as r:
+        sg = Singulation(r, start=0.503, end=0.507, cluster_frames=4).run()
+        with pytest.raises(InputError, match="two frames"):
+            Singulation(r).run(stop=1)
+    assert sg.results.cluster_frames == 4               # the window holds no frame
+    summary = sg.summary()
+    assert list(summary) == [k for k in SINGULATION_KEYS if k in sg.results]
+    assert summary["face_up_fraction"] is None and summary["steady_from"] == 0.503

@@ -1,0 +1,468 @@
+"""Sweep files, their expansion into jobs, the summary and the resume logic (no engine).
+
+The engine side (real runs, a failing job, SIGKILL, mpirun) is tests/engine/test_sweep.py."""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import math
+import os
+
+import numpy as np
+import pytest
+
+from helpers import parts, write_result
+from vibrofeed.errors import InputError, ParameterError, UsageError
+from vibrofeed.sweep import folder as F
+from vibrofeed.sweep import plan as P
+from vibrofeed.sweep import report as R
+from vibrofeed.sweep import summary as S
+from vibrofeed.sweep.execute import describe
+from vibrofeed.sweep.spec import fingerprint, key_lines, parse
+
+# The form the issue asks for, verbatim.
+ISSUE = """\
+deck = "bulk_feeder"
+ranks_per_run = 1
+replicates = 2
+[fixed]
+t_end = 1.0
+[grid]
+amp_n = [5e-5, 1e-4]
+phase = [0.0, 90.0]
+"""
+
+
+def spec_of(text: str, tmp_path=None):
+    path = (tmp_path / "s.toml") if tmp_path is not None else "s.toml"
+    return parse(text, path)
+
+
+def refused(text: str, exc=InputError, planned=False) -> str:
+    with pytest.raises(exc) as info:
+        spec = parse(text, "s.toml")
+        if planned:
+            P.plan(spec)
+    return str(info.value)
+
+
+# ------------------------------------------------------------------ expansion
+def test_the_issue_form_expands_to_grid_times_replicates_with_distinct_seeds():
+    spec = spec_of(ISSUE)
+    jobs = P.plan(spec)
+    assert len(jobs) == 2 * 2 * 2
+    # first axis slowest, replicates innermost
+    assert [(j.setting["amp_n"], j.setting["phase"], j.replicate) for j in jobs[:4]] == \
+        [(5e-5, 0.0, 0), (5e-5, 0.0, 1), (5e-5, 90.0, 0), (5e-5, 90.0, 1)]
+    default = int(P.find_deck(spec).tunables["seed"].default)
+    assert [j.seed for j in jobs] == [default, default + 1] * 4
+    assert all(j.params["t_end"] == "1.0" and j.values["t_end"] == "1.0" for j in jobs)
+    assert jobs[0].params["amp_n"] == "5e-05"  # shortest exact repr of the TOML float
+    # every job is another run: distinct run ids, and distinct files
+    assert len({j.run_id for j in jobs}) == 8 and len({j.file for j in jobs}) == 8
+    assert jobs[3].file == "jobs/job-0003.h5"
+
+
+def test_zip_groups_vary_together_and_points_are_one_axis():
+    spec = spec_of("""
+deck = "bulk_feeder"
+[fixed]
+seed = 11
+[grid]
+phase = [0, 90, 180]
+[zip.stroke]
+freq = [50, 100]
+amp_t = [2e-4, 5e-5]
+[[point]]
+gate_width = 0
+[[point]]
+gate_width = 4.5e-4
+fill_to = 0.68
+""")
+    assert [a.kind for a in spec.axes] == ["grid", "zip", "point"]
+    assert spec.varied == ["phase", "freq", "amp_t", "gate_width", "fill_to"]
+    jobs = P.plan(spec)
+    assert len(jobs) == 3 * 2 * 2
+    pairs = {(j.setting["freq"], j.setting["amp_t"]) for j in jobs}
+    assert pairs == {(50, 2e-4), (100, 5e-5)}  # zipped, never crossed
+    assert {j.seed for j in jobs} == {11}
+    # a point that does not name a parameter runs it at the deck's default
+    first = next(j for j in jobs if j.setting["gate_width"] == 0)
+    assert "fill_to" not in first.setting and first.values["fill_to"] == "0.9"
+    assert [j.setting.get("fill_to") for j in jobs[:2]] == [None, 0.68]
+
+
+def test_a_varied_seed_without_replicates_and_no_axes_at_all():
+    jobs = P.plan(spec_of('deck = "single_part"\n[grid]\nseed = [3, 7]\n'))
+    assert [j.seed for j in jobs] == [3, 7] and [j.params["seed"] for j in jobs] == ["3", "7"]
+    (only,) = P.plan(spec_of('deck = "single_part"\n[fixed]\nt_end = 0.1\n'))
+    assert only.setting == {"t_end": 0.1} and only.index == 0
+
+
+def test_dispatch_is_longest_expected_first():
+    spec = spec_of('deck = "bulk_feeder"\n[grid]\nt_end = [0.5, 2.0, 1.0]\nn_parts = [100, 300]\n')
+    jobs = P.plan(spec)
+    order = P.dispatch_order(jobs)
+    costs = [j.cost for j in order]
+    assert costs == sorted(costs, reverse=True)
+    assert (order[0].setting["t_end"], order[0].setting["n_parts"]) == (2.0, 300)
+    # cost = t_end x parts (module docstring); inlet parts count, a given timestep divides
+    assert P.cost({"t_end": "2", "n_parts": "300"}) == pytest.approx(600)
+    assert P.cost({"t_end": "2", "n_parts": "0", "inlet_rate": "100"}) == pytest.approx(400)
+    assert P.cost({"t_end": "1", "dt": "1e-6"}) == pytest.approx(1e6)
+
+
+# ------------------------------------------------------------------ refusals, with lines
+@pytest.mark.parametrize("text, line, words", [
+    ('deck = "bulk_feeder"\nreplicate = 2\n', 2, "unknown key 'replicate'"),
+    ('deck = "bulk_feeder"\n[grid]\namp_n = [1e-5, 2e-5]\n[grids]\nx = [1]\n', 4, "unknown key 'grids'"),
+    ('deck = "bulk_feeder"\n[fixed]\nt_end = [1, 2]\n', 3, "one number or string"),
+    ('deck = "bulk_feeder"\n[fixed]\nt_end = 1\n[grid]\n\nt_end = [1, 2]\n', 6, "set twice"),
+    ('deck = "bulk_feeder"\n[grid]\namp_n = []\n', 3, "non-empty list"),
+    ('deck = "bulk_feeder"\n[grid]\namp_n = [1e-5, 1e-5]\n', 3, "lists a value twice"),
+    ('deck = "bulk_feeder"\n[grid]\nmu = [true, false]\n', 3, "not a number or a string"),
+    ('deck = "bulk_feeder"\n[zip.s]\nfreq = [50, 100]\n# note\namp_t = [1e-4]\n', 5, "equal lengths"),
+    ('deck = "bulk_feeder"\n[grid]\nphase = [0]\n[[point]]\nmu = 0.3\n[[point]]\nphase = 9\n', 7,
+     "set twice"),
+    ('deck = "bulk_feeder"\nreplicates = 3\n[grid]\nseed = [1, 2]\n', 4, "replicates set the seeds"),
+    ('deck = "bulk_feeder"\nreplicates = 0\n', 2, "replicates must be a whole number >= 1"),
+    ('deck = "bulk_feeder"\nranks_per_run = 1.5\n', 2, "ranks_per_run must be"),
+])
+def test_structural_problems_are_refused_naming_the_line(text, line, words):
+    message = refused(text)
+    assert message.startswith(f"s.toml:{line}: "), message
+    assert words in message
+
+
+def test_invalid_toml_keeps_tomllibs_position_and_a_missing_deck_is_named():
+    assert "line 2" in refused('deck = "bulk_feeder"\n[grid\n')
+    assert "no deck" in refused("[grid]\nphase = [0]\n")
+
+
+@pytest.mark.parametrize("text, line, words", [
+    # an unknown parameter, with the deck's list and a close match
+    ('deck = "bulk_feeder"\n[fixed]\nt_end = 0.5\n[grid]\namp_nn = [1e-5, 2e-5]\n', 5,
+     "unknown parameter 'amp_nn' for deck bulk_feeder (did you mean 'amp_n'?)"),
+    ('deck = "bulk_feeder"\n[[point]]\nmu = 0.3\n[[point]]\nmu = 0.4\nbogus = 1\n', 6,
+     "unknown parameter 'bogus'"),
+    ('deck = "bulk_feeder"\n[fixed]\ndeck_dir = "x"\n', 3, "set by vibrofeed itself"),
+    # a value the deck's checks refuse, in a list spread over lines: the key's line
+    ('deck = "bulk_feeder"\n[grid]\nphase = [0, 90]\namp_n = [\n  5e-5,\n  0.5,\n]\n', 4,
+     "job 1 (phase=0 amp_n=0.5): parameter amp_n=0.5 m must be in [0, 0.01]"),
+    # a relation between a fixed and a varied value: the varied one is named first
+    ('deck = "bulk_feeder"\n[fixed]\nt_end = 0.01\n[grid]\noutput_dt = [0.001, 0.1]\n', 5,
+     "output_dt=0.1 s is longer than the run"),
+    ('deck = "bulk_feeder"\n[zip.a]\nfreq = [100, 200]\namp_n = [1e-4, 5e-3]\n', 4,
+     "moves the surface at"),
+    ('deck = "single_part"\nreplicates = 2\n[fixed]\nseed = "x"\n', 4, "seed"),
+    ('deck = "no_such_deck"\n', 1, "no deck 'no_such_deck'"),
+])
+def test_parameters_are_checked_as_vibrofeed_run_checks_them_naming_the_line(text, line, words):
+    message = refused(text, exc=InputError, planned=True)
+    assert message.startswith(f"s.toml:{line}: "), message
+    assert words in message, message
+
+
+def test_every_invalid_job_is_counted_and_the_rank_count_is_checked(monkeypatch):
+    message = refused('deck = "single_part"\n[grid]\nrestitution = [0.01, 0.02, 0.5]\n',
+                      ParameterError, planned=True)
+    assert "(2 of 3 jobs are invalid)" in message
+    monkeypatch.setenv("VIBROFEED_MAX_RANKS", "4")
+    message = refused('deck = "single_part"\nranks_per_run = 5\n', UsageError, planned=True)
+    assert message.startswith("s.toml:2: ranks_per_run:") and "at most 4" in message
+
+
+def test_a_deck_file_is_found_next_to_the_sweep_file(tmp_path):
+    from helpers import DECKS
+
+    (tmp_path / "decks").mkdir()
+    deck = tmp_path / "decks" / "mine.liggghts"
+    deck.write_text((DECKS / "single_part.liggghts").read_text().replace("${deck_dir}/include",
+                                                                        str(DECKS / "include")))
+    spec = parse('deck = "decks/mine.liggghts"\n', tmp_path / "s.toml")
+    assert P.find_deck(spec).path == deck
+
+
+# ------------------------------------------------------------------ line finder, fingerprint
+def test_key_lines_follow_tables_arrays_of_tables_and_multiline_values():
+    text = """# comment
+deck = "x"            # 2
+[grid]                # 3
+a = [1,               # 4
+  2, [3, 4],
+]
+"b" = ['x = 1']       # 7
+[zip.s]               # 8
+c = [1]               # 9
+[[point]]             # 10
+d = 1                 # 11
+[[point]]             # 12
+d = 2                 # 13
+e = \"\"\"
+f = 1
+\"\"\"
+[ fixed ]             # 17
+g.h = 2               # 18
+"""
+    lines = key_lines(text)
+    assert lines[("deck",)] == 2 and lines[("grid",)] == 3 and lines[("grid", "a")] == 4
+    assert lines[("grid", "b")] == 7 and lines[("zip", "s")] == 8 and lines[("zip", "s", "c")] == 9
+    assert lines[("point", 0)] == 10 and lines[("point", 0, "d")] == 11
+    assert lines[("point", 1, "d")] == 13 and lines[("point", 1, "e")] == 14
+    assert ("point", 1, "f") not in lines  # inside a multi-line string
+    assert lines[("fixed",)] == 17 and lines[("fixed", "g", "h")] == 18
+
+
+def test_the_fingerprint_is_of_the_content_not_the_layout():
+    a = parse(ISSUE, "a.toml")
+    relaid = """# the same sweep, laid out otherwise
+replicates = 2
+deck="bulk_feeder"
+ranks_per_run = 1
+[grid]
+phase = [ 0.0,
+  90.0 ]   # degrees
+amp_n = [5e-5, 1e-4]
+[fixed]
+t_end = 1.0
+"""
+    b = parse(relaid, "b.toml")
+    assert b.data == a.data and b.fingerprint == a.fingerprint
+    c = parse(ISSUE.replace("1e-4", "2e-4"), "c.toml")
+    assert c.fingerprint != a.fingerprint
+    assert a.fingerprint == fingerprint(a.data) and len(a.fingerprint) == 64
+
+
+# ------------------------------------------------------------------ the summary
+def rows_for(jobs, parameters, status=S.DONE, **metrics):
+    from vibrofeed.sweep.execute import base_row
+
+    out = []
+    for j in jobs:
+        row = base_row(j, parameters)
+        row.update(status=status, file=j.file, wall_s=1.5 + j.index, **metrics)
+        out.append(row)
+    return out
+
+
+def test_summary_rows_round_trip_through_hdf5_and_csv(tmp_path):
+    spec = spec_of(ISSUE)
+    jobs = P.plan(spec)
+    params = [p for p in spec.parameters if p != "seed"]
+    rows = rows_for(jobs[:3], params, parts_per_s=346.7, cv_interarrival=math.nan, n_events=288)
+    rows[1].update(status=S.FAILED, error="LIGGGHTS error: boom, with a comma", file="",
+                   parts_per_s=None, n_events=None)
+    S.write(tmp_path, list(reversed(rows)), params, {"fingerprint": spec.fingerprint, "n_jobs": 8})
+    back, meta = S.read(tmp_path)
+    assert [r["job"] for r in back] == [0, 1, 2]  # sorted by job
+    assert meta["fingerprint"] == spec.fingerprint and meta["n_jobs"] == 8
+    assert meta["columns"][:3] == ["job", "replicate", "seed"] and meta["parameters"] == params
+    assert meta["metrics"] == ["parts_per_s", "cv_interarrival", "n_events"]
+    expected = [{k: (None if isinstance(v, float) and math.isnan(v) else v or None if k == "error"
+                     else v) for k, v in r.items()} for r in rows]
+    expected[1]["file"] = None
+    assert back == expected
+    assert back[0]["amp_n"] == 5e-5 and back[0]["phase"] == 0.0 and back[0]["seed"] == jobs[0].seed
+    with open(tmp_path / S.CSV_NAME, newline="") as f:
+        table = list(csv.DictReader(f))
+    assert [int(r["job"]) for r in table] == [0, 1, 2]
+    assert table[1]["error"] == "LIGGGHTS error: boom, with a comma" and table[1]["parts_per_s"] == ""
+    assert float(table[0]["parts_per_s"]) == 346.7 and table[0]["cv_interarrival"] == ""
+    assert float(table[2]["wall_s"]) == rows[2]["wall_s"]
+    # only the two files: no temporary file left behind
+    assert sorted(p.name for p in tmp_path.iterdir()) == [S.CSV_NAME, S.H5_NAME]
+
+
+def test_an_interrupted_summary_write_leaves_the_previous_summary(tmp_path, monkeypatch):
+    spec = spec_of(ISSUE)
+    jobs = P.plan(spec)
+    S.write(tmp_path, rows_for(jobs[:1], []), [], {})
+    before = (tmp_path / S.H5_NAME).read_bytes()
+
+    def fail(*args, **kwargs):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(os, "replace", fail)
+    with pytest.raises(OSError):
+        S.write(tmp_path, rows_for(jobs[:2], []), [], {})
+    assert (tmp_path / S.H5_NAME).read_bytes() == before
+    assert len(S.read(tmp_path)[0]) == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == [S.CSV_NAME, S.H5_NAME]
+
+
+def test_a_folder_without_summary_reads_empty(tmp_path):
+    assert S.read(tmp_path) == ([], {})
+
+
+# ------------------------------------------------------------------ resume
+def test_resume_keeps_true_rows_and_reruns_the_rest():
+    spec = spec_of(ISSUE)
+    jobs = P.plan(spec)
+    rows = rows_for(jobs[:6], [])
+    rows[1]["status"] = S.FAILED
+    rows[2]["run_id"] = "0" * 64  # an older deck or vibrofeed: another run
+    rows[3]["status"] = S.FAILED
+    rows[3]["run_id"] = "1" * 64
+    good = {0, 4}  # job 5's file does not check
+    kept, todo = F.resume(jobs, rows, False, lambda j: j.index in good)
+    assert [r["job"] for r in kept] == [0, 1, 4]
+    assert [j.index for j in todo] == [2, 3, 5, 6, 7]
+    kept, todo = F.resume(jobs, rows, True, lambda j: j.index in good)
+    assert [r["job"] for r in kept] == [0, 4]
+    assert [j.index for j in todo] == [1, 2, 3, 5, 6, 7]
+
+
+def test_a_result_counts_as_done_only_complete_and_with_the_jobs_run_id(tmp_path):
+    spec = spec_of(ISSUE)
+    job = P.plan(spec)[0]
+    job.file = "jobs/a.h5"
+    (tmp_path / "jobs").mkdir()
+    path = tmp_path / job.file
+    frames = [(k, 0.01 * k, parts([1], [[0, 0, 5e-4]])) for k in range(3)]
+    assert not F.result_is_true(tmp_path, job)  # absent
+    write_result(path, frames, status=None)  # a run that did not complete
+    job.run_id = hashlib.sha256(str(path).encode()).hexdigest()  # the id write_result gives
+    assert not F.result_is_true(tmp_path, job)
+    write_result(path, frames)
+    assert F.result_is_true(tmp_path, job)
+    job.run_id = "0" * 64
+    assert not F.result_is_true(tmp_path, job)  # complete, but of another run
+    path.write_bytes(b"not hdf5")
+    assert not F.result_is_true(tmp_path, job)
+
+
+def test_a_folder_of_another_sweep_or_of_other_files_is_refused(tmp_path):
+    spec = spec_of(ISSUE, tmp_path)
+    jobs = P.plan(spec)
+    folder = tmp_path / "out"
+    assert F.check_folder(folder, spec) is False  # new
+    folder.mkdir()
+    F.write_manifest(folder, spec, jobs, "bulk_feeder.liggghts")
+    assert F.check_folder(folder, spec) is True
+    changed = parse(ISSUE.replace("replicates = 2", "replicates = 3"), tmp_path / "s.toml")
+    with pytest.raises(UsageError, match=r"holds another sweep .* differs in replicates\)"):
+        F.check_folder(folder, changed)
+    other = tmp_path / "other"
+    (other / "jobs").mkdir(parents=True)
+    with pytest.raises(UsageError, match="no sweep.json"):
+        F.check_folder(other, spec)
+    lock = F.lock(folder)
+    try:
+        import subprocess
+        import sys
+
+        code = ("import sys; from pathlib import Path; from vibrofeed.sweep.folder import lock\n"
+                f"try:\n    lock(Path({str(folder)!r}))\nexcept Exception as e:\n    print(e)")
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True).stdout
+        assert "another vibrofeed sweep is running" in out
+    finally:
+        os.close(lock)
+
+
+def test_the_dry_run_table_lists_every_job_with_its_state():
+    spec = spec_of(ISSUE)
+    jobs = P.plan(spec)
+    text = describe(jobs, spec, {0: S.DONE, 3: S.FAILED})
+    lines = text.splitlines()
+    assert lines[0].split() == ["job", "rep", "seed", "amp_n", "phase", "cost", "state"]
+    assert len(lines) == 9
+    assert lines[1].split()[-1] == "done" and lines[4].split()[-1] == "failed"
+    assert lines[2].endswith("to run")
+
+
+# ------------------------------------------------------------------ report
+def test_settings_average_replicates_with_their_standard_error():
+    rows = [
+        {"job": 0, "status": S.DONE, "a": 1.0, "parts_per_s": 100.0, "parts_per_s_err": 9.0},
+        {"job": 1, "status": S.DONE, "a": 1.0, "parts_per_s": 110.0, "parts_per_s_err": 9.0},
+        {"job": 2, "status": S.DONE, "a": 1.0, "parts_per_s": 120.0, "parts_per_s_err": 9.0},
+        {"job": 3, "status": S.DONE, "a": 2.0, "parts_per_s": 50.0, "parts_per_s_err": 4.0},
+        {"job": 4, "status": S.FAILED, "a": 2.0, "parts_per_s": None, "parts_per_s_err": None},
+    ]
+    one, two = R.settings(rows, ["a"], "parts_per_s")
+    assert (one["done"], one["runs"], two["done"], two["runs"]) == (3, 3, 1, 2)
+    assert one["merit"] == pytest.approx(110.0)
+    assert one["merit_err"] == pytest.approx(np.std([100, 110, 120], ddof=1) / math.sqrt(3))
+    assert (two["merit"], two["merit_err"]) == (50.0, 4.0)  # one run: its own batch-means error
+
+
+def _entry(a, rate, err, singulated):
+    return {"parameters": {"a": a}, "merit": rate, "merit_err": err, "singulated_fraction": singulated}
+
+
+def test_the_best_setting_is_the_highest_feed_rate_ties_broken_by_singulation():
+    entries = [_entry(1, 100.0, 5.0, 0.1), _entry(2, 95.0, 3.0, 0.6), _entry(3, 80.0, 2.0, 0.9)]
+    # 100 - 95 = 5 <= hypot(5, 3): a tie within one standard error -> the better singulation
+    assert R.best(entries)["parameters"] == {"a": 2}
+    entries[1]["merit"] = 90.0  # 10 > hypot(5, 3): no longer a tie
+    assert R.best(entries)["parameters"] == {"a": 1}
+    no_singulation = [_entry(1, 1.0, 0.5, None), _entry(2, 1.2, 0.5, None)]
+    assert R.best(no_singulation)["parameters"] == {"a": 2}
+    assert R.best([_entry(1, None, None, None)]) is None
+
+
+# ------------------------------------------------------------------ local execution, with a fake runner
+def test_local_workers_take_the_longest_jobs_first_and_the_summary_follows_every_job(tmp_path):
+    import threading
+
+    from vibrofeed.sweep.execute import Recorder, run_local
+    from vibrofeed.sweep.progress import SweepProgress
+
+    spec = spec_of('deck = "bulk_feeder"\n[grid]\nt_end = [0.5, 2.0, 1.0, 1.5]\n')
+    jobs = P.plan(spec)
+    started, seen_rows = [], []
+    gate = threading.Lock()
+
+    def fake(job):
+        with gate:
+            started.append(job.setting["t_end"])
+        row = rows_for([job], ["t_end"])[0]
+        if job.setting["t_end"] == 1.0:
+            row.update(status=S.FAILED, error="LIGGGHTS error: boom")
+        return row, True
+
+    progress = SweepProgress(jobs, 2, enabled=False)
+    recorder = Recorder(tmp_path, [], ["t_end"], {"n_jobs": 4}, progress)
+    assert S.read(tmp_path)[0] == []  # the summary exists, empty, before the first job ends
+    original = recorder.add
+
+    def add(job, row, computed):
+        original(job, row, computed)
+        seen_rows.append(len(S.read(tmp_path)[0]))  # written before the next job is recorded
+
+    recorder.add = add
+    run_local(jobs, 2, fake, recorder, progress)
+    assert started[:2] == [2.0, 1.5] and sorted(started) == [0.5, 1.0, 1.5, 2.0]
+    assert seen_rows == [1, 2, 3, 4]
+    rows = S.read(tmp_path)[0]
+    assert [r["status"] for r in rows] == [S.DONE, S.DONE, S.FAILED, S.DONE]
+    assert (progress.done, progress.failed, progress.running) == (3, 1, {})
+
+
+def test_a_bug_in_a_job_thread_is_raised_not_swallowed(tmp_path):
+    from vibrofeed.sweep.execute import Recorder, run_local
+    from vibrofeed.sweep.progress import SweepProgress
+
+    jobs = P.plan(spec_of('deck = "bulk_feeder"\n[grid]\nt_end = [0.5, 2.0]\n'))
+
+    def broken(job):
+        raise ZeroDivisionError("a bug")
+
+    with pytest.raises(ZeroDivisionError):
+        run_local(jobs, 1, broken, Recorder(tmp_path, [], [], {}), SweepProgress(jobs, 1, enabled=False))
+
+
+def test_the_eta_scales_the_cost_left_by_the_time_per_cost_so_far():
+    from vibrofeed.sweep.progress import SweepProgress
+
+    jobs = P.plan(spec_of('deck = "bulk_feeder"\n[grid]\nt_end = [1.0, 2.0, 3.0]\n'))
+    p = SweepProgress(jobs, 2, enabled=False)
+    assert p.eta() is None
+    p.started(jobs[0])
+    p.running[jobs[0].index] -= 10.0  # it took 10 s
+    p.finished(jobs[0], {"status": S.DONE})
+    # cost of job 0: 1.0 x 300 parts; left: (2 + 3) x 300 at the same pace, on 2 workers
+    assert p.eta() == pytest.approx(10.0 * 5 / 1 / 2, rel=1e-3)
+    p.finished(jobs[1], {"status": S.DONE}, computed=False)  # an earlier result: no time counted
+    assert p.eta() == pytest.approx(10.0 * 3 / 1 / 2, rel=1e-3)

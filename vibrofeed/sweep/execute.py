@@ -1,0 +1,241 @@
+"""Running a sweep: its jobs through the isolated runner, and the summary after each one.
+
+Every job is one :func:`~vibrofeed.engine.runner.run_deck` (a worker process
+of its own, or its own ``mpirun`` for ``ranks_per_run`` > 1, started without
+the launcher variables of any enclosing MPI job), so a job that fails (bad
+parameters, a LIGGGHTS ERROR, a crash, a kill) becomes a ``failed`` row and
+the others go on. Its analysis (:mod:`.metrics`) runs where the job ran, and
+an analysis that raises is that job's failure too (the result stays; a rerun
+with ``--retry-failed`` analyses it again without running it).
+
+Without MPI, ``workers`` jobs run at once, each waited for by a thread (the
+threads only wait for their worker processes and analyse). Under ``mpirun``
+see :mod:`.mpi`. Only one process writes the summary: this one, or rank 0.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import queue
+import shlex
+import sys
+import threading
+import time
+from collections import deque
+from pathlib import Path
+
+from ..decks import Deck
+from ..errors import RunError, UsageError, VibrofeedError
+from . import folder as F
+from . import summary as S
+from .metrics import metrics
+from .plan import Job, dispatch_order, find_deck, plan
+from .progress import SweepProgress
+from .spec import SweepSpec, load
+
+
+def _number(text: str):
+    """A resolved parameter value as the summary stores it: a number when it is one."""
+    try:
+        x = float(text)
+    except (TypeError, ValueError):
+        return text
+    return int(x) if x.is_integer() and "." not in text and "e" not in text.lower() else x
+
+
+def base_row(job: Job, parameters: list[str]) -> dict:
+    row = {"job": job.index, "replicate": job.replicate, "seed": job.seed}
+    row.update({name: _number(job.values[name]) for name in parameters if name != "seed"})
+    row.update({"status": S.FAILED, "error": "", "file": "", "run_id": job.run_id, "wall_s": None})
+    return row
+
+
+def _one_line(text: str) -> str:
+    return " ".join(str(text).split())
+
+
+def run_job(job: Job, folder: Path, deck: Deck, ranks: int, parameters: list[str],
+            command: str = "", warn=None) -> tuple[dict, bool]:
+    """(summary row, computed here) of one job; never raises for the job's own failure."""
+    from ..engine.runner import run_deck
+
+    row = base_row(job, parameters)
+    started = time.monotonic()
+
+    def on_event(event: dict) -> None:
+        if event.get("event") == "warning" and warn is not None:
+            warn(job, event.get("message", ""))
+
+    try:
+        result = run_deck(deck, job.params, folder / job.file, ranks=ranks, reuse=True,
+                          on_event=on_event, command=f"{command} (job {job.index})".strip())
+    except VibrofeedError as exc:
+        partial = getattr(exc, "partial", None)
+        row.update(error=_one_line(exc), wall_s=time.monotonic() - started,
+                   file=str(Path(partial[0]).relative_to(folder)) if partial else "")
+        return row, True
+    except Exception as exc:  # a bug in one job's set-up must not end the sweep: it is its row
+        row.update(error=_one_line(f"{type(exc).__name__}: {exc}"), wall_s=time.monotonic() - started)
+        return row, True
+    row.update(file=job.file, wall_s=result.wall if result.reused else time.monotonic() - started)
+    try:
+        row.update(metrics(folder / job.file))
+    except Exception as exc:  # the run is kept; --retry-failed analyses it again
+        row.update(error=_one_line(f"analysis failed: {type(exc).__name__}: {exc}"))
+        return row, not result.reused
+    row.update(status=S.DONE)
+    return row, not result.reused
+
+
+class Recorder:
+    """Keeps the rows and rewrites the summary (atomically) after every finished job."""
+
+    def __init__(self, folder: Path, rows: list[dict], parameters: list[str], meta: dict,
+                 progress: SweepProgress | None = None):
+        self.folder, self.parameters, self.meta, self.progress = folder, parameters, meta, progress
+        self.rows = {row["job"]: row for row in rows}
+        self.flush()
+
+    def add(self, job: Job, row: dict, computed: bool) -> None:
+        self.rows[job.index] = row
+        self.flush()
+        if self.progress is not None:
+            self.progress.finished(job, row, computed)
+
+    def flush(self) -> None:
+        S.write(self.folder, list(self.rows.values()), self.parameters, self.meta)
+
+
+def run_local(todo: list[Job], workers: int, run_one, recorder: Recorder,
+              progress: SweepProgress) -> None:
+    """``workers`` jobs at a time, each in a daemon thread (an interrupted sweep
+    exits at once; its runs' workers get SIGTERM as their parent dies)."""
+    waiting = deque(dispatch_order(todo))
+    finished: queue.Queue = queue.Queue()
+    running = 0
+
+    def work(job: Job) -> None:
+        try:
+            finished.put((job, *run_one(job)))
+        except BaseException as exc:  # noqa: BLE001 (re-raised in the main thread)
+            finished.put((job, exc, False))
+
+    while waiting or running:
+        while waiting and running < workers:
+            job = waiting.popleft()
+            progress.started(job)
+            threading.Thread(target=work, args=(job,), daemon=True).start()
+            running += 1
+        job, row, computed = finished.get()
+        running -= 1
+        if isinstance(row, BaseException):
+            raise row
+        recorder.add(job, row, computed)
+
+
+def describe(jobs: list[Job], spec: SweepSpec, states: dict[int, str]) -> str:
+    """The job table of ``--dry-run``."""
+    varied = spec.varied
+    head = ["job", "rep", "seed"] + varied + ["cost", "state"]
+    top = max((j.cost for j in jobs), default=1.0) or 1.0
+    rows = [[str(j.index), str(j.replicate), str(j.seed if j.seed is not None else "")]
+            + [str(j.setting.get(name, "")) for name in varied]
+            + [f"{j.cost / top:.3g}", states.get(j.index, "to run")] for j in jobs]
+    widths = [max(len(r[i]) for r in [head] + rows) for i in range(len(head))]
+    return "\n".join("  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip() for r in [head] + rows)
+
+
+def sweep(spec_path, output=None, workers: int = 1, retry_failed: bool = False,
+          dry_run: bool = False, quiet: bool = False, comm=None, out=None) -> int:
+    """``vibrofeed sweep``: returns the exit status (or raises a VibrofeedError).
+
+    ``comm``: the MPI communicator when started by ``mpirun`` with more than
+    one rank (this is rank 0), else None."""
+    out = out or sys.stdout
+    spec = load(spec_path)
+    deck = find_deck(spec)
+    jobs = plan(spec, deck)
+    folder = Path(output if output is not None else Path("results") / Path(spec_path).stem).absolute()
+    ours = F.check_folder(folder, spec)
+    parameters = [p for p in spec.parameters if p != "seed"]
+    groups = 1 if comm is None else comm.Get_size() // spec.ranks_per_run
+    if comm is not None and groups < 1:
+        raise UsageError(f"{spec.where('ranks_per_run')}: ranks_per_run = {spec.ranks_per_run} "
+                         f"needs at least that many ranks; mpirun started {comm.Get_size()}")
+    if comm is not None and workers > 1:
+        raise UsageError("-j: under mpirun the groups of ranks_per_run ranks are the workers; drop -j")
+    lock = None
+    if not dry_run:  # from here on this sweep owns the folder: no other one reads or writes it
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / "jobs").mkdir(exist_ok=True)
+        lock = F.lock(folder)
+        F.clear_leftovers(folder)
+    try:
+        return _run(spec, deck, jobs, folder, ours, parameters, groups, workers, retry_failed,
+                    dry_run, quiet, comm, out, spec_path)
+    finally:
+        if lock is not None:
+            os.close(lock)
+
+
+def _run(spec, deck, jobs, folder, ours, parameters, groups, workers, retry_failed, dry_run, quiet,
+         comm, out, spec_path) -> int:
+    rows = S.read(folder)[0] if ours else []
+    kept, todo = F.resume(jobs, rows, retry_failed, lambda j: F.result_is_true(folder, j))
+    states = {row["job"]: row["status"] for row in kept}
+    n_done = sum(s == S.DONE for s in states.values())
+    n_failed = len(states) - n_done
+    settings = len(jobs) // spec.replicates
+    idle = 0 if comm is None else comm.Get_size() - groups * spec.ranks_per_run
+    where = "local" if comm is None else f"{comm.Get_size()} MPI ranks" + (
+        f" of which {idle} idle: not a multiple of ranks_per_run" if idle else "")
+    head = (f"sweep {spec.source}: {len(jobs)} jobs ({settings} settings x {spec.replicates} "
+            f"replicates) of deck {deck.name} -> {folder}; {n_done} done, {n_failed} failed kept, "
+            f"{len(todo)} to run ({'workers: ' + str(workers) if comm is None else where}, "
+            f"{spec.ranks_per_run} rank{'s' * (spec.ranks_per_run > 1)} per run)")
+    if dry_run:
+        print(head, file=out)
+        print(describe(jobs, spec, states), file=out)
+        return 0
+
+    F.write_manifest(folder, spec, jobs, str(deck.path))
+    if not quiet:
+        print(head, file=sys.stderr)
+    label = lambda job: f"job {job.index} ({job.label(spec.varied)})"  # noqa: E731
+    progress = SweepProgress(todo, groups if comm is not None else workers, n_done, n_failed,
+                             enabled=not quiet, label=label)
+    meta = {"fingerprint": spec.fingerprint, "deck": deck.name, "source": str(spec.source),
+            "n_jobs": len(jobs), "replicates": spec.replicates, "varied": json.dumps(spec.varied),
+            "axes": json.dumps([axis.keys for axis in spec.axes]),
+            "units": json.dumps({n: deck.tunables[n].unit for n in spec.parameters}),
+            "spec": spec.text}
+    recorder = Recorder(folder, kept, parameters, meta, progress)  # drops rows no longer true
+    command = shlex.join(["vibrofeed", "sweep", str(spec_path), "-o", str(folder)])
+
+    def warn(job, message):
+        print(f"vibrofeed: warning: {label(job)}: {message}", file=sys.stderr)
+
+    def run_one(job: Job):
+        return run_job(job, folder, deck, spec.ranks_per_run, parameters, command, warn)
+
+    try:
+        if comm is None:
+            run_local(todo, workers, run_one, recorder, progress)
+        else:
+            from .mpi import dispatch
+
+            setup = {"deck": str(deck.path), "folder": str(folder), "ranks": spec.ranks_per_run,
+                     "parameters": parameters, "command": command}
+            dispatch(comm, todo, spec.ranks_per_run, setup, run_one, recorder, progress)
+    finally:
+        progress.close()
+    rows = list(recorder.rows.values())
+    failed = sum(r["status"] != S.DONE for r in rows)
+    print(f"sweep: {len(rows)} of {len(jobs)} jobs finished, {len(rows) - failed} done, {failed} failed "
+          f"-> {folder / S.CSV_NAME}", file=out)
+    if failed:
+        raise RunError(f"{failed} of {len(jobs)} jobs failed (their errors are in "
+                       f"{folder / S.CSV_NAME}); rerun with --retry-failed to run them again")
+    return 0
+

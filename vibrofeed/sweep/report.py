@@ -1,0 +1,249 @@
+"""``vibrofeed sweep-report``: a sweep's settings, the best one, and the maps.
+
+Settings are the summary's rows grouped over their replicates (same
+parameters, different seeds). A setting's figure is the mean over its done
+replicates; its uncertainty is the standard error of that mean over the
+replicates (independent seeds: the honest spread, run-to-run noise included)
+when there are two or more, else the run's own batch-means error.
+
+The figure of merit is the feed rate (``parts_per_s``) of a bulk-feeder deck,
+else the mean conveying velocity. **Best setting**: among the settings whose
+figure is within one combined standard error (sqrt(err_best^2 + err^2)) of the
+highest, the one with the largest singulated fraction (a feeder that delivers
+as much and singulates better is the better feeder); without singulation
+figures, simply the highest.
+
+Maps (``--plot DIR``): a heat map of the figure over the first two varied
+axes, and the figure against the first varied axis with its error bars (one
+line per value of the second axis), the singulated fraction beside it. Other
+varied axes are held at the best setting's values; a zipped group is one axis,
+labelled by its first parameter.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+from ..errors import UsageError
+from . import summary as S
+
+# column -> (name, unit shown, scale to that unit, format)
+FIGURES = {
+    "parts_per_s": ("feed rate", "parts/s", 1.0, ".4g"),
+    "mean_velocity": ("conveying", "mm/s", 1e3, ".4g"),
+    "singulated_fraction": ("singulated", "%", 100.0, ".3g"),
+    "doubles_rate": ("doubles", "%", 100.0, ".3g"),
+}
+
+
+def heading(name: str) -> str:
+    title, unit, _, _ = FIGURES[name]
+    return f"{title} [{unit}]"
+
+
+def _mean_err(values: list, errors: list) -> tuple[float | None, float | None]:
+    xs = [v for v in values if v is not None]
+    if not xs:
+        return None, None
+    mean = sum(xs) / len(xs)
+    if len(xs) >= 2:
+        var = sum((x - mean) ** 2 for x in xs) / (len(xs) - 1)
+        return mean, math.sqrt(var / len(xs))
+    e = errors[values.index(xs[0])] if errors else None
+    return mean, e
+
+
+def settings(rows: list[dict], varied: list[str], merit: str) -> list[dict]:
+    """One entry per setting: its varied values, runs done / total, figures (mean, error)."""
+    groups: dict[tuple, list[dict]] = {}
+    for row in sorted(rows, key=lambda r: r["job"]):
+        groups.setdefault(tuple(row.get(p) for p in varied), []).append(row)
+    out = []
+    for key, members in groups.items():
+        done = [r for r in members if r["status"] == S.DONE]
+        entry = {"parameters": dict(zip(varied, key)), "runs": len(members), "done": len(done),
+                 "jobs": [r["job"] for r in members]}
+        for name in FIGURES:
+            mean, err = _mean_err([r.get(name) for r in done], [r.get(f"{name}_err") for r in done])
+            entry[name], entry[f"{name}_err"] = mean, err
+        entry["merit"], entry["merit_err"] = entry[merit], entry[f"{merit}_err"]
+        out.append(entry)
+    return out
+
+
+def best(entries: list[dict]) -> dict | None:
+    """The best setting (module docstring), or None when none has a figure."""
+    scored = [e for e in entries if e["merit"] is not None]
+    if not scored:
+        return None
+    top = max(scored, key=lambda e: e["merit"])
+    err_top = top["merit_err"] or 0.0
+    close = [e for e in scored
+             if top["merit"] - e["merit"] <= math.hypot(err_top, e["merit_err"] or 0.0)]
+    if any(e["singulated_fraction"] is not None for e in close):
+        return max(close, key=lambda e: (e["singulated_fraction"] if e["singulated_fraction"] is not None
+                                         else -1.0, e["merit"]))
+    return top
+
+
+def _fmt(value, scale=1.0, spec=".4g") -> str:
+    return "n/a" if value is None else format(value * scale, spec)
+
+
+def _with_err(entry, name) -> str:
+    _, _, scale, spec = FIGURES[name]
+    value, err = entry[name], entry[f"{name}_err"]
+    if value is None:
+        return "n/a"
+    return _fmt(value, scale, spec) + ("" if err is None else f" ± {_fmt(err, scale, '.2g')}")
+
+
+def table(entries: list[dict], varied: list[str], shown: list[str]) -> str:
+    head = varied + ["runs"] + [heading(n) for n in shown]
+    rows = [[_fmt(e["parameters"][p], spec="g") if isinstance(e["parameters"][p], int | float)
+             else str(e["parameters"][p]) for p in varied] + [f"{e['done']}/{e['runs']}"]
+            + [_with_err(e, n) for n in shown] for e in entries]
+    widths = [max(len(r[i]) for r in [head] + rows) for i in range(len(head))]
+    return "\n".join("  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip() for r in [head] + rows)
+
+
+def load(folder) -> tuple[list[dict], dict]:
+    folder = Path(folder)
+    if not (folder / S.H5_NAME).is_file():
+        raise UsageError(f"{folder}: no {S.H5_NAME}; give the -o DIR of a `vibrofeed sweep` "
+                         "(its summary appears after the first job finishes)")
+    rows, meta = S.read(folder)
+    meta["varied"] = json.loads(meta.get("varied", "[]"))
+    meta["axes"] = json.loads(meta.get("axes", "[]")) or [[v] for v in meta["varied"]]
+    return rows, meta
+
+
+def report(folder, plot_folder=None) -> dict:
+    """Everything ``vibrofeed sweep-report`` shows, JSON-ready."""
+    rows, meta = load(folder)
+    varied = [p for p in meta["varied"] if p != "seed"]
+    merit = "parts_per_s" if any(r.get("parts_per_s") is not None for r in rows) else "mean_velocity"
+    entries = settings(rows, varied, merit)
+    chosen = best(entries)
+    failed = [{"job": r["job"], "error": r["error"], "file": r["file"]}
+              for r in rows if r["status"] != S.DONE]
+    units = json.loads(meta.get("units", "{}"))
+    out = {"folder": str(folder), "deck": meta.get("deck"), "jobs_planned": meta.get("n_jobs"),
+           "jobs_finished": len(rows), "done": len(rows) - len(failed), "failed": failed,
+           "varied": varied, "merit": merit, "settings": entries, "best": chosen, "figures": []}
+    if plot_folder is not None and entries:
+        axes = [[k for k in axis if k in varied] for axis in meta["axes"]]
+        axes = [axis[0] for axis in axes if axis]
+        out["figures"] = plots(entries, axes, merit, chosen, Path(plot_folder), units)
+    return out
+
+
+def text(rep: dict) -> str:
+    shown = [rep["merit"]] + [n for n in ("singulated_fraction", "doubles_rate")
+                              if any(e[n] is not None for e in rep["settings"])]
+    if rep["merit"] == "parts_per_s":
+        shown.append("mean_velocity")
+    lines = [f"sweep {rep['folder']}: deck {rep['deck']}, {rep['jobs_finished']} of "
+             f"{rep['jobs_planned']} jobs finished: {rep['done']} done, {len(rep['failed'])} failed",
+             "", table(rep["settings"], rep["varied"], shown), ""]
+    b = rep["best"]
+    if b is None:
+        lines.append("best: none (no job finished with a figure)")
+    else:
+        setting = " ".join(f"{k}={_fmt(v, spec='g') if isinstance(v, float) else v}"
+                           for k, v in b["parameters"].items()) or "(the only setting)"
+        title, unit, _, _ = FIGURES[rep["merit"]]
+        lines.append(f"best: {setting}: {title} {_with_err(b, rep['merit'])} {unit}"
+                     + (f", singulated {_with_err(b, 'singulated_fraction')} %"
+                        if b["singulated_fraction"] is not None else "")
+                     + " (the highest; within one standard error, the better singulation)")
+    for f in rep["failed"][:10]:
+        lines.append(f"failed: job {f['job']}: {f['error']}")
+    if len(rep["failed"]) > 10:
+        lines.append(f"... and {len(rep['failed']) - 10} more failed jobs (see summary.csv)")
+    lines += [f"figure: {p}" for p in rep["figures"]]
+    return "\n".join(lines)
+
+
+# ---------------------------------------------------------------- figures
+def _numeric(entries, name) -> bool:
+    return all(isinstance(e["parameters"][name], int | float) for e in entries)
+
+
+def _slice(entries, keep: list[str], chosen) -> list[dict]:
+    """The entries whose varied values other than ``keep`` are the best setting's."""
+    if chosen is None:
+        return entries
+    fixed = {k: v for k, v in chosen["parameters"].items() if k not in keep}
+    return [e for e in entries if all(e["parameters"][k] == v for k, v in fixed.items())]
+
+
+def plots(entries, axes: list[str], merit: str, chosen, folder: Path, units=None) -> list[str]:
+    from ..figures import pyplot, save
+
+    plt = pyplot()
+    label, scale = heading(merit), FIGURES[merit][2]
+    units = units or {}
+
+    def axis_label(name):
+        unit = units.get(name, "")
+        return f"{name} [{unit}]" if unit and unit != "-" else name
+
+    out = []
+    axes = [a for a in axes if _numeric(entries, a) and len({e["parameters"][a] for e in entries}) > 1]
+    if len(axes) >= 2:
+        a, b = axes[:2]
+        part = _slice(entries, [a, b], chosen)
+        xs = sorted({e["parameters"][a] for e in part})
+        ys = sorted({e["parameters"][b] for e in part})
+        import numpy as np
+
+        grid = np.full((len(ys), len(xs)), np.nan)
+        for e in part:
+            if e["merit"] is not None:
+                grid[ys.index(e["parameters"][b]), xs.index(e["parameters"][a])] = e["merit"] * scale
+        fig, ax = plt.subplots(figsize=(6.5, 4.8), layout="constrained")
+        im = ax.imshow(grid, origin="lower", aspect="auto", cmap="viridis")
+        ax.set_xticks(range(len(xs)), [f"{x:g}" for x in xs])
+        ax.set_yticks(range(len(ys)), [f"{y:g}" for y in ys])
+        for (i, j), v in np.ndenumerate(grid):
+            if np.isfinite(v):
+                ax.text(j, i, f"{v:.3g}", ha="center", va="center", fontsize=8,
+                        color="w" if v < np.nanmean(grid) else "k")
+        ax.set_xlabel(axis_label(a))
+        ax.set_ylabel(axis_label(b))
+        fig.colorbar(im, ax=ax, label=label)
+        if chosen is not None and chosen in part:
+            ax.plot(xs.index(chosen["parameters"][a]), ys.index(chosen["parameters"][b]), "r*", ms=14,
+                    label="best")
+            ax.legend(loc="upper right", fontsize=8)
+        out.append(str(save(fig, folder / "sweep_map.png")))
+    if axes:
+        a = axes[0]
+        series = axes[1] if len(axes) > 1 else None
+        part = _slice(entries, [a] + ([series] if series else []), chosen)
+        fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.2), layout="constrained")
+        for value in sorted({e["parameters"][series] for e in part}) if series else [None]:
+            line = sorted((e for e in part if series is None or e["parameters"][series] == value),
+                          key=lambda e: e["parameters"][a])
+            name = f"{series}={value:g}" if series else None
+            x = [e["parameters"][a] for e in line]
+            y = [math.nan if e["merit"] is None else e["merit"] * scale for e in line]
+            err = [0.0 if e["merit_err"] is None else e["merit_err"] * scale for e in line]
+            left.errorbar(x, y, yerr=err, marker="o", ms=4, capsize=3, label=name)
+            s = [math.nan if e["singulated_fraction"] is None else 100 * e["singulated_fraction"]
+                 for e in line]
+            serr = [0.0 if e["singulated_fraction_err"] is None else 100 * e["singulated_fraction_err"]
+                    for e in line]
+            right.errorbar(x, s, yerr=serr, marker="s", ms=4, capsize=3, label=name)
+        left.set_xlabel(axis_label(a))
+        left.set_ylabel(label)
+        right.set_xlabel(axis_label(a))
+        right.set_ylabel("singulated fraction [%]")
+        if series:
+            left.legend(fontsize=8)
+            right.legend(fontsize=8)
+        out.append(str(save(fig, folder / f"sweep_vs_{a}.png")))
+    return out

@@ -1,0 +1,343 @@
+"""The sweep file: which deck, which parameters fixed and which varied.
+
+::
+
+    deck = "bulk_feeder"      # a deck name, or a deck file (relative to this file's folder)
+    ranks_per_run = 1         # MPI ranks of each run
+    replicates = 2            # runs per setting, with seeds seed, seed+1, ...
+    description = "..."       # optional, free text
+
+    [fixed]                   # one value each, for every job
+    t_end = 1.0
+
+    [grid]                    # every combination (cartesian product) of these lists
+    amp_n = [5e-5, 1e-4]
+    phase = [0.0, 90.0]
+
+    [zip.stroke]              # lists that vary together (equal lengths): one axis
+    freq = [50, 100]
+    amp_t = [2e-4, 5e-5]
+
+    [[point]]                 # explicit settings: each [[point]] is one value of one more axis
+    gate_width = 0
+    [[point]]
+    gate_width = 4.5e-4
+    fill_to = 0.68
+
+The jobs are the cartesian product of the axes (each ``[grid]`` key, each
+``[zip.NAME]`` group, the list of ``[[point]]`` tables), in the order the file
+gives them, times the replicates (innermost). A parameter may appear in one
+place only. ``seed`` may be fixed (the base seed of the replicates) or varied
+when ``replicates = 1``.
+
+Everything is checked before anything runs, and a problem is reported with
+the line of the file it is on (``tomllib`` keeps no positions, so
+:func:`key_lines` finds each key's line in the text). The fingerprint is a
+SHA-256 of the parsed content (comments, layout and key order within a table
+do not change it), which ties an output folder to one sweep.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import re
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..errors import InputError
+
+TOP_KEYS = ("deck", "ranks_per_run", "replicates", "description", "fixed", "grid", "zip", "point")
+SECTIONS = ("fixed", "grid", "zip", "point")
+
+
+@dataclass
+class Axis:
+    """One varied axis: its values are partial settings (name -> TOML value).
+
+    ``kind``: ``grid`` (one key), ``zip`` (several keys varying together) or
+    ``point`` (explicit settings, possibly of different keys)."""
+
+    kind: str
+    name: str
+    keys: list[str]
+    values: list[dict]
+
+
+@dataclass
+class SweepSpec:
+    source: Path
+    text: str
+    data: dict
+    deck: str
+    ranks_per_run: int = 1
+    replicates: int = 1
+    description: str = ""
+    fixed: dict = field(default_factory=dict)
+    axes: list[Axis] = field(default_factory=list)
+    lines: dict = field(default_factory=dict)  # key path (tuple) -> line number
+
+    @property
+    def fingerprint(self) -> str:
+        return fingerprint(self.data)
+
+    @property
+    def varied(self) -> list[str]:
+        """The varied parameter names, in the order of the file."""
+        out: list[str] = []
+        for axis in self.axes:
+            out += [k for k in axis.keys if k not in out]
+        return out
+
+    @property
+    def parameters(self) -> list[str]:
+        """Every parameter the file names: fixed, then varied."""
+        return list(self.fixed) + [k for k in self.varied if k not in self.fixed]
+
+    def line_of(self, *path) -> int | None:
+        """The line of a key path (``("grid", "amp_n")``, ``("point", 1, "fill_to")``)."""
+        while path:
+            if path in self.lines:
+                return self.lines[path]
+            path = path[:-1]
+        return None
+
+    def where(self, *path) -> str:
+        """``FILE:LINE`` of a key path (``FILE`` when it cannot be placed)."""
+        line = self.line_of(*path)
+        return f"{self.source}:{line}" if line else str(self.source)
+
+    def place(self, name: str) -> tuple:
+        """The key path where parameter ``name`` is set."""
+        if name in self.fixed:
+            return ("fixed", name)
+        for axis in self.axes:
+            if name in axis.keys:
+                if axis.kind == "grid":
+                    return ("grid", name)
+                if axis.kind == "zip":
+                    return ("zip", axis.name, name)
+                first = next(i for i, v in enumerate(axis.values) if name in v)
+                return ("point", first, name)
+        return ()
+
+
+def fingerprint(data: dict) -> str:
+    """SHA-256 of the canonical JSON of a parsed sweep file."""
+    text = json.dumps(data, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+# ---------------------------------------------------------------- line numbers
+_HEADER = re.compile(r"^\s*(\[\[?)\s*([^\[\]]+?)\s*(\]\]?)\s*(#.*)?$")
+_PART = r"""(?:[A-Za-z0-9_-]+|"[^"]*"|'[^']*')"""  # a bare or quoted key
+_KEY = re.compile(rf"^\s*({_PART}(?:\s*\.\s*{_PART})*)\s*=(.*)$")
+
+
+def _split_dotted(key: str) -> list[str]:
+    return [part.strip().strip("\"'") for part in re.findall(r"\"[^\"]*\"|'[^']*'|[^.]+", key)]
+
+
+def _open_brackets(value: str) -> int:
+    """Net ``[`` minus ``]`` of a value outside strings and comments."""
+    depth, quote = 0, None
+    for ch in value:
+        if quote:
+            if ch == quote:
+                quote = None
+        elif ch in "\"'":
+            quote = ch
+        elif ch == "#":
+            break
+        elif ch == "[":
+            depth += 1
+        elif ch == "]":
+            depth -= 1
+    return depth
+
+
+def key_lines(text: str) -> dict[tuple, int]:
+    """Line number (1-based) of every table header and key of a TOML text,
+    keyed by path: ``("grid",)``, ``("grid", "amp_n")``, ``("point", 0, "x")``
+    (arrays of tables are indexed by occurrence). Values that span lines
+    (arrays, multi-line strings) are skipped over."""
+    lines: dict[tuple, int] = {}
+    table: tuple = ()
+    counts: dict[tuple, int] = {}
+    depth, in_string = 0, None
+    for number, raw in enumerate(text.splitlines(), start=1):
+        if in_string:
+            if raw.count(in_string) % 2 == 1:
+                in_string = None
+            continue
+        if depth > 0:
+            depth += _open_brackets(raw)
+            continue
+        header = _HEADER.match(raw)
+        if header and not _KEY.match(raw):
+            path = tuple(_split_dotted(header[2]))
+            if header[1] == "[[":
+                index = counts.get(path, 0)
+                counts[path] = index + 1
+                lines.setdefault(path, number)
+                table = path + (index,)
+            else:
+                table = path
+            lines[table] = number
+            continue
+        key = _KEY.match(raw)
+        if key:
+            lines[table + tuple(_split_dotted(key[1]))] = number
+            value = key[2]
+            for quotes in ('"""', "'''"):
+                if value.count(quotes) % 2 == 1:
+                    in_string = quotes
+            if not in_string:
+                depth = max(_open_brackets(value), 0)
+    return lines
+
+
+# ---------------------------------------------------------------- parsing
+def _scalar(value) -> bool:
+    return isinstance(value, int | float | str) and not isinstance(value, bool)
+
+
+def load(path) -> SweepSpec:
+    """Read and check a sweep file; InputError naming the line of a problem."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"cannot read sweep file {path}: {getattr(exc, 'strerror', None) or exc}") from None
+    return parse(text, path)
+
+
+def parse(text: str, source: Path | str = "sweep.toml") -> SweepSpec:
+    source = Path(source)
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"{source}: not valid TOML: {exc}") from None
+    lines = key_lines(text)
+
+    def where(*key) -> str:
+        while key and key not in lines:
+            key = key[:-1]
+        return f"{source}:{lines[key]}" if key else str(source)
+
+    def fail(key: tuple, message: str):
+        raise InputError(f"{where(*key)}: {message}")
+
+    for key in data:
+        if key not in TOP_KEYS:
+            fail((key,), f"unknown key {key!r}; a sweep file has {', '.join(TOP_KEYS)} "
+                         "(deck parameters go in [fixed], [grid], [zip.NAME] or [[point]])")
+    if "deck" not in data:
+        fail((), "no deck: add deck = \"bulk_feeder\" (a deck name or file)")
+    if not isinstance(data["deck"], str) or not data["deck"].strip():
+        fail(("deck",), "deck must be a deck name or a file name (a string)")
+    numbers = {}
+    for key, default in (("ranks_per_run", 1), ("replicates", 1)):
+        value = data.get(key, default)
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            fail((key,), f"{key} must be a whole number >= 1, got {value!r}")
+        numbers[key] = value
+    if not isinstance(data.get("description", ""), str):
+        fail(("description",), "description must be a string")
+    for key in SECTIONS:
+        if key in data and not isinstance(data[key], dict if key != "point" else list):
+            form = "[[point]] tables" if key == "point" else f"a table [{key}]"
+            fail((key,), f"{key} must be {form}")
+
+    owner: dict[str, tuple] = {}  # parameter -> the key path that sets it
+
+    def claim(name: str, key: tuple) -> None:
+        if name in owner:
+            fail(key, f"parameter {name!r} is set twice (also at line {lines.get(owner[name], '?')}); "
+                      "a parameter is fixed, or in one grid list, zip group or the points")
+        owner[name] = key
+
+    fixed = {}
+    for name, value in data.get("fixed", {}).items():
+        if not _scalar(value):
+            fail(("fixed", name), f"[fixed] {name} must be one number or string, got {value!r} "
+                                  "(lists of values go in [grid] or [zip.NAME])")
+        claim(name, ("fixed", name))
+        fixed[name] = value
+
+    axes: list[Axis] = []
+
+    def values_list(key: tuple, name: str, value) -> list:
+        if not isinstance(value, list) or not value:
+            fail(key, f"{name} must be a non-empty list of values, got {value!r}")
+        for v in value:
+            if not _scalar(v):
+                fail(key, f"{name}: {v!r} is not a number or a string")
+        if len({json.dumps(v) for v in value}) != len(value):
+            fail(key, f"{name} lists a value twice: {value!r} (replicates repeat a setting)")
+        return value
+
+    for name, value in data.get("grid", {}).items():
+        key = ("grid", name)
+        claim(name, key)
+        axes.append(Axis("grid", name, [name], [{name: v} for v in values_list(key, name, value)]))
+    for group, table in data.get("zip", {}).items():
+        if not isinstance(table, dict) or not table:
+            fail(("zip", group), f"zip.{group} must be a table of lists: [zip.{group}] then name = [...]")
+        length = None
+        columns = {}
+        for name, value in table.items():
+            key = ("zip", group, name)
+            claim(name, key)
+            columns[name] = values_list(key, f"zip.{group}.{name}", value)
+            if length is not None and len(value) != length:
+                fail(key, f"zip.{group}: {name} has {len(value)} values, the lists before it "
+                          f"{length}; lists that vary together need equal lengths")
+            length = len(value)
+        rows = [{name: columns[name][i] for name in columns} for i in range(length)]
+        if len({json.dumps(r, sort_keys=True) for r in rows}) != len(rows):
+            fail(("zip", group), f"zip.{group} lists a setting twice")
+        axes.append(Axis("zip", group, list(columns), rows))
+    points = data.get("point", [])
+    if points:
+        keys: list[str] = []
+        for i, point in enumerate(points):
+            if not isinstance(point, dict) or not point:
+                fail(("point", i), "each [[point]] must set at least one parameter")
+            for name, value in point.items():
+                if not _scalar(value):
+                    fail(("point", i, name), f"[[point]] {name} must be one number or string, "
+                                             f"got {value!r}")
+                if name not in keys:  # first [[point]] naming it
+                    claim(name, ("point", i, name))
+                    keys.append(name)
+        if len({json.dumps(p, sort_keys=True) for p in points}) != len(points):
+            fail(("point",), "two [[point]] tables are the same setting")
+        axes.append(Axis("point", "point", keys, [dict(p) for p in points]))
+
+    if "seed" in owner and owner["seed"][0] != "fixed" and numbers["replicates"] > 1:
+        fail(owner["seed"], "seed is varied and replicates > 1: replicates set the seeds "
+                            "(seed, seed+1, ...); fix seed or set replicates = 1")
+
+    return SweepSpec(source=source, text=text, data=data, deck=data["deck"].strip(),
+                     ranks_per_run=numbers["ranks_per_run"], replicates=numbers["replicates"],
+                     description=data.get("description", ""), fixed=fixed, axes=axes, lines=lines)
+
+
+def describe_change(old: dict, new: dict) -> str:
+    """What differs between two parsed sweep files, as ``key.path`` names."""
+    def flat(d, prefix=""):
+        out = {}
+        for k, v in d.items():
+            name = f"{prefix}{k}"
+            if isinstance(v, dict):
+                out.update(flat(v, name + "."))
+            else:
+                out[name] = v
+        return out
+
+    a, b = flat(old), flat(new)
+    changed = sorted(k for k in a.keys() | b.keys() if a.get(k, object()) != b.get(k, object()))
+    shown = ", ".join(changed[:6]) + (f" and {len(changed) - 6} more" if len(changed) > 6 else "")
+    return shown or "its content"
