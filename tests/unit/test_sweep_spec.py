@@ -466,3 +466,24 @@ def test_the_eta_scales_the_cost_left_by_the_time_per_cost_so_far():
     assert p.eta() == pytest.approx(10.0 * 5 / 1 / 2, rel=1e-3)
     p.finished(jobs[1], {"status": S.DONE}, computed=False)  # an earlier result: no time counted
     assert p.eta() == pytest.approx(10.0 * 3 / 1 / 2, rel=1e-3)
+
+
+def test_report_maps_keep_every_parameter_of_a_zipped_axis():
+    """A grid axis x a zipped pair: the map holds every setting (the zipped partner varies with
+    its axis, it is not held at the best setting's value), and a third axis is held there."""
+    from vibrofeed.sweep import report as R
+
+    entries = []
+    for fill in (100, 200, 300):
+        for k, gamma in enumerate((0.0, 1e-4, 2e-4, 4e-4, 8e-4)):
+            for extra in (1, 2):
+                entries.append({"parameters": {"n_parts": fill, "surface_energy": gamma,
+                                               "surface_energy_pp": gamma, "phase": extra},
+                                "merit": fill - k + extra})
+    chosen = entries[-1]
+    groups = [["n_parts"], ["surface_energy", "surface_energy_pp"], ["phase"]]
+    axes, part = R.plotted(entries, groups, chosen)
+    assert axes == ["n_parts", "surface_energy"]
+    assert len(part) == 15 and {e["parameters"]["phase"] for e in part} == {2}
+    assert {(e["parameters"]["n_parts"], e["parameters"]["surface_energy"]) for e in part} == {
+        (f, g) for f in (100, 200, 300) for g in (0.0, 1e-4, 2e-4, 4e-4, 8e-4)}

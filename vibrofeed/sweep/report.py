@@ -14,10 +14,10 @@ as much and singulates better is the better feeder); without singulation
 figures, simply the highest.
 
 Maps (``--plot DIR``): a heat map of the figure over the first two varied
-axes, and the figure against the first varied axis with its error bars (one
-line per value of the second axis), the singulated fraction beside it. Other
-varied axes are held at the best setting's values; a zipped group is one axis,
-labelled by its first parameter.
+axes, and the figure against the one of them with more values, with its error
+bars (one line per value of the other), the singulated fraction beside it.
+Other varied axes are held at the best setting's values; a zipped group is one
+axis (all its parameters vary together), labelled by its first parameter.
 """
 
 from __future__ import annotations
@@ -134,9 +134,9 @@ def report(folder, plot_folder=None) -> dict:
            "jobs_finished": len(rows), "done": len(rows) - len(failed), "failed": failed,
            "varied": varied, "merit": merit, "settings": entries, "best": chosen, "figures": []}
     if plot_folder is not None and entries:
-        axes = [[k for k in axis if k in varied] for axis in meta["axes"]]
-        axes = [axis[0] for axis in axes if axis]
-        out["figures"] = plots(entries, axes, merit, chosen, Path(plot_folder), units)
+        groups = [[k for k in axis if k in varied] for axis in meta["axes"]]
+        out["figures"] = plots(entries, [g for g in groups if g], merit, chosen, Path(plot_folder),
+                               units)
     return out
 
 
@@ -180,22 +180,40 @@ def _slice(entries, keep: list[str], chosen) -> list[dict]:
     return [e for e in entries if all(e["parameters"][k] == v for k, v in fixed.items())]
 
 
-def plots(entries, axes: list[str], merit: str, chosen, folder: Path, units=None) -> list[str]:
+def plotted(entries, groups: list[list[str]], chosen) -> tuple[list[str], list[dict]]:
+    """(axes, entries) the maps draw: the first two numeric varied groups with more than one
+    value, each drawn along its first parameter (a zipped group's others vary with it), and
+    the settings where every other varied parameter has the best setting's value."""
+    def n_values(name):
+        return len({e["parameters"][name] for e in entries})
+
+    groups = [g for g in groups if _numeric(entries, g[0]) and n_values(g[0]) > 1][:2]
+    return [g[0] for g in groups], _slice(entries, [k for g in groups for k in g], chosen)
+
+
+def plots(entries, groups: list[list[str]], merit: str, chosen, folder: Path, units=None) -> list[str]:
+    """The maps of the module docstring; ``groups``: the varied axes, each the list of
+    parameters that vary together (one for a grid axis, several for a zipped group)."""
     from ..figures import pyplot, save
 
     plt = pyplot()
     label, scale = heading(merit), FIGURES[merit][2]
     units = units or {}
 
+    partners = {g[0]: g[1:] for g in groups}
+
     def axis_label(name):
         unit = units.get(name, "")
-        return f"{name} [{unit}]" if unit and unit != "-" else name
+        text = f"{name} [{unit}]" if unit and unit != "-" else name
+        return text + (f" (= {', '.join(partners[name])})" if partners.get(name) else "")
+
+    def n_values(name):
+        return len({e["parameters"][name] for e in entries})
 
     out = []
-    axes = [a for a in axes if _numeric(entries, a) and len({e["parameters"][a] for e in entries}) > 1]
+    axes, part = plotted(entries, groups, chosen)
     if len(axes) >= 2:
         a, b = axes[:2]
-        part = _slice(entries, [a, b], chosen)
         xs = sorted({e["parameters"][a] for e in part})
         ys = sorted({e["parameters"][b] for e in part})
         import numpy as np
@@ -221,9 +239,9 @@ def plots(entries, axes: list[str], merit: str, chosen, folder: Path, units=None
             ax.legend(loc="upper right", fontsize=8)
         out.append(str(save(fig, folder / "sweep_map.png")))
     if axes:
-        a = axes[0]
-        series = axes[1] if len(axes) > 1 else None
-        part = _slice(entries, [a] + ([series] if series else []), chosen)
+        a, series = axes[0], (axes[1] if len(axes) > 1 else None)
+        if series is not None and n_values(series) > n_values(a):
+            a, series = series, a  # along the axis with more values, a line per value of the other
         fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.2), layout="constrained")
         for value in sorted({e["parameters"][series] for e in part}) if series else [None]:
             line = sorted((e for e in part if series is None or e["parameters"][series] == value),
