@@ -15,7 +15,9 @@ figures, simply the highest.
 
 Maps (``--plot DIR``): a heat map of the figure over the first two varied
 axes, and the figure against the one of them with more values, with its error
-bars (one line per value of the other), the singulated fraction beside it.
+bars (one line per value of the other), beside it the conveying velocity (bulk
+decks: the feed rate is the parts' line density times it) and the singulated
+fraction.
 Other varied axes are held at the best setting's values; a zipped group is one
 axis (all its parameters vary together), labelled by its first parameter.
 """
@@ -242,26 +244,26 @@ def plots(entries, groups: list[list[str]], merit: str, chosen, folder: Path, un
         a, series = axes[0], (axes[1] if len(axes) > 1 else None)
         if series is not None and n_values(series) > n_values(a):
             a, series = series, a  # along the axis with more values, a line per value of the other
-        fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.2), layout="constrained")
+        # The figure of merit, then (bulk decks) the conveying velocity that makes it and the
+        # singulation: each against the axis, a line per value of the other axis.
+        panels = [(merit, label, scale)]
+        if merit == "parts_per_s":
+            panels.append(("mean_velocity", heading("mean_velocity"), FIGURES["mean_velocity"][2]))
+        panels.append(("singulated_fraction", "singulated fraction [%]", 100.0))
+        fig, row = plt.subplots(1, len(panels), figsize=(5.2 * len(panels), 4.2), layout="constrained")
         for value in sorted({e["parameters"][series] for e in part}) if series else [None]:
             line = sorted((e for e in part if series is None or e["parameters"][series] == value),
                           key=lambda e: e["parameters"][a])
             name = f"{series}={value:g}" if series else None
             x = [e["parameters"][a] for e in line]
-            y = [math.nan if e["merit"] is None else e["merit"] * scale for e in line]
-            err = [0.0 if e["merit_err"] is None else e["merit_err"] * scale for e in line]
-            left.errorbar(x, y, yerr=err, marker="o", ms=4, capsize=3, label=name)
-            s = [math.nan if e["singulated_fraction"] is None else 100 * e["singulated_fraction"]
-                 for e in line]
-            serr = [0.0 if e["singulated_fraction_err"] is None else 100 * e["singulated_fraction_err"]
-                    for e in line]
-            right.errorbar(x, s, yerr=serr, marker="s", ms=4, capsize=3, label=name)
-        left.set_xlabel(axis_label(a))
-        left.set_ylabel(label)
-        right.set_xlabel(axis_label(a))
-        right.set_ylabel("singulated fraction [%]")
-        if series:
-            left.legend(fontsize=8)
-            right.legend(fontsize=8)
+            for ax, (key, _, k) in zip(row, panels):
+                y = [math.nan if e[key] is None else e[key] * k for e in line]
+                err = [0.0 if e[f"{key}_err"] is None else e[f"{key}_err"] * k for e in line]
+                ax.errorbar(x, y, yerr=err, marker="o", ms=4, capsize=3, label=name)
+        for ax, (_, ylabel, _) in zip(row, panels):
+            ax.set_xlabel(axis_label(a))
+            ax.set_ylabel(ylabel)
+            if series:
+                ax.legend(fontsize=8)
         out.append(str(save(fig, folder / f"sweep_vs_{a}.png")))
     return out
