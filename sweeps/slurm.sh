@@ -17,9 +17,10 @@
 # run. Add --retry-failed to run the failed ones again. The summary is true at every
 # instant; `vibrofeed sweep-report DIR` reads it while the sweep runs.
 #
-# Tested here under `mpirun -np 2` on one machine; on a cluster, check once with a
-# small sweep that each job's ranks land on its leader's node (the job's own mpirun
-# still sees the SLURM_* variables of the allocation).
+# Tested here under `mpirun -np 2` on one machine. Each job's own mpirun (ranks_per_run
+# > 1) starts on its leader's node: vibrofeed removes the SLURM_* variables of the
+# allocation (and the outer MPI job's) from the job's environment, so that mpirun runs
+# locally; on a new cluster, check it once with a small sweep.
 
 #SBATCH --job-name=vibrofeed-sweep
 #SBATCH --nodes=4

@@ -4,8 +4,9 @@ The parent never loads LIGGGHTS: an engine error ends the worker, and the
 parent turns that end into an :class:`EngineError` naming LIGGGHTS' message
 and the deck line. The worker is started with the MPI launcher variables of
 any surrounding MPI job removed from its environment (``OMPI_*``, ``PMIX_*``,
-``OPAL_*``, ``ORTE_*``), as a singleton or under its own ``mpirun``, so a
-failing run inside a sweep never takes the sweep down with it.
+``OPAL_*``, ``ORTE_*``, and a Slurm allocation's ``SLURM_*``), as a singleton
+or under its own ``mpirun`` on the local node, so a failing run inside a sweep
+never takes the sweep down with it.
 
 While the run goes, frames land in ``OUT.h5.part``; only a completed run is
 renamed to ``OUT.h5``. A run that fails or is interrupted after writing frames
@@ -37,7 +38,10 @@ from ..results.writer import mark_file_status
 from .errors import failed_command, find_error
 from .worker import MARK
 
-_LAUNCHER_PREFIXES = ("OMPI_", "PMIX_", "OPAL_", "ORTE_", "PRTE_", "HYDRA_", "PMI_")
+# SLURM_ too: under a Slurm allocation (a sweep started by srun or mpirun in a batch job) the
+# worker's own mpirun would spread its ranks over the allocation's nodes instead of the
+# leader's, and a singleton worker would take itself for a task of the srun step.
+_LAUNCHER_PREFIXES = ("OMPI_", "PMIX_", "OPAL_", "ORTE_", "PRTE_", "HYDRA_", "PMI_", "SLURM_")
 
 # Ranks started per core at most: Open MPI oversubscribes on request, but far
 # beyond the cores a run only slows down, and thousands of ranks never start.
