@@ -26,6 +26,12 @@ The part's lift-off is where its gap (z - radius - z_s) first turns positive
 after the start, interpolated between frames; the contact force cannot be used
 as ``postproc.flights`` does, since the recorded force now also holds the
 surface forces.
+
+The feeding study (issue 12, README "Micro-scale forces in the feeder"): the
+figure of the two bulk sweeps sweeps/adhesion.toml and sweeps/squeeze_film.toml,
+``python -m vibrofeed.validation.micro_checks ADHESION_DIR SQUEEZE_DIR -o FIG.png``
+(:func:`feeding_figure`; feed rate and conveying speed against the Bond number
+of the adhesion, and against the frequency with and without the air film).
 """
 
 from __future__ import annotations
@@ -233,3 +239,215 @@ def _plot_launch(case, panels, path: Path) -> Path:
 
 #: The kinds of this module, merged into ``crosscheck.KINDS``.
 KINDS = {"vdw_pulloff": vdw_pulloff, "sticking": sticking, "squeeze_launch": squeeze_launch}
+
+
+# ------------------------------------------------------------------ the feeding study
+def bond_number(p: dict) -> float:
+    """Pull-off over weight of a bulk_feeder part (parameters ``p``, deck defaults
+    for the rest): A R / (6 s^2) for a sphere, A S / (6 pi s^3) over a chip's or
+    disc's face S (models/adhesion.py), over m g."""
+    from .models.adhesion import Adhesion
+
+    size, thick, rho = float(p.get("part_size", 3e-4)), float(p.get("part_thickness", 1.5e-4)), \
+        float(p.get("density", 2330.0))
+    shape = {"sphere": 0, "chip": 1, "disc": 2}.get(str(p.get("shape", 0)), None)
+    shape = int(float(p.get("shape", 0))) if shape is None else shape
+    hamaker, roughness = float(p.get("hamaker", 0.0)), float(p.get("roughness", 0.0))
+    if shape == 0:
+        adh, mass = Adhesion(hamaker, roughness, radius=size / 2), np.pi / 6 * size ** 3 * rho
+    elif shape == 1:
+        adh, mass = Adhesion(hamaker, roughness, face_side=size), size ** 2 * thick * rho
+    else:
+        adh, mass = Adhesion(hamaker, roughness, face_radius=size / 2), np.pi / 4 * size ** 2 * thick * rho
+    return adh.pulloff / (mass * G) if hamaker > 0 else 0.0
+
+
+#: The feeding study's analysis window [s]: from 5 periods at 100 Hz (the start-up) to
+#: the end of the run. One window for every job, not each run's detected steady window:
+#: a pre-filled track drains, and a window that moves between runs moves the rate with
+#: it (by up to 40 % between otherwise equal runs of the sphere variant).
+STUDY_START = 0.05
+
+
+def _settings(folder, start: float = STUDY_START) -> list[dict]:
+    """The finished settings of a sweep: its parameters (fixed ones included), and the feed
+    rate and conveying speed of each job over [start, t_end] (postproc.feedrate), as the
+    mean over the replicates with its standard error (one run: its batch-means error)."""
+    import csv
+    import json
+
+    from vibrofeed.postproc.feedrate import FeedRate
+    from vibrofeed.results.reader import Result
+
+    folder = Path(folder)
+    fixed = json.loads((folder / "sweep.json").read_text())["spec"].get("fixed", {})
+    with open(folder / "summary.csv", newline="") as fh:
+        rows = [r for r in csv.DictReader(fh) if r["status"] == "done"]
+    if not rows:
+        raise CaseError(f"{folder}: no finished job in the sweep's summary")
+    columns = list(rows[0])
+    names = [c for c in columns[:columns.index("status")] if c not in ("job", "replicate", "seed")]
+    groups: dict[tuple, list[dict]] = {}
+    for row in rows:
+        groups.setdefault(tuple(row[n] for n in names), []).append(row)
+    out = []
+    for key, members in groups.items():
+        figures = []
+        for row in members:
+            with Result(folder / row["file"]) as result:
+                deck_parameters = dict(result.parameters)
+                r = FeedRate(result, start=start, end=float(result.time[-1])).run().results
+                figures.append({k: float(getattr(r, k)) for k in
+                                ("parts_per_s", "parts_per_s_err", "mean_velocity", "mean_velocity_err")})
+        entry = {"parameters": {**fixed, **dict(zip(names, key))}, "runs": len(figures),
+                 "deck_parameters": deck_parameters}
+        for name in ("parts_per_s", "mean_velocity"):
+            values = np.array([f[name] for f in figures])
+            entry[name] = float(values.mean())
+            entry[name + "_err"] = (float(values.std(ddof=1) / np.sqrt(len(values))) if len(values) > 1
+                                    else figures[0][name + "_err"])
+        out.append(entry)
+    return out
+
+
+def _number(p: dict, name: str, default: float) -> float:
+    value = p.get(name)
+    return default if value in (None, "") else float(value)
+
+
+def _gamma_n(p: dict) -> float:
+    return _number(p, "amp_n", 5e-5) * (2 * np.pi * _number(p, "freq", 100.0)) ** 2 / G
+
+
+def _errorbars(ax, x, entries, name, scale, label):
+    y = [scale * e[name] if e[name] is not None else np.nan for e in entries]
+    err = [scale * (e[name + "_err"] or 0.0) for e in entries]
+    ax.errorbar(x, y, err, marker="o", capsize=3, label=label)
+
+
+FIGURE_PANELS = (("parts_per_s", 1.0, "feed rate [parts/s]"),
+                 ("mean_velocity", 1e3, "conveying speed [mm/s]"))
+
+
+def sticky_model_speed(p: dict, bond: float) -> float | None:
+    """The single-part model's conveying speed [m/s] (Khan & Sarma, §2.3.2, as
+    ``vibrofeed feedrate``'s dilute limit) of a part held to the track by a
+    constant pull-off of ``bond`` times its weight, for deck parameters ``p``:
+    while it never leaves the track (peak normal acceleration below g (1 + Bo)),
+    the pull-off is exactly a heavier gravity, g (1 + Bo). None when it would
+    hop (the vdW force then falls off in flight, which that model lacks)."""
+    from .models.part_on_surface import PartParams, mean_velocity
+
+    a_n = float(p["amp_n"]) * (2 * np.pi * float(p["freq"])) ** 2  # the sine's peak (waveform 0)
+    if int(float(p.get("waveform", 0))) != 0 or a_n >= G * (1 + bond):
+        return None
+    motion = dm.waveform(p)
+    mu = float(p["mu"])
+    part = PartParams(mu_s=mu, mu_k=mu, e=min(float(p["restitution"]), 0.999))
+    state = mean_velocity(motion, part, incline=float(p.get("incline", 0.0)), g=G * (1 + bond))
+    return float(state.velocity)
+
+
+def _mode(p: dict) -> str:
+    gamma = round(_gamma_n(p), 1)
+    return f"{'hopping' if gamma > 1 else 'in-plane'}, Gamma_n {gamma:g}"
+
+
+def _film_label(p: dict) -> str:
+    if _number(p, "air_viscosity", 0.0) <= 0:
+        return "no air film"
+    return f"air, clearance {1e6 * max(_number(p, 'roughness', 0.0), 6.8e-8):g} um"
+
+
+def feeding_study(adhesion_dir, squeeze_dir) -> dict:
+    """The two sweeps' settings (:func:`_settings`), grouped: ``adhesion`` mode -> settings
+    by Bond number, ``squeeze`` film -> settings by frequency."""
+    study: dict = {"adhesion": {}, "squeeze": {}}
+    for e in _settings(adhesion_dir):
+        e["bond"] = bond_number(e["parameters"])
+        e["model"] = sticky_model_speed(e["deck_parameters"], e["bond"])
+        study["adhesion"].setdefault(_mode(e["parameters"]), []).append(e)
+    for e in _settings(squeeze_dir):
+        e["freq"] = _number(e["parameters"], "freq", 100.0)
+        study["squeeze"].setdefault(_film_label(e["parameters"]), []).append(e)
+    for group, key in (("adhesion", "bond"), ("squeeze", "freq")):
+        for entries in study[group].values():
+            entries.sort(key=lambda e: e[key])
+    return study
+
+
+def study_text(study: dict) -> str:
+    """The study's table: one line per setting, mean ± standard error."""
+    lines = ["adhesion: mode, A [J], roughness [m], Bo, runs, feed rate [parts/s], conveying [mm/s], "
+             "one part never leaving [mm/s]"]
+    for mode, entries in sorted(study["adhesion"].items()):
+        for e in entries:
+            p = e["parameters"]
+            hamaker, roughness = _number(p, "hamaker", 0.0), _number(p, "roughness", 0.0)
+            lines.append(f"  {mode:20s} {hamaker:7.2g} {roughness:7.2g} {e['bond']:6.3g} {e['runs']:3d}  "
+                         f"{e['parts_per_s']:6.1f} ± {e['parts_per_s_err']:4.1f}  "
+                         f"{1e3 * e['mean_velocity']:6.2f} ± {1e3 * e['mean_velocity_err']:4.2f}  "
+                         + ("n/a" if e["model"] is None else f"{1e3 * e['model']:6.2f}"))
+    lines.append("squeeze film: air film, freq [Hz], runs, feed rate [parts/s], conveying [mm/s]")
+    for film, entries in sorted(study["squeeze"].items(), key=lambda kv: (kv[0] != "no air film", kv[0])):
+        for e in entries:
+            lines.append(f"  {film:26s} {e['freq']:5g} {e['runs']:3d}  {e['parts_per_s']:6.1f} ± "
+                         f"{e['parts_per_s_err']:4.1f}  {1e3 * e['mean_velocity']:6.2f} ± "
+                         f"{1e3 * e['mean_velocity_err']:4.2f}")
+    return "\n".join(lines)
+
+
+def feeding_figure(study: dict, path) -> Path:
+    """Four panels: feed rate and conveying speed (mean over the replicates, with
+    its standard error) against the Bond number, one line per mode (Gamma_n),
+    from the adhesion sweep; and against the frequency, one line per air-film
+    setting, from the squeeze-film sweep."""
+    from vibrofeed.figures import pyplot, save
+
+    plt = pyplot()
+    fig, axes = plt.subplots(2, 2, figsize=(9, 6.4), layout="constrained")
+    for mode, sel in sorted(study["adhesion"].items()):
+        for ax, (name, scale, _) in zip(axes[0], FIGURE_PANELS):
+            _errorbars(ax, [e["bond"] for e in sel], sel, name, scale, mode)
+        model = [(e["bond"], e["model"]) for e in sel if e["model"] is not None]
+        if model:
+            color = axes[0, 1].lines[-1].get_color()
+            axes[0, 1].plot([b for b, _ in model], [1e3 * v for _, v in model], ls=":", color=color,
+                            label=f"one part, never leaving: g (1 + Bo) ({mode.split(',')[0]})")
+    for ax in axes[0]:
+        ax.set_xscale("symlog", linthresh=0.1)
+        ax.set_xlabel("Bond number: vdW pull-off / weight")
+    for film, sel in sorted(study["squeeze"].items(), key=lambda kv: (kv[0] != "no air film", kv[0])):
+        for ax, (name, scale, _) in zip(axes[1], FIGURE_PANELS):
+            _errorbars(ax, [e["freq"] for e in sel], sel, name, scale, film)
+    for ax in axes[1]:
+        ax.set_xscale("log")
+        ax.set_xlabel("frequency [Hz] (Gamma_n = Gamma_t = 2)")
+    for row in axes:
+        for ax, (_, _, ylabel) in zip(row, FIGURE_PANELS):
+            ax.set_ylabel(ylabel)
+            ax.grid(alpha=0.3)
+            ax.legend(fontsize=7)
+    axes[0, 0].set_title("van der Waals adhesion (sweeps/adhesion.toml)", fontsize=9, loc="left")
+    axes[1, 0].set_title("squeeze-film air damping (sweeps/squeeze_film.toml)", fontsize=9, loc="left")
+    return save(fig, path)
+
+
+def main(argv=None) -> int:
+    import argparse
+
+    parser = argparse.ArgumentParser(prog="python -m vibrofeed.validation.micro_checks",
+                                     description="The figure of the feeding study (README, "
+                                     "'Micro-scale forces in the feeder') from its two sweep folders.")
+    parser.add_argument("adhesion_dir")
+    parser.add_argument("squeeze_dir")
+    parser.add_argument("-o", "--output", default="micro_feeding.png")
+    args = parser.parse_args(argv)
+    study = feeding_study(args.adhesion_dir, args.squeeze_dir)
+    print(study_text(study))
+    print(feeding_figure(study, args.output))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -299,24 +299,63 @@ VDW_D0 = 2e-10  # m, contact distance of smooth surfaces (Khan & Sarma, §3.1)
 AIR_MEAN_FREE_PATH = 6.8e-8  # m, the smallest air-film clearance
 
 
+# Stefan's law for a square plate of side a: F = STEFAN_SQUARE mu a^4 V / h^3 (the
+# rectangle's series solution of the Reynolds equation; validation/models/squeeze_film.py
+# computes it, tests/unit/test_squeeze_film.py checks this copy).
+STEFAN_SQUARE = 0.421731044868524
+
+
+def surface_forces_part(p: Mapping[str, float]) -> dict | None:
+    """The part the surface forces' step limit is taken for, in either deck's
+    vocabulary: ``mass`` [kg], sphere ``radius`` [m], and for a part lying on
+    a flat face its ``area`` [m^2], Stefan's constant ``stefan`` [m^4] (F = mu K
+    V / h^3) and free-flow drag length ``drag`` [m] (F = mu L V); None without
+    the vocabulary. single_part: ``radius``, ``face_radius`` (a disc face).
+    bulk_feeder: ``part_size``, ``shape`` (0 spheres, the smallest of a size
+    spread: the stiffest; 1 chips, a square face; 2 discs), ``part_thickness``,
+    ``size_spread`` -- the whole clump (its spheres share the face's force)."""
+    if "density" not in p:
+        return None
+    rho = p["density"]
+    if "radius" in p:  # single_part
+        r, face = p["radius"], p.get("face_radius", 0.0)
+        part = {"mass": 4 / 3 * math.pi * r ** 3 * rho, "radius": r}
+        if face > 0:
+            part.update(area=math.pi * face ** 2, stefan=1.5 * math.pi * face ** 4, drag=16 * face)
+        return part
+    if "part_size" not in p:
+        return None
+    size, shape = p["part_size"], int(p.get("shape", 0))
+    if shape == 0:
+        r = size / 2 * (1 - p.get("size_spread", 0.0))
+        return {"mass": 4 / 3 * math.pi * r ** 3 * rho, "radius": r}
+    thickness = p.get("part_thickness", size)
+    if shape == 1:
+        return {"mass": size ** 2 * thickness * rho, "radius": thickness / 2, "area": size ** 2,
+                "stefan": STEFAN_SQUARE * size ** 4, "drag": 16 * size / math.sqrt(math.pi)}
+    face = size / 2
+    return {"mass": math.pi * face ** 2 * thickness * rho, "radius": thickness / 2,
+            "area": math.pi * face ** 2, "stefan": 1.5 * math.pi * face ** 4, "drag": 16 * face}
+
+
 def surface_forces_step_limit(p: Mapping[str, float]) -> float:
-    """Largest timestep [s] the vdW and squeeze-film forces of a single part
-    allow (inf when both are off, or without the single-part vocabulary)."""
+    """Largest timestep [s] the vdW and squeeze-film forces allow (inf when both
+    are off, or without a part's vocabulary; see :func:`surface_forces_part`)."""
     hamaker, mu = p.get("hamaker", 0.0), p.get("air_viscosity", 0.0)
-    if (hamaker <= 0 and mu <= 0) or "radius" not in p or "density" not in p:
+    part = surface_forces_part(p) if (hamaker > 0 or mu > 0) else None
+    if part is None:
         return math.inf
-    radius, face = p["radius"], p.get("face_radius", 0.0)
-    mass = 4 / 3 * math.pi * radius ** 3 * p["density"]
+    mass, radius, flat = part["mass"], part["radius"], "area" in part
     roughness = p.get("roughness", 0.0)
     limit = math.inf
     if hamaker > 0:
         s = VDW_D0 + roughness
-        kappa = (hamaker * face ** 2 / (2 * s ** 4)) if face > 0 else hamaker * radius / (3 * s ** 3)
+        kappa = (hamaker * part["area"] / (2 * math.pi * s ** 4)) if flat else hamaker * radius / (3 * s ** 3)
         if kappa > 0:  # (not underflowed)
             limit = math.pi / 50 * math.sqrt(mass / kappa)
     if mu > 0:
         h = max(roughness, AIR_MEAN_FREE_PATH)
-        c = (mu * (1.5 * math.pi * face ** 4 / h ** 3 + 16 * face) if face > 0
+        c = (mu * (part["stefan"] / h ** 3 + part["drag"]) if flat
              else 6 * math.pi * mu * radius * (radius / h + 1))
         if c > 0:
             limit = min(limit, mass / (10 * c))

@@ -108,6 +108,11 @@ def test_stiffness_and_work_are_the_derivative_and_integral_of_the_force(face_ra
 def test_a_flat_face_pulls_with_the_flat_pressure_over_its_area():
     adh = ad.Adhesion(A, 1e-6, face_radius=200e-6)
     assert adh.pulloff == pytest.approx(ad.flat_pressure(A, 1e-6 + D) * math.pi * (200e-6) ** 2)
+    square = ad.Adhesion(A, 1e-6, face_side=300e-6)  # a chip's face
+    assert square.flat and square.face_area == pytest.approx(9e-8)
+    assert square.pulloff == pytest.approx(ad.flat_pressure(A, 1e-6 + D) * 9e-8)
+    h = 1e-6 * square.s
+    assert -(square.force(2 * h) - square.force(h)) / h == pytest.approx(square.stiffness, rel=1e-4)
 
 
 def test_sticking_threshold_grows_linearly_with_the_hamaker_constant():

@@ -63,9 +63,10 @@ def test_film_limits_at_small_and_large_gaps():
         sf.saturated_deficit(sphere, M)
 
 
-@pytest.mark.parametrize("flat", [True, False])
-def test_impulse_is_the_integral_of_the_coefficient(flat):
-    film = sf.Film(MU, R, h_c=3e-6, flat=flat)
+@pytest.mark.parametrize("flat, side", [(True, 0.0), (False, 0.0), (True, 300e-6)],
+                         ids=["disc", "sphere", "square"])
+def test_impulse_is_the_integral_of_the_coefficient(flat, side):
+    film = sf.Film(MU, R, h_c=3e-6, flat=flat, side=side)
     h0, h1 = 3e-6, 400e-6
     # in log h, where the integrand is smooth
     want, _ = quad(lambda u: film.coefficient(math.exp(u)) * math.exp(u), math.log(h0), math.log(h1),
@@ -173,3 +174,50 @@ def test_film_step_limit_is_a_tenth_of_the_relaxation_time():
     dt = sf.film_step_limit(film, M)
     assert dt * film.coefficient(film.h_c) / M == pytest.approx(0.1, rel=1e-12)
     assert sf.film_step_limit(sf.Film(0.0, R, 1e-6), M) == math.inf
+
+
+def square_plate_poisson(n):
+    """int phi over the unit square, nabla^2 phi = -1, phi = 0 on the edges, by the
+    5-point finite-difference stencil on an n x n interior grid."""
+    from scipy.sparse import diags, identity, kron
+    from scipy.sparse.linalg import spsolve
+    h = 1.0 / (n + 1)
+    second = diags([1.0, -2.0, 1.0], [-1, 0, 1], shape=(n, n)) / h ** 2
+    laplace = kron(identity(n), second) + kron(second, identity(n))
+    phi = spsolve(laplace.tocsc(), -np.ones(n * n))
+    return phi.sum() * h ** 2
+
+
+def test_the_square_plates_stefan_constant_solves_the_reynolds_equation():
+    # Reynolds: nabla^2 p = 12 mu V / h^3 on the face, p = 0 at its edge; F = int p, so
+    # for a square of side a, F = 12 (int phi) mu a^4 V / h^3 with phi on the unit square.
+    coarse, fine = square_plate_poisson(60), square_plate_poisson(120)
+    extrapolated = fine + (fine - coarse) / 3  # the stencil's error is O(h^2)
+    assert 12 * extrapolated == pytest.approx(sf.STEFAN_SQUARE, rel=2e-5)
+    assert sf.STEFAN_SQUARE == pytest.approx(0.421731, abs=1e-6)
+    # a long strip (L >> B): F = mu V L B^3 / h^3, the factor tends to 1 - 0.63 B / L
+    assert sf.rectangle_factor(1e-3) == pytest.approx(1 - 192 / math.pi ** 5 * 1.0045 * 1e-3, rel=1e-6)
+    # the disc of the same area squeezes harder: 1.5 pi r^4 with pi r^2 = a^2 is 1.5 / pi a^4
+    assert 1.5 / math.pi / sf.STEFAN_SQUARE == pytest.approx(1.132, abs=1e-3)
+    with pytest.raises(ValueError):
+        sf.rectangle_factor(1.5)
+
+
+def test_vibrofeed_parameters_holds_the_same_square_constant():
+    from vibrofeed.parameters import STEFAN_SQUARE
+    assert STEFAN_SQUARE == pytest.approx(sf.STEFAN_SQUARE, rel=1e-14)
+
+
+def test_a_square_face_film_and_its_panels():
+    a, h = 300e-6, 2e-6
+    square = sf.Film(MU, 0.0, h_c=1e-6, side=a)
+    assert square.coefficient(h) == pytest.approx(MU * sf.STEFAN_SQUARE * a ** 4 / h ** 3
+                                                  + 16 * MU * a / math.sqrt(math.pi), rel=1e-12)
+    # the equal-area disc's free-flow drag
+    disc = sf.Film(MU, a / math.sqrt(math.pi), h_c=1e-6)
+    assert square.free_coefficient == pytest.approx(disc.free_coefficient, rel=1e-12)
+    assert sf.saturated_deficit(square, 1e-8) == pytest.approx(
+        0.5 * MU * sf.STEFAN_SQUARE * a ** 4 / (1e-8 * 1e-12), rel=1e-12)
+    # a clump's n panels at one gap (a part lying flat) carry the face's force together
+    gap, v = 3e-6, -0.02
+    assert 9 * square.panel_force(gap, v, 9) == pytest.approx(square.force(gap, v), rel=1e-14)

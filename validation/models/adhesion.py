@@ -108,24 +108,37 @@ class Adhesion:
     """A part's van der Waals attraction to the track.
 
     hamaker [J]; roughness [m] (standoff D0 + roughness); radius [m] of a
-    spherical part, or face_radius [m] > 0 for a part lying on a flat face
-    (flat-flat pressure over pi face_radius^2).
+    spherical part, or face_radius [m] > 0 for a part lying on a flat disc
+    face (flat-flat pressure over pi face_radius^2), or face_side [m] > 0 on
+    a square face (a chip: over face_side^2).
     """
     hamaker: float
     roughness: float = 0.0
     radius: float = 0.0
     face_radius: float = 0.0
+    face_side: float = 0.0
 
     @property
     def s(self) -> float:
         return standoff(self.roughness)
 
+    @property
+    def flat(self) -> bool:
+        return self.face_radius > 0 or self.face_side > 0
+
+    @property
+    def face_area(self) -> float:
+        """Area [m^2] of the flat face (0 for a sphere)."""
+        if self.face_side > 0:
+            return self.face_side ** 2
+        return math.pi * self.face_radius ** 2
+
     def force(self, gap: float) -> float:
         """Attraction [N] at ``gap`` [m] (the DEM's gap between the touching
         surfaces; <= 0 in contact, where it is the pull-off)."""
         d = max(gap, 0.0) + self.s
-        if self.face_radius > 0:
-            return flat_pressure(self.hamaker, d) * math.pi * self.face_radius ** 2
+        if self.flat:
+            return flat_pressure(self.hamaker, d) * self.face_area
         return sphere_plane_force(self.hamaker, self.radius, d)
 
     @property
@@ -136,14 +149,14 @@ class Adhesion:
     @property
     def stiffness(self) -> float:
         """|dF/dgap| [N/m] at contact: A R / (3 s^3), or A S / (2 pi s^4) for a flat face."""
-        if self.face_radius > 0:
-            return self.hamaker * math.pi * self.face_radius ** 2 / (2.0 * math.pi * self.s ** 4)
+        if self.flat:
+            return self.hamaker * self.face_area / (2.0 * math.pi * self.s ** 4)
         return self.hamaker * self.radius / (3.0 * self.s ** 3)
 
     def work(self) -> float:
         """Work [J] to take the part from contact to infinity: A R / (6 s) (flat: A S / (12 pi s^2))."""
-        if self.face_radius > 0:
-            return -flat_energy(self.hamaker, self.s) * math.pi * self.face_radius ** 2
+        if self.flat:
+            return -flat_energy(self.hamaker, self.s) * self.face_area
         return -sphere_plane_energy(self.hamaker, self.radius, self.s)
 
 

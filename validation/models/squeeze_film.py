@@ -57,6 +57,18 @@ figure's description exactly ("frequency dependence at low frequency",
 dependence is the transient of a fixed observation window, not a property
 of the launched part. tests/unit/test_squeeze_film.py asserts both readings.
 
+**A square face** (a chip of side a): the Reynolds equation's solution for a
+rectangle of sides B <= L (a series in tanh; e.g. Hamrock, Schmid & Jacobson,
+"Fundamentals of Fluid Film Lubrication", the squeeze-film chapter) gives
+F = mu V L B^3 / h^3 [1 - (192 B / (pi^5 L)) sum_odd n tanh(n pi L / (2 B)) / n^5],
+for a square 0.42173 mu a^4 V / h^3 (`stefan_constant`; the disc of equal area,
+1.5 pi r^4 = 0.477 a^4, squeezes 13 % harder); its free-flow drag is taken as
+the equal-area disc's, 16 mu a / sqrt(pi).
+
+**A clump's panels.** The bulk deck's chips and discs are multisphere clumps
+of n spheres; each sphere carries 1/n of the face's coefficient at its own
+gap (`Film.panel_force`): the sum is the face's law while the part lies flat.
+
 Time step: a film of coefficient c on a part of mass m relaxes the relative
 velocity in m / c; explicit integration resolves it with dt <= m / (10 c),
 c taken at the clearance (`film_step_limit`).
@@ -89,6 +101,21 @@ FIG13_GAMMA = 10.0
 FIG13_MASS = math.pi * FIG13_RADIUS ** 2 * FIG13_THICKNESS * FIG13_DENSITY
 
 
+def rectangle_factor(aspect: float, terms: int = 200) -> float:
+    """The rectangle's squeeze-film factor: F = factor * mu V L B^3 / h^3 for
+    sides B <= L, aspect = B / L in (0, 1] (1 - 192 aspect / pi^5 sum_odd n
+    tanh(n pi / (2 aspect)) / n^5; 1 for an infinitely long strip)."""
+    if not 0 < aspect <= 1:
+        raise ValueError(f"aspect must be in (0, 1], got {aspect}")
+    odd = np.arange(1, 2 * terms, 2, dtype=float)
+    series = np.sum(np.tanh(odd * math.pi / (2.0 * aspect)) / odd ** 5)
+    return float(1.0 - 192.0 * aspect / math.pi ** 5 * series)
+
+
+#: Stefan's constant of a square face: F = STEFAN_SQUARE mu a^4 V / h^3.
+STEFAN_SQUARE = rectangle_factor(1.0)
+
+
 def stefan_force(viscosity: float, radius: float, thickness: float, speed: float) -> float:
     """Stefan's law [N]: 1.5 pi mu r^4 V / h^3 (disc of radius r, film thickness h, speed V)."""
     return 1.5 * math.pi * viscosity * radius ** 4 * speed / thickness ** 3
@@ -110,13 +137,23 @@ class Film:
 
     viscosity [Pa s]; radius [m] of the part's flat face (``flat``: Stefan) or
     of the sphere (Reynolds); h_c [m] the clearance (film thickness in
-    contact); free_flow: add the Stokes drag (16 mu r or 6 pi mu R).
+    contact); free_flow: add the Stokes drag (16 mu r or 6 pi mu R);
+    side [m] > 0: the flat face is a square of this side instead (radius
+    ignored; module docstring).
     """
     viscosity: float
     radius: float
     h_c: float
     flat: bool = True
     free_flow: bool = True
+    side: float = 0.0
+
+    @property
+    def stefan_constant(self) -> float:
+        """K [m^4] of the flat face's law F = mu K V / h^3: 1.5 pi r^4, or 0.42173 a^4 for a square."""
+        if self.side > 0:
+            return STEFAN_SQUARE * self.side ** 4
+        return 1.5 * math.pi * self.radius ** 4
 
     def thickness(self, gap):
         """Film thickness [m] at the DEM gap [m] (<= 0 in contact): max(gap, 0) + h_c."""
@@ -128,19 +165,21 @@ class Film:
         if not self.free_flow:
             return 0.0
         mu, r = self.viscosity, self.radius
+        if self.flat and self.side > 0:
+            return 16.0 * mu * self.side / math.sqrt(math.pi)  # the equal-area disc's
         return 16.0 * mu * r if self.flat else 6.0 * math.pi * mu * r
 
     def coefficient(self, h):
         """Damping coefficient c(h) [N s/m] at film thickness h [m]: F = -c (v_p - v_s)."""
         mu, r = self.viscosity, self.radius
-        film = 1.5 * math.pi * mu * r ** 4 / h ** 3 if self.flat else 6.0 * math.pi * mu * r ** 2 / h
+        film = mu * self.stefan_constant / h ** 3 if self.flat else 6.0 * math.pi * mu * r ** 2 / h
         return film + self.free_coefficient
 
     def impulse(self, h0, h):
         """Momentum [N s] the film takes from a part whose film grows from h0 to h: int_h0^h c."""
         mu, r = self.viscosity, self.radius
         if self.flat:
-            film = 0.75 * math.pi * mu * r ** 4 * (1.0 / h0 ** 2 - 1.0 / h ** 2)
+            film = 0.5 * mu * self.stefan_constant * (1.0 / h0 ** 2 - 1.0 / h ** 2)
         else:
             film = 6.0 * math.pi * mu * r ** 2 * np.log(h / h0)
         return film + self.free_coefficient * (h - h0)
@@ -149,6 +188,11 @@ class Film:
         """Force [N] on the part at ``gap`` [m] moving at ``v_rel`` [m/s] relative to the track."""
         return -self.coefficient(self.thickness(gap)) * v_rel
 
+    def panel_force(self, gap, v_rel, panels: int):
+        """Force [N] on one of a clump's ``panels`` spheres at its own gap and
+        velocity relative to the track: 1/panels of the face's coefficient."""
+        return self.force(gap, v_rel) / panels
+
 
 def saturated_deficit(film: Film, mass: float, h0: float | None = None) -> float:
     """The squeeze film's velocity deficit [m/s] once the part is far from the
@@ -156,7 +200,7 @@ def saturated_deficit(film: Film, mass: float, h0: float | None = None) -> float
     if not film.flat:
         raise ValueError("a sphere's film (Reynolds) has no saturated deficit: it grows as ln(h/h0)")
     h0 = film.h_c if h0 is None else h0
-    return 0.75 * math.pi * film.viscosity * film.radius ** 4 / (mass * h0 ** 2)
+    return 0.5 * film.viscosity * film.stefan_constant / (mass * h0 ** 2)
 
 
 def film_step_limit(film: Film, mass: float, steps: float = STEPS_PER_RELAXATION) -> float:
@@ -233,7 +277,7 @@ def launch(film: Film, mass: float, freq: float, gamma: float, g: float = G, *,
         x, u = y
         c = film.coefficient(x + h_c)
         if film.flat:
-            dc = -4.5 * math.pi * film.viscosity * film.radius ** 4 / (x + h_c) ** 4
+            dc = -3.0 * film.viscosity * film.stefan_constant / (x + h_c) ** 4
         else:
             dc = -6.0 * math.pi * film.viscosity * film.radius ** 2 / (x + h_c) ** 2
         return [[0.0, 1.0], [-dc * u / mass, -c / mass]]
