@@ -16,6 +16,7 @@ from vibrofeed.postproc.feedrate import (
     _mean_and_batch_error,
     batch_rate,
     bin_width,
+    mser,
     outlet_x,
     period_lag,
     period_velocities,
@@ -40,6 +41,9 @@ def test_bins_hold_about_ten_events_in_whole_periods():
     assert bin_width(0.0, 1.0, 0.0, 55) == pytest.approx(0.1)
     assert bin_width(0.0, 1.0, 0.0, 1000) == pytest.approx(0.01)
     assert bin_width(0.0, 2.0, 0.0, 10 ** 5) == pytest.approx(0.01)
+    # only the span counts, not where it starts
+    assert bin_width(0.5, 1.5, 100.0, 1000) == pytest.approx(0.01)
+    assert bin_width(0.5, 1.5, 0.0, 55) == pytest.approx(0.1)
 
 
 @pytest.mark.parametrize("freq", [4.0, 0.0])  # four one-period batches, or 200 units in 4 batches
@@ -135,6 +139,9 @@ def test_feed_rate_summary_holds_the_contract_keys_json_ready(tmp_path):
         assert repr(fa).endswith(f"{len(FRAMES)} frames>")
         with pytest.raises(InputError, match="bins must be at least 1"):
             FeedRate(r, bins=0)
+        one = FeedRate(r, bins=1).run().results   # the whole track in one bin
+        assert one.profile_count.tolist() == [fa.results.profile_count.sum()]
+        assert one.profile_velocity[0] == pytest.approx(fa.results.mean_velocity, rel=1e-12)
     summary = fa.summary()
     assert list(summary) == list(SUMMARY_KEYS)
     assert summary["parts_per_s"] == fa.results.parts_per_s
@@ -189,3 +196,102 @@ def test_singulation_between_two_frames_samples_clusters_from_all_frames(tmp_pat
     summary = sg.summary()
     assert list(summary) == [k for k in SINGULATION_KEYS if k in sg.results]
     assert summary["face_up_fraction"] is None and summary["steady_from"] == 0.503
+
+
+def test_period_lag_of_frames_shorter_than_a_period_weighs_the_alias_per_period():
+    # lags of 0.17, 0.34, 0.51 periods: aliases 0.17, 0.34, 0.49, per period 1, 1, 0.96
+    m, alias = period_lag(np.arange(4) * 0.0017, 100.0)
+    assert m == 3 and alias == pytest.approx(0.49)
+
+
+def test_a_given_start_cuts_only_the_end_by_mser_over_the_bins_after_it():
+    # a burst in the first bin, steady bins, then the run-out: with the start given, the end
+    # cut is MSER's over the bins from that start on, the burst included
+    from vibrofeed.postproc.feedrate import mser, steady_window
+
+    rng = np.random.default_rng(1)
+    times = np.r_[rng.uniform(0.0, 0.01, 60), rng.uniform(0.01, 0.7, 700)]
+    t_a, t_b, width, counts = steady_window(times, 0.0, 1.0, FREQ, start=0.0)
+    assert width == pytest.approx(0.01) and counts[0] == 60
+    d, e = mser(counts, cut_start=False, cut_end=True)
+    assert d == 0 and mser(counts[1:], cut_start=False, cut_end=True)[1] != e   # the burst matters
+    assert t_a == 0.0 and t_b == pytest.approx(1.0 - e * width)
+    assert len(counts) == 100 and counts.sum() == len(times)   # whole bins over the span, no more
+
+
+def test_feed_rate_profile_without_an_outlet_edge_spans_the_parts(tmp_path):
+    pos = [[0.0, 0, RADIUS], [2 * RADIUS, 0, RADIUS], [0.01, 0, RADIUS]]
+    frames = [(k, 0.01 * k, parts([1, 2, 3], pos, radius=RADIUS)) for k in range(6)]
+    with hand_made(tmp_path / "p.h5", frames, events_of([0.012, 0.031], [1, 3]),
+                   outlet={"method": "m"}) as r:
+        fr = FeedRate(r, bins=10).run().results
+    assert fr.profile_edges == pytest.approx(np.linspace(0.0, 0.01, 11))   # 0 .. the farthest part
+    assert fr.profile_x == pytest.approx((np.arange(10) + 0.5) * 1e-3)     # the bins' middles
+    assert fr.profile_count.sum() == 3 * 5 and fr.mean_velocity == 0.0
+
+
+def test_a_window_of_two_frames_has_one_whole_period_interval(tmp_path):
+    exits = 0.1 + np.arange(40) / 50.0
+    with Result(feeder(tmp_path / "two.h5", FRAMES, exits, freq=FREQ, speed=0.05, amp=2e-5)) as r:
+        fr = FeedRate(r, start=0.505, end=0.525).run().results   # frames at 0.51 and 0.52 s
+    assert fr.velocity_lag == 1 and fr.mean_velocity == pytest.approx(0.05, rel=1e-9)
+    assert math.isnan(fr.mean_velocity_err)                       # one interval: no batches
+
+
+def test_singulation_counts_only_the_arrivals_in_its_window(tmp_path):
+    exits = 0.05 + np.arange(90) / 100.0
+    with Result(feeder(tmp_path / "win.h5", FRAMES, exits, freq=FREQ, speed=0.3)) as r:
+        sg = Singulation(r, start=0.3, end=0.6).run().results
+    inside = exits[(exits >= 0.3) & (exits < 0.6)]
+    assert sg.n_arrivals == len(inside) == 30
+    assert sg.arrival_times == pytest.approx(inside)
+    with Result(tmp_path / "win.h5") as r:   # every pair 10 ms apart is a double by a 20 ms gap
+        crowded = Singulation(r, gap=0.02, start=0.3, end=0.6).run().results
+    assert crowded.n_doubles == 29 and crowded.doubles_per_s == pytest.approx(29 / 0.3)
+
+
+def test_a_feed_rate_of_two_frames(tmp_path):
+    exits = 0.1 + np.arange(40) / 50.0
+    with Result(feeder(tmp_path / "f2.h5", FRAMES, exits, freq=FREQ, speed=0.05, amp=2e-5)) as r:
+        fr = FeedRate(r).run(frames=[50, 51]).results
+    assert fr.mean_velocity == pytest.approx(0.05, rel=1e-9)
+    assert fr.n_events == ((exits > 0.5) & (exits <= 0.51)).sum()
+
+
+def test_outlet_events_are_those_after_the_first_time_up_to_the_last():
+    from vibrofeed.postproc.feedrate import outlet_events
+
+    class Fake:
+        outlet_plane = {"outlet_x": 0.02}
+        outlet = {"time": np.array([0.3, 0.1, 0.2, 0.4]), "id": np.array([3, 1, 2, 4])}
+
+    ev = outlet_events(Fake(), 0.1, 0.3)
+    assert ev["time"].tolist() == [0.2, 0.3] and ev["id"].tolist() == [2, 3]   # sorted by time
+
+
+def test_mser_may_cut_half_the_series_at_its_end():
+    assert mser(np.r_[np.full(10, 5.0), np.zeros(10)]) == (0, 10)
+    assert mser(np.r_[np.arange(10.0), np.full(10, 5.0)]) == (10, 0)   # and half at its start
+
+
+def test_the_edge_speed_is_measured_within_the_window_only(tmp_path):
+    # parts leaving before 0.5 s ran at 0.05 m/s, the later ones at 0.1 m/s (side by side
+    # lanes, so nobody overtakes anybody in the same lane); over [0.5, 1] only the fast ones
+    # are near the edge
+    exits = 0.05 + np.arange(90) / 100.0
+    speeds = np.where(exits < 0.5, 0.05, 0.1)
+    lanes = np.where(exits < 0.5, 0.0, 2e-3)
+    with Result(feeder(tmp_path / "edge.h5", FRAMES, exits, freq=FREQ, speed=speeds, lanes=lanes)) as r:
+        sg = Singulation(r, start=0.5, end=1.0).run().results
+    assert sg.edge_velocity == pytest.approx(0.1, rel=1e-9)
+
+
+def test_simultaneous_arrivals_have_no_cv_and_no_warning(tmp_path):
+    import warnings
+
+    frames = [(k, 0.01 * k, parts([1, 2], [[0, 0, RADIUS], [0, 1e-3, RADIUS]])) for k in range(6)]
+    with hand_made(tmp_path / "sim.h5", frames, events_of([0.02, 0.02, 0.02], [1, 2, 3])) as r:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            sg = Singulation(r, start=0.0, end=0.05).run().results
+    assert sg.n_arrivals == 3 and math.isnan(sg.cv_interarrival) and sg.mean_interarrival == 0.0

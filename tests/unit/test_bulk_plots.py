@@ -26,6 +26,9 @@ def drawn(monkeypatch):
     monkeypatch.setattr(feedrate_module, "save", keep)
     monkeypatch.setattr(singulation_module, "save", keep)
     yield figures
+    for name, fig in figures.items():   # whatever the styling, every line drawn can be seen
+        for ax in fig.axes:
+            assert all(line.get_linewidth() > 0 for line in ax.lines), name
     from vibrofeed.figures import pyplot
 
     for fig in figures.values():
@@ -86,6 +89,7 @@ def test_singulation_figures_draw_the_arrivals_against_random_ones_and_the_clust
     mean = sg.mean_interarrival * 1e3
     expected = len(sg.interarrival) * (np.exp(-edges[:-1] / mean) - np.exp(-edges[1:] / mean))
     assert np.asarray(random.get_ydata())[:-1] == pytest.approx(expected)
+    assert random.get_ydata()[-1] == random.get_ydata()[-2]   # a step: no drop at the last edge
     assert edges[0] == pytest.approx(lefts[0])
     gap = ax.lines[1]
     assert np.asarray(gap.get_xdata()) == pytest.approx([1.0, 1.0])  # the gap, 1 ms

@@ -240,3 +240,45 @@ def test_a_larger_tolerance_only_merges_clusters(points, radii_seed, tol_a, tol_
     for group in partition(fine):
         assert len({int(coarse[i]) for i in group}) == 1
     assert sum(s * c for s, c in cluster_sizes(coarse).items()) == len(pos)
+
+
+def test_pairs_touch_of_many_clump_pairs_at_once():
+    # more pairs than one block (2048): every pair the same two chips, side by side 2 r apart
+    # (outer spheres 2e-4 + 2 r apart, less 1 nm: touching) or 1 um farther (not)
+    k = 5000
+    a = np.column_stack([np.arange(k) * 1e-2, np.zeros(k), np.zeros(k)])
+    gap = np.where(np.arange(k) % 3 == 0, 1e-6, -1e-9)   # 1 nm overlap: touching beyond rounding
+    b = a + np.column_stack([2e-4 + 2 * R_S + gap, np.zeros(k), np.zeros(k)])
+    q = np.tile([1.0, 0, 0, 0], (k, 1))
+    got = pairs_touch(a, b, orientations_a=q, orientations_b=q, template=CHIP)
+    assert got.tolist() == (gap < 0).tolist()
+
+
+def test_cluster_sizes_skip_unused_labels_and_negative_tolerances_join_nothing():
+    assert cluster_sizes([0, 2, 2, 5]) == {1: 2, 2: 1}           # labels 1, 3, 4 unused
+    assert cluster_sizes([]) == {}
+    pos = np.array([[0.0, 0, 0], [1.0, 0, 0], [2.0, 0, 0]])
+    assert cluster_labels(pos, np.full(3, 0.5), tolerance=-1.5).tolist() == [0, 1, 2]
+    assert cluster_labels(pos, np.full(3, 0.5)).tolist() == [0, 0, 0]
+
+
+def test_pairs_touch_is_inclusive_and_adds_the_tolerance():
+    # exact binary values: touching means a centre distance of exactly r_a + r_b (+ tolerance)
+    a = np.zeros((3, 3))
+    b = np.array([[1.0, 0, 0], [1.25, 0, 0], [1.5, 0, 0]])
+    assert pairs_touch(a, b, np.full(3, 0.5), np.full(3, 0.5)).tolist() == [True, False, False]
+    assert pairs_touch(a, b, np.full(3, 0.5), np.full(3, 0.5), tolerance=0.25).tolist() == [True, True, False]
+    # two-sphere rods along x (spheres at +-0.5, r = 0.25): end to end, their outer spheres
+    # exactly touch 1.5 apart; 0.25 farther they touch only by a tolerance of 0.25
+    rod = np.array([[-0.5, 0, 0, 0.25], [0.5, 0, 0, 0.25]])
+    q = np.tile([1.0, 0, 0, 0], (3, 1))
+    ends = np.array([[1.5, 0, 0], [1.75, 0, 0], [2.0, 0, 0]])
+    assert pairs_touch(a, ends, orientations_a=q, orientations_b=q, template=rod).tolist() == \
+        [True, False, False]
+    assert pairs_touch(a, ends, orientations_a=q, orientations_b=q, template=rod,
+                       tolerance=0.25).tolist() == [True, True, False]
+
+
+def test_one_clump_is_one_cluster():
+    assert clump_labels(np.zeros((1, 3)), [[1.0, 0, 0, 0]], CHIP).tolist() == [0]
+    assert clump_labels(np.zeros((0, 3)), np.zeros((0, 4)), CHIP).tolist() == []

@@ -167,6 +167,10 @@ def test_thin_axis_and_orientation_of_a_template():
     assert thin_axis(tilted) == pytest.approx([1, 0, 0])
     cos_tilt, yaw = face_orientation([q_axis([0, 1, 0], np.pi / 2)], tilted)
     assert cos_tilt == pytest.approx([-1.0])  # x turned onto -z: face down
+    # standing on edge unturned: the in-plane reference is its y axis (x is the normal), 90 deg,
+    # folded to 0 by the square's symmetry
+    cos_tilt, yaw = face_orientation([[1.0, 0, 0, 0]], tilted)
+    assert cos_tilt == pytest.approx([0.0], abs=1e-12) and yaw == pytest.approx([0.0], abs=1e-9)
 
 
 def test_spheres_have_no_face(tmp_path):
@@ -180,4 +184,5 @@ def test_settings_are_checked(tmp_path):
         for bad in ({"gap": 0.0}, {"gap_distance": -1e-4}, {"cluster_frames": 0}, {"edge_length": 0}):
             with pytest.raises(InputError):
                 Singulation(r, **bad)
+        assert Singulation(r, gap_distance=0.0).gap_distance == 0.0   # abreast only: allowed
     assert OUTLET_X > 0

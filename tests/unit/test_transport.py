@@ -136,3 +136,15 @@ def test_an_empty_frame_selection_is_refused(tmp_path):
     with Result(write_conveyor(tmp_path / "c.h5", times, [(0, 10)], [0.01])) as r:
         with pytest.raises(InputError, match="no frame selected"):
             Transport(r).run(start=5, stop=5)
+
+
+def test_a_part_numbered_zero_is_a_part(tmp_path):
+    """Only the fill value -1 marks an empty slot (FORMAT.md); id 0 moves like any other."""
+    from helpers import parts, write_result
+
+    times = np.arange(0, 0.1 + 1e-12, 0.01)
+    frames = [(k, t, parts([0, 1], [[0.02 * t, 0, 0], [1e-3 + 0.01 * t, 0, 0]])) for k, t in enumerate(times)]
+    with Result(write_result(tmp_path / "zero.h5", frames)) as r:   # 50 Hz
+        tr = Transport(r, start=0.0).run().results
+    assert tr.ids.tolist() == [0, 1]
+    assert tr.velocities == pytest.approx([0.02, 0.01], rel=1e-9)

@@ -180,6 +180,10 @@ def test_a_field_with_the_wrong_number_of_rows_is_named_with_both_counts(tmp_pat
     p["radius"] = np.full(2, 1e-4)
     with pytest.raises(ValueError, match=r"parts\['radius'\] has 2 rows, id has 3"):
         w.write_frame(0, 0.0, p, [0, 0, 0], [0, 0, 0])
+    p = parts([1, 2, 3], np.zeros((3, 3)))
+    p["velocity"] = np.zeros((2, 3))   # rows, not components
+    with pytest.raises(ValueError, match=r"parts\['velocity'\] has 2 rows, id has 3"):
+        w.write_frame(0, 0.0, p, [0, 0, 0], [0, 0, 0])
     w.close()
 
 
