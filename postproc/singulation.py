@@ -30,7 +30,9 @@ same way unless ``start``/``end`` are given)
   face up (the body's thin axis, rotated by the part's quaternion, within 45°
   of +z), face down or on edge, and the orientation along the track: the
   in-plane angle between the body's x axis and the track, folded by the
-  part's symmetry (90° for a square chip) into (-45°, 45°].
+  part's symmetry (90° for a square chip) into (-45°, 45°]. Both as the track
+  delivers the part: at the last frame at which its centre was still over the
+  track, before it tips over the outlet edge.
 """
 
 from __future__ import annotations
@@ -195,7 +197,7 @@ class Singulation(AnalysisBase):
         r.singulated_fraction = float(alone.mean()) if len(times) else math.nan
 
         self._clusters(frames, t_a, t_b, tol)
-        self._faces(ev)
+        self._faces(ev, before)
 
     # -- pieces -----------------------------------------------------------------------
     def _mean_radius(self, event_radii: np.ndarray, frames: np.ndarray) -> float:
@@ -263,7 +265,7 @@ class Singulation(AnalysisBase):
         parts = all_sizes.sum()
         r.track_singulated_fraction = float((all_sizes == 1).sum() / parts) if parts else math.nan
 
-    def _faces(self, ev: dict) -> None:
+    def _faces(self, ev: dict, before: np.ndarray) -> None:
         r, template = self.results, self.result.body_template
         keys = ("face_up_fraction", "face_down_fraction", "on_edge_fraction", "aligned_fraction")
         if template is None or len(ev["time"]) == 0:
@@ -271,12 +273,34 @@ class Singulation(AnalysisBase):
             for key in keys:
                 r[key] = None
             return
-        r.cos_tilt, r.yaw_deg = face_orientation(ev["orientation"], template)
+        r.cos_tilt, r.yaw_deg = face_orientation(self._on_track_orientation(ev, before), template)
         c = math.cos(math.radians(FACE_ANGLE))
         r.face_up_fraction = float((r.cos_tilt >= c).mean())
         r.face_down_fraction = float((r.cos_tilt <= -c).mean())
         r.on_edge_fraction = 1.0 - r.face_up_fraction - r.face_down_fraction
         r.aligned_fraction = float((np.abs(r.yaw_deg) <= ALIGNED_ANGLE).mean())
+
+    def _on_track_orientation(self, ev: dict, before: np.ndarray) -> np.ndarray:
+        """Each leaving part's orientation at the last frame at which its centre was still
+        over the track (not past the outlet edge), where a chip still lies as the track
+        delivers it; the event's own orientation (at the catch plane, after it tipped over
+        the edge) only for a part never seen over the track (frames 0..before)."""
+        result, edge = self.result, outlet_x(self.result)
+        orientation = np.array(ev["orientation"], dtype=float)
+        if not math.isfinite(edge):
+            return orientation
+        frames = np.asarray(before, dtype=np.int64).copy()
+        pending = np.ones(len(frames), dtype=bool)
+        while pending.any():
+            k = np.nonzero(pending)[0]
+            state = values_at(result, frames[k], ev["id"][k], ["position", "orientation"])
+            surface_x = result.read("surface_position", frames=frames[k])[:, self.axis]
+            over = state["found"] & (state["position"][:, self.axis] - surface_x <= edge)
+            orientation[k[over]] = state["orientation"][over]
+            pending[k[over]] = False
+            pending &= frames > 0
+            frames[pending] -= 1
+        return orientation
 
     # -- views ----------------------------------------------------------------------
     def summary(self) -> dict:

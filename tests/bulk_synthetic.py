@@ -26,12 +26,14 @@ G = 9.81
 
 def feeder(path, frame_times, exit_times, speed=0.02, amp=0.0, freq=100.0, radius=RADIUS,
            mass=1e-7, lanes=None, orientations=None, body_template=None, variables=None,
-           outlet_x=OUTLET_X, seed=0):
+           outlet_x=OUTLET_X, seed=0, tipped=None):
     """Write the result file (module docstring); returns ``path``.
 
     ``speed``, ``mass``, ``radius``: scalars or one value per part; ``lanes``:
     each part's y [m] (default 0); ``orientations``: (parts, 4) quaternions
-    (written only when given). The parts are shuffled at every frame.
+    (written only when given); ``tipped``: (parts, 4) orientations once past the
+    edge, in the event and the falling frame (default: ``orientations``). The
+    parts are shuffled at every frame.
     """
     rng = np.random.default_rng(seed)
     frame_times = np.asarray(frame_times, dtype=float)
@@ -65,7 +67,10 @@ def feeder(path, frame_times, exit_times, speed=0.02, amp=0.0, freq=100.0, radiu
                  "velocity": np.column_stack([vx, np.zeros(m), vz]),
                  "angular_velocity": np.zeros((m, 3)), "force": np.zeros((m, 3))}
         if orientations is not None:
-            parts["orientation"] = np.asarray(orientations, dtype=float)[present]
+            q = np.asarray(orientations, dtype=float)[present]
+            if tipped is not None:
+                q = np.where(falling[present][:, None], np.asarray(tipped, dtype=float)[present], q)
+            parts["orientation"] = q
         frames.append((j, float(t), parts))
         exited = int((exit_times <= t).sum())
         counts.append({"inserted": int(inserted.sum()), "on_track": int(on_track.sum()),
@@ -76,7 +81,7 @@ def feeder(path, frame_times, exit_times, speed=0.02, amp=0.0, freq=100.0, radiu
                                            np.full(len(out), CATCH_Z)]),
               "velocity": np.column_stack([speed[out], np.zeros(len(out)), np.full(len(out), -0.05)]),
               "orientation": (np.tile([1.0, 0, 0, 0], (len(out), 1)) if orientations is None
-                              else np.asarray(orientations, dtype=float)[out])}
+                              else np.asarray(orientations if tipped is None else tipped, dtype=float)[out])}
     surface = [([amp * np.sin(w * t), 0, 0], [amp * w * np.cos(w * t), 0, 0]) for t in frame_times]
     base = {"freq": (repr(float(freq)), "Hz", "vibration frequency", "100"),
             "track_length": (repr(outlet_x), "m", "track length", "0.02"),

@@ -270,44 +270,50 @@ STUDY_START = 0.05
 
 
 def _settings(folder, start: float = STUDY_START) -> list[dict]:
-    """The finished settings of a sweep: its parameters (fixed ones included), and the feed
-    rate and conveying speed of each job over [start, t_end] (postproc.feedrate), as the
-    mean over the replicates with its standard error (one run: its batch-means error)."""
-    import csv
+    """The finished settings of a sweep (``vibrofeed sweep-report``'s grouping: the mean over
+    the replicates with its standard error, one run: its batch-means error), each job's
+    figures taken over [start, t_end] instead of its detected steady window: feed rate and
+    conveying speed (postproc.feedrate), doubles and singulated fraction at the outlet and
+    the fraction of parts alone on the track (postproc.singulation). ``parameters`` holds
+    the fixed ones too, ``deck_parameters`` one job's resolved deck parameters."""
     import json
 
     from vibrofeed.postproc.feedrate import FeedRate
+    from vibrofeed.postproc.singulation import Singulation
     from vibrofeed.results.reader import Result
+    from vibrofeed.sweep import report
 
     folder = Path(folder)
-    fixed = json.loads((folder / "sweep.json").read_text())["spec"].get("fixed", {})
-    with open(folder / "summary.csv", newline="") as fh:
-        rows = [r for r in csv.DictReader(fh) if r["status"] == "done"]
-    if not rows:
+    rows, meta = report.load(folder)
+    done = [r for r in rows if r["status"] == "done"]
+    if not done:
         raise CaseError(f"{folder}: no finished job in the sweep's summary")
-    columns = list(rows[0])
-    names = [c for c in columns[:columns.index("status")] if c not in ("job", "replicate", "seed")]
-    groups: dict[tuple, list[dict]] = {}
-    for row in rows:
-        groups.setdefault(tuple(row[n] for n in names), []).append(row)
-    out = []
-    for key, members in groups.items():
-        figures = []
-        for row in members:
-            with Result(folder / row["file"]) as result:
-                deck_parameters = dict(result.parameters)
-                r = FeedRate(result, start=start, end=float(result.time[-1])).run().results
-                figures.append({k: float(getattr(r, k)) for k in
-                                ("parts_per_s", "parts_per_s_err", "mean_velocity", "mean_velocity_err")})
-        entry = {"parameters": {**fixed, **dict(zip(names, key))}, "runs": len(figures),
-                 "deck_parameters": deck_parameters}
-        for name in ("parts_per_s", "mean_velocity"):
-            values = np.array([f[name] for f in figures])
-            entry[name] = float(values.mean())
-            entry[name + "_err"] = (float(values.std(ddof=1) / np.sqrt(len(values))) if len(values) > 1
-                                    else figures[0][name + "_err"])
-        out.append(entry)
-    return out
+    deck_parameters = {}
+    for row in done:
+        with Result(folder / row["file"]) as result:
+            window = {"start": start, "end": float(result.time[-1])}
+            fr = FeedRate(result, **window).run().results
+            sg = Singulation(result, **window).run().results
+            deck_parameters[row["job"]] = dict(result.parameters)
+        figures = {**{k: fr[k] for k in STUDY_FEEDRATE}, **{k: sg[k] for k in STUDY_SINGULATION}}
+        row.update({k: (float(v) if v == v else None) for k, v in figures.items()})  # NaN: None
+        for k in STUDY_SINGULATION:  # one run's figure has no error of its own
+            row[k + "_err"] = None
+    varied = [p for p in meta["varied"] if p != "seed"]
+    fixed = json.loads((folder / "sweep.json").read_text())["spec"].get("fixed", {})
+    entries = report.settings(done, varied, "parts_per_s")
+    for e in entries:
+        k = "track_singulated_fraction"  # not a sweep-report figure
+        e[k], e[k + "_err"] = report.mean_err([r[k] for r in done if r["job"] in e["jobs"]], [])
+        e["parameters"] = {**fixed, **e["parameters"]}
+        e["deck_parameters"] = deck_parameters[e["jobs"][0]]
+        e["runs"] = e["done"]
+    return entries
+
+
+#: The figures the study takes over its window (each with a ``_err`` from the analysis).
+STUDY_FEEDRATE = ("parts_per_s", "parts_per_s_err", "mean_velocity", "mean_velocity_err")
+STUDY_SINGULATION = ("doubles_rate", "singulated_fraction", "track_singulated_fraction")
 
 
 def _number(p: dict, name: str, default: float) -> float:
@@ -326,7 +332,8 @@ def _errorbars(ax, x, entries, name, scale, label):
 
 
 FIGURE_PANELS = (("parts_per_s", 1.0, "feed rate [parts/s]"),
-                 ("mean_velocity", 1e3, "conveying speed [mm/s]"))
+                 ("mean_velocity", 1e3, "conveying speed [mm/s]"),
+                 ("track_singulated_fraction", 100.0, "parts alone on the track [%]"))
 
 
 def sticky_model_speed(p: dict, bond: float) -> float | None:
@@ -376,10 +383,20 @@ def feeding_study(adhesion_dir, squeeze_dir) -> dict:
     return study
 
 
+def _relative(entries, e, name="mean_velocity") -> str:
+    """``e``'s figure over that of the first setting of its line (no adhesion / no film)."""
+    ref = entries[0][name]
+    return f"{e[name] / ref:5.2f}" if ref else "  n/a"
+
+
+def _fraction(value) -> str:
+    return "  n/a" if value is None else f"{100 * value:4.0f} %"
+
+
 def study_text(study: dict) -> str:
-    """The study's table: one line per setting, mean ± standard error."""
+    """The study's table: one line per setting, mean ± standard error over the replicates."""
     lines = ["adhesion: mode, A [J], roughness [m], Bo, runs, feed rate [parts/s], conveying [mm/s], "
-             "one part never leaving [mm/s]"]
+             "conveying / Bo 0, one part never leaving [mm/s], singulated at the outlet, alone on the track"]
     for mode, entries in sorted(study["adhesion"].items()):
         for e in entries:
             p = e["parameters"]
@@ -387,25 +404,34 @@ def study_text(study: dict) -> str:
             lines.append(f"  {mode:20s} {hamaker:7.2g} {roughness:7.2g} {e['bond']:6.3g} {e['runs']:3d}  "
                          f"{e['parts_per_s']:6.1f} ± {e['parts_per_s_err']:4.1f}  "
                          f"{1e3 * e['mean_velocity']:6.2f} ± {1e3 * e['mean_velocity_err']:4.2f}  "
-                         + ("n/a" if e["model"] is None else f"{1e3 * e['model']:6.2f}"))
-    lines.append("squeeze film: air film, freq [Hz], runs, feed rate [parts/s], conveying [mm/s]")
-    for film, entries in sorted(study["squeeze"].items(), key=lambda kv: (kv[0] != "no air film", kv[0])):
+                         f"{_relative(entries, e)}  "
+                         + ("   n/a" if e["model"] is None else f"{1e3 * e['model']:6.2f}")
+                         + f"  {_fraction(e['singulated_fraction'])}  "
+                         f"{_fraction(e['track_singulated_fraction'])}")
+    lines.append("squeeze film: air film, freq [Hz], runs, feed rate [parts/s], conveying [mm/s], "
+                 "conveying / no film")
+    films = sorted(study["squeeze"].items(), key=lambda kv: (kv[0] != "no air film", kv[0]))
+    free = dict(films).get("no air film", [])
+    for film, entries in films:
         for e in entries:
+            ref = next((f for f in free if f["freq"] == e["freq"]), None)
             lines.append(f"  {film:26s} {e['freq']:5g} {e['runs']:3d}  {e['parts_per_s']:6.1f} ± "
                          f"{e['parts_per_s_err']:4.1f}  {1e3 * e['mean_velocity']:6.2f} ± "
-                         f"{1e3 * e['mean_velocity_err']:4.2f}")
+                         f"{1e3 * e['mean_velocity_err']:4.2f}  "
+                         + (f"{e['mean_velocity'] / ref['mean_velocity']:5.2f}" if ref else "  n/a"))
     return "\n".join(lines)
 
 
 def feeding_figure(study: dict, path) -> Path:
-    """Four panels: feed rate and conveying speed (mean over the replicates, with
-    its standard error) against the Bond number, one line per mode (Gamma_n),
-    from the adhesion sweep; and against the frequency, one line per air-film
-    setting, from the squeeze-film sweep."""
+    """Six panels: feed rate, conveying speed and the fraction of parts alone on
+    the track (mean over the replicates, with its standard error) against the
+    Bond number, one line per mode (Gamma_n), from the adhesion sweep; and
+    against the frequency, one line per air-film setting, from the squeeze-film
+    sweep."""
     from vibrofeed.figures import pyplot, save
 
     plt = pyplot()
-    fig, axes = plt.subplots(2, 2, figsize=(9, 6.4), layout="constrained")
+    fig, axes = plt.subplots(2, 3, figsize=(13, 6.4), layout="constrained")
     for mode, sel in sorted(study["adhesion"].items()):
         for ax, (name, scale, _) in zip(axes[0], FIGURE_PANELS):
             _errorbars(ax, [e["bond"] for e in sel], sel, name, scale, mode)

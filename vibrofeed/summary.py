@@ -22,8 +22,9 @@ def run_summary(run) -> str:
         n = len(r.part_ids)
         bits = [f"{n} part{'s' * (n != 1)}"]
         if n and r.n_frames > 2:
-            tr = Transport(r).run().results
-            bits.append(f"mean speed {_si(tr.mean_velocity, 'm/s')} along x")
+            v = Transport(r).run().results.mean_velocity
+            bits.append(f"mean speed {_si(v, 'm/s')} along x" if v == v  # NaN: no part stayed
+                        else "no part on the track through the second half (mean speed n/a)")
         if n == 1 and r.n_frames > 2:
             fl = Flights(r).run().results
             period = 1.0 / float(r.parameters.get("freq", 1.0))

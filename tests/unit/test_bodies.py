@@ -134,3 +134,18 @@ def test_prepared_geometry_from_the_spec(tmp_path):
     assert track[1].tolist() == [[0, 1, 2]] and np.allclose(tpl, template)
     assert prepared_geometry({}) == (None, None)
     assert prepared_geometry({"prepared": {"track": None, "body_template": None}}) == (None, None)
+
+
+def test_the_fragments_of_a_body_being_deleted_are_no_part():
+    # fix multisphere removes a body that lost a sphere: the others get body -1 until
+    # they are deleted; a frame in between must neither count them as a part nor
+    # call a whole body incomplete
+    q = random_quaternions(3, seed=8)
+    atoms = clump_atoms(CLUMP, q, np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)))
+    keep = np.ones(15, bool)
+    keep[10] = False  # body 102 lost its first sphere ...
+    atoms["molecule"] = np.where(atoms["molecule"] == 102, -1, atoms["molecule"])  # ... and is removed
+    atoms = {k: a[keep] for k, a in atoms.items()}
+    parts, incomplete = aggregate(atoms, CLUMP, 5)
+    assert parts["id"].tolist() == [100, 101] and incomplete == 0
+    assert np.abs(parts["orientation"] - q[:2]).max() < 1e-12

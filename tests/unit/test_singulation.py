@@ -161,6 +161,25 @@ def test_chip_faces_and_alignment_at_the_outlet(tmp_path):
     assert sg.aligned_fraction == pytest.approx(6 / 10)   # 0, 10, 5, 5, 2 face up; 20 face down
 
 
+def test_chip_faces_are_taken_as_the_track_delivers_them(tmp_path):
+    # flat on the track, tipped 80 degrees about y as they fall past the edge (the events'
+    # and the falling frames' orientation): the faces are read before the tip
+    n = 6
+    flat = np.array([q_axis([0, 0, 1], a * np.pi / 180) for a in (0, 3, 60, 90, 7, 2)])
+    tip = np.array([q_mul(q_axis([0, 1, 0], 80 * np.pi / 180), q) for q in flat])
+    exits = 0.1 + 0.08 * np.arange(n)
+    with open_feeder(tmp_path, exits, speed=0.05, orientations=flat, tipped=tip, body_template=CHIP,
+                     lanes=np.arange(n) * 1e-3) as r:
+        sg = Singulation(r, start=0.0, end=1.0).run().results
+    assert sg.face_up_fraction == pytest.approx(1.0) and sg.on_edge_fraction == pytest.approx(0.0)
+    assert sg.cos_tilt == pytest.approx([1.0] * n, abs=1e-12)
+    assert sg.yaw_deg == pytest.approx([0, 3, -30, 0, 7, 2], abs=1e-9)
+    assert sg.aligned_fraction == pytest.approx(5 / 6)
+    # the tipped orientation alone would read every chip on edge (cos 80 deg)
+    cos_tipped, _ = face_orientation(tip, CHIP)
+    assert cos_tipped == pytest.approx([np.cos(80 * np.pi / 180)] * n, abs=1e-12)
+
+
 def test_thin_axis_and_orientation_of_a_template():
     assert thin_axis(CHIP) == pytest.approx([0, 0, 1])
     tilted = CHIP[:, [2, 0, 1, 3]]           # the same chip lying in the yz plane

@@ -78,12 +78,21 @@ def aggregate(atoms: dict, template: np.ndarray | None, n_spheres: int) -> tuple
     ``atoms`` holds per-atom ``id``, ``molecule`` (body id), ``type``,
     ``radius``, ``rmass``, ``x``, ``v``, ``omega`` of every atom (all
     ranks gathered). The template (n, 3+) lists the spheres in atom-id order
-    (LIGGGHTS numbers a body's atoms in template order). A body with fewer
-    than ``n_spheres`` atoms (never seen: LIGGGHTS deletes a body whole) keeps
+    (LIGGGHTS numbers a body's atoms in template order). Atoms of body -1
+    (what is left of a body being deleted) are dropped. A body with fewer
+    than ``n_spheres`` atoms (not seen: LIGGGHTS removes a body whole) keeps
     its sums and means but gets the identity orientation; their number is
     returned so that the caller can say so.
     """
     mol = np.asarray(atoms["molecule"], dtype=np.int64)
+    # A body that lost a sphere (through the box floor, below the outlet) is removed by
+    # fix multisphere: its other spheres get body -1 and are deleted at the next
+    # re-neighbouring. Such fragments are no part (a frame between the two would count
+    # them as one); a body lost anywhere else shows in the mass balance.
+    whole = mol >= 0
+    if not whole.all():
+        atoms = {k: np.asarray(v)[whole] for k, v in atoms.items()}
+        mol = mol[whole]
     aid = np.asarray(atoms["id"], dtype=np.int64)
     if len(mol) == 0:
         empty = {k: np.zeros((0, 3)) for k in ("position", "velocity", "angular_velocity", "force")}

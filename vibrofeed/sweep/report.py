@@ -45,7 +45,9 @@ def heading(name: str) -> str:
     return f"{title} [{unit}]"
 
 
-def _mean_err(values: list, errors: list) -> tuple[float | None, float | None]:
+def mean_err(values: list, errors: list) -> tuple[float | None, float | None]:
+    """Mean of the values that are not None, and its standard error over them (one value:
+    its own error from ``errors``, aligned with ``values``; none: (None, None))."""
     xs = [v for v in values if v is not None]
     if not xs:
         return None, None
@@ -68,7 +70,7 @@ def settings(rows: list[dict], varied: list[str], merit: str) -> list[dict]:
         entry = {"parameters": dict(zip(varied, key)), "runs": len(members), "done": len(done),
                  "jobs": [r["job"] for r in members]}
         for name in FIGURES:
-            mean, err = _mean_err([r.get(name) for r in done], [r.get(f"{name}_err") for r in done])
+            mean, err = mean_err([r.get(name) for r in done], [r.get(f"{name}_err") for r in done])
             entry[name], entry[f"{name}_err"] = mean, err
         entry["merit"], entry["merit_err"] = entry[merit], entry[f"{merit}_err"]
         out.append(entry)
