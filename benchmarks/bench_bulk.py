@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import re
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -74,28 +75,39 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("-p", "--param", action="append", default=[], metavar="NAME=VALUE")
     ap.add_argument("--ranks", type=int, default=1)
+    ap.add_argument("--repeats", type=int, default=3, help="runs of each; medians are reported")
     a = ap.parse_args()
     params = [w for p in a.param for w in ("-p", p)]
+    hand, driven, ratios, t_an = [], [], [], []
     with tempfile.TemporaryDirectory() as d:
         tmp = Path(d)
-        (tmp / "hand").mkdir()
-        wall_hand, loop_hand, steps = by_hand(tmp / "hand", params, a.ranks)
-        wall_vf, out = through_vibrofeed(tmp, params, a.ranks)
+        for k in range(a.repeats):  # alternated, so that a slow spell of the machine hits both
+            (tmp / f"hand{k}").mkdir()
+            hand.append(by_hand(tmp / f"hand{k}", params, a.ranks))
+            wall_vf, out = through_vibrofeed(tmp, params, a.ranks)
+            driven.append(wall_vf)
+            ratios.append(wall_vf / hand[-1][0])
+            t_an.append(analyses(out))
         from vibrofeed.results.reader import Result
 
         with Result(out) as r:
             parts = int(r.mass_balance["inserted"][-1])
             frames = r.n_frames
             sim = float(r.time[-1] - r.time[0])
-        t_an = analyses(out)
-    print(f"machine: {machine()}; ranks {a.ranks}; parameters: {' '.join(a.param) or 'defaults'}")
+    med = statistics.median
+    wall_hand, loop_hand = med(h[0] for h in hand), med(h[1] for h in hand)
+    steps = hand[0][2]
+    print(f"machine: {machine()}; ranks {a.ranks}; parameters: {' '.join(a.param) or 'defaults'}; "
+          f"medians of {a.repeats}")
     print("| measurement | result |\n|---|---|")
     print(f"| parts, simulated time, frames | {parts}, {sim:g} s, {frames} |")
     print(f"| `liggghts -in` by hand, whole run (settle + vibration, text dump) | {wall_hand:.1f} s |")
     print(f"| by hand, vibration run only | {loop_hand:.1f} s, {steps / loop_hand:.0f} steps/s, "
           f"{parts * steps / loop_hand / 1e6:.2f} M particle-steps/s (initial parts) |")
-    print(f"| `vibrofeed run`, whole run | {wall_vf:.1f} s (ratio to by hand {wall_vf / wall_hand:.3f}) |")
-    print(f"| feed-rate + singulation analyses | {t_an:.2f} s ({t_an / wall_vf:.1%} of the run) |")
+    print(f"| `vibrofeed run`, whole run | {med(driven):.1f} s (ratio to by hand {med(ratios):.3f}; "
+          f"each run {', '.join(f'{x:.3f}' for x in ratios)}) |")
+    share = med(t_an) / med(driven)
+    print(f"| feed-rate + singulation analyses | {med(t_an):.2f} s ({share:.2%} of the run) |")
 
 
 if __name__ == "__main__":

@@ -36,14 +36,46 @@ def machine() -> str:
     return f"{cpu}, {os.cpu_count()} cores, {platform.system()} {platform.release()}"
 
 
-def by_hand(tmp: Path, t_end: float) -> float:
-    """Steps/s of `liggghts -in` on the deck (no vibrofeed, text dump every output_dt)."""
+def by_hand(tmp: Path, t_end: float, output_dt: float | None = None) -> tuple[float, float]:
+    """(steps/s of the run loop, wall s of the whole command) of `liggghts -in` on the deck
+    (no vibrofeed; a text dump every output_dt, the deck's default 1e-4 s if None)."""
+    extra = [] if output_dt is None else ["-var", "output_dt", repr(output_dt)]
+    t0 = time.monotonic()
     out = subprocess.run(["liggghts", "-in", str(DECK), "-var", "deck_dir", str(DECK.parent),
                           "-var", "t_end", str(t_end), "-var", "dump_file", str(tmp / "d.dump"),
-                          "-log", str(tmp / "log"), "-nocite"], capture_output=True, text=True,
+                          *extra, "-log", str(tmp / "log"), "-nocite"], capture_output=True, text=True,
                          check=True).stdout
+    wall = time.monotonic() - t0
     m = re.search(r"Loop time of ([0-9.e+-]+) on \d+ procs for (\d+) steps", out)
-    return int(m[2]) / float(m[1])
+    return int(m[2]) / float(m[1]), wall
+
+
+def engine_path(tmp: Path, t_end: float, output_dt: float) -> float:
+    """Wall s of one run through the isolated runner as validation and sweeps use it
+    (``runner.run_deck``: worker process, H5MD frames; no command line, no summary)."""
+    from vibrofeed.decks import Deck
+    from vibrofeed.engine.runner import run_deck
+
+    t0 = time.monotonic()
+    run_deck(Deck.find("single_part"), {"t_end": t_end, "output_dt": output_dt}, tmp / "e.h5")
+    return time.monotonic() - t0
+
+
+def overhead(tmp: Path, t_end: float, output_dt: float, repeats: int) -> dict:
+    """Medians of `liggghts -in` (by hand), the runner (engine path) and `vibrofeed run` (the
+    command, with its summary line) on the same deck writing the same frames, whole runs,
+    alternated; and the two ratios to by hand (medians of the per-repeat ratios)."""
+    hand, engine, command = [], [], []
+    for _ in range(repeats):
+        hand.append(by_hand(tmp, t_end, output_dt)[1])
+        engine.append(engine_path(tmp, t_end, output_dt))
+        command.append(through_vibrofeed(tmp, t_end, output_dt, 1)[1])
+
+    def median(xs):
+        return sorted(xs)[len(xs) // 2]
+    return {"hand": median(hand), "engine": median(engine), "command": median(command),
+            "engine_ratio": median([e / h for e, h in zip(engine, hand)]),
+            "command_ratio": median([c / h for c, h in zip(command, hand)])}
 
 
 def through_vibrofeed(tmp: Path, t_end: float, output_dt: float, ranks: int) -> tuple[float, float]:
@@ -91,7 +123,15 @@ def main() -> None:
         tmp = Path(d)
         print("| measurement | setting | result |\n|---|---|---|")
         print(f"| `liggghts -in` by hand (text dump every 1e-4 s) | single_part, t_end={t_end} s, 1 rank "
-              f"| {by_hand(tmp, t_end) / 1e3:.0f}k steps/s |")
+              f"| {by_hand(tmp, t_end)[0] / 1e3:.0f}k steps/s |")
+        for t_run in (0.6, t_end):
+            o = overhead(tmp, t_run, 1e-3, 1 if args.quick else 5)
+            print(f"| driver overhead, engine path (`runner.run_deck`, as validation and sweeps run) / "
+                  f"`liggghts -in`, same frames (every 1e-3 s) | single_part, t_end={t_run} s, 1 rank "
+                  f"| {o['engine_ratio']:.3f} ({o['engine']:.2f} s / {o['hand']:.2f} s, medians) |")
+            print(f"| driver overhead, the command `vibrofeed run` (and its summary line) / "
+                  f"`liggghts -in` | single_part, t_end={t_run} s, 1 rank "
+                  f"| {o['command_ratio']:.3f} ({o['command']:.2f} s / {o['hand']:.2f} s, medians) |")
         for output_dt in (1e-3, 1e-4, 2e-5):
             for ranks in (1, 2):
                 rate, wall = through_vibrofeed(tmp, t_end, output_dt, ranks)

@@ -83,11 +83,11 @@ def consistent(a: dict, ref: dict) -> bool:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--skins", type=float, nargs="+", default=[0.2, 0.8, 1.6],
+    ap.add_argument("--skins", type=float, nargs="*", default=[0.2, 0.8, 1.6],
                     help="skins to try, in units of the smallest radius (the deck: 0.4)")
-    ap.add_argument("--bins", type=float, nargs="+", default=[0.5, 1.0, 2.0],
+    ap.add_argument("--bins", type=float, nargs="*", default=[0.5, 1.0, 2.0],
                     help="bin sizes to try, in units of the largest cut-off (LIGGGHTS' default: 0.5)")
-    ap.add_argument("--output-dts", type=float, nargs="+", default=[0.002, 0.005, 0.02, 0.05],
+    ap.add_argument("--output-dts", type=float, nargs="*", default=[0.002, 0.005, 0.02, 0.05],
                     help="output intervals to try [s] (the deck: 0.01)")
     ap.add_argument("--repeats", type=int, default=1)
     ap.add_argument("-p", "--param", action="append", default=[], metavar="NAME=VALUE")

@@ -36,6 +36,7 @@ of the adhesion, and against the frequency with and without the air film).
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -366,6 +367,28 @@ def _film_label(p: dict) -> str:
     return f"air, clearance {1e6 * max(_number(p, 'roughness', 0.0), 6.8e-8):g} um"
 
 
+def _films(study: dict) -> list[tuple[str, list[dict]]]:
+    """The squeeze sweep's lines: no air film first, then the clearances from wide to narrow."""
+    def clearance(item):
+        entries = item[1]
+        air = _number(entries[0]["parameters"], "air_viscosity", 0.0) > 0
+        return (air, -_number(entries[0]["parameters"], "roughness", 0.0))
+    return sorted(study["squeeze"].items(), key=clearance)
+
+
+def _versus_free(study: dict, e: dict) -> tuple[float, float] | None:
+    """``e``'s conveying speed over that without the air film at its frequency, with the
+    ratio's standard error (the two errors combined), or None without that setting."""
+    free = dict(_films(study)).get("no air film", [])
+    ref = next((f for f in free if f["freq"] == e["freq"]), None)
+    if ref is None or not ref["mean_velocity"]:
+        return None
+    ratio = e["mean_velocity"] / ref["mean_velocity"]
+    rel = math.hypot((e["mean_velocity_err"] or 0.0) / e["mean_velocity"],
+                     (ref["mean_velocity_err"] or 0.0) / ref["mean_velocity"])
+    return ratio, ratio * rel
+
+
 def feeding_study(adhesion_dir, squeeze_dir) -> dict:
     """The two sweeps' settings (:func:`_settings`), grouped: ``adhesion`` mode -> settings
     by Bond number, ``squeeze`` film -> settings by frequency."""
@@ -410,15 +433,13 @@ def study_text(study: dict) -> str:
                          f"{_fraction(e['track_singulated_fraction'])}")
     lines.append("squeeze film: air film, freq [Hz], runs, feed rate [parts/s], conveying [mm/s], "
                  "conveying / no film")
-    films = sorted(study["squeeze"].items(), key=lambda kv: (kv[0] != "no air film", kv[0]))
-    free = dict(films).get("no air film", [])
-    for film, entries in films:
+    for film, entries in _films(study):
         for e in entries:
-            ref = next((f for f in free if f["freq"] == e["freq"]), None)
+            versus = _versus_free(study, e)
             lines.append(f"  {film:26s} {e['freq']:5g} {e['runs']:3d}  {e['parts_per_s']:6.1f} ± "
                          f"{e['parts_per_s_err']:4.1f}  {1e3 * e['mean_velocity']:6.2f} ± "
                          f"{1e3 * e['mean_velocity_err']:4.2f}  "
-                         + (f"{e['mean_velocity'] / ref['mean_velocity']:5.2f}" if ref else "  n/a"))
+                         + ("  n/a" if versus is None else f"{versus[0]:5.2f} ± {versus[1]:4.2f}"))
     return "\n".join(lines)
 
 
@@ -427,7 +448,7 @@ def feeding_figure(study: dict, path) -> Path:
     the track (mean over the replicates, with its standard error) against the
     Bond number, one line per mode (Gamma_n), from the adhesion sweep; and
     against the frequency, one line per air-film setting, from the squeeze-film
-    sweep."""
+    sweep (there the conveying speed over that without the film)."""
     from vibrofeed.figures import pyplot, save
 
     plt = pyplot()
@@ -443,17 +464,26 @@ def feeding_figure(study: dict, path) -> Path:
     for ax in axes[0]:
         ax.set_xscale("symlog", linthresh=0.1)
         ax.set_xlabel("Bond number: vdW pull-off / weight")
-    for film, sel in sorted(study["squeeze"].items(), key=lambda kv: (kv[0] != "no air film", kv[0])):
-        for ax, (name, scale, _) in zip(axes[1], FIGURE_PANELS):
+    bottom = (FIGURE_PANELS[0], ("versus_free", 1.0, "conveying speed / without the air film"),
+              FIGURE_PANELS[2])
+    for film, sel in _films(study):
+        for e in sel:
+            e["versus_free"], e["versus_free_err"] = _versus_free(study, e) or (None, None)
+        for ax, (name, scale, _) in zip(axes[1], bottom):
             _errorbars(ax, [e["freq"] for e in sel], sel, name, scale, film)
+    axes[1, 1].axhline(1.0, color="k", lw=0.8)
     for ax in axes[1]:
         ax.set_xscale("log")
+        ax.set_xticks([50, 100, 200, 400], ["50", "100", "200", "400"])
+        ax.minorticks_off()
         ax.set_xlabel("frequency [Hz] (Gamma_n = Gamma_t = 2)")
-    for row in axes:
-        for ax, (_, _, ylabel) in zip(row, FIGURE_PANELS):
-            ax.set_ylabel(ylabel)
-            ax.grid(alpha=0.3)
-            ax.legend(fontsize=7)
+    for ax, (_, _, ylabel) in zip(axes[1], bottom):
+        ax.set_ylabel(ylabel)
+    for ax, (_, _, ylabel) in zip(axes[0], FIGURE_PANELS):
+        ax.set_ylabel(ylabel)
+    for ax in axes.flat:
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
     axes[0, 0].set_title("van der Waals adhesion (sweeps/adhesion.toml)", fontsize=9, loc="left")
     axes[1, 0].set_title("squeeze-film air damping (sweeps/squeeze_film.toml)", fontsize=9, loc="left")
     return save(fig, path)

@@ -34,7 +34,6 @@ from ..decks import Deck
 from ..errors import EngineError, OutputError, RunError, UsageError
 from ..parameters import resolve
 from ..results import layout as L
-from ..results.writer import mark_file_status
 from .errors import failed_command, find_error
 from .worker import MARK
 
@@ -290,6 +289,8 @@ def run_deck(deck: Deck, params: Mapping[str, str], output, *, ranks: int = 1,
             except KeyboardInterrupt:
                 _stop(proc)
                 if part.exists() and _frames_in(part)[0]:
+                    from ..results.writer import mark_file_status  # h5py: only when needed
+
                     mark_file_status(part, L.STATUS_INTERRUPTED, "interrupted by the user")
                 else:
                     part.unlink(missing_ok=True)
@@ -306,6 +307,8 @@ def run_deck(deck: Deck, params: Mapping[str, str], output, *, ranks: int = 1,
         frames, last_step, last_time = _frames_in(part) if part.exists() else (0, None, None)
         error = _diagnose(rc, events, deck, log, screen, stderr_path, last_step, last_time)
         if frames:
+            from ..results.writer import mark_file_status
+
             mark_file_status(part, L.STATUS_FAILED, str(error))
             error.partial = (part, frames)
         else:
