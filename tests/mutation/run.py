@@ -327,6 +327,7 @@ def main(argv=None) -> int:
                     help="test only this fraction of a new session's mutants (the same ones each "
                          "time); default: a target's `sample` in pyproject.toml, else all")
     args = ap.parse_args(argv)
+    args.workdir = args.workdir.resolve()  # cosmic-ray runs in the copy: a relative path would move
     names = args.targets or list(targets)
     unknown = [n for n in names if n not in targets]
     if unknown:

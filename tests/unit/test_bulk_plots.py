@@ -93,6 +93,7 @@ def test_singulation_figures_draw_the_arrivals_against_random_ones_and_the_clust
     assert edges[0] == pytest.approx(lefts[0])
     gap = ax.lines[1]
     assert np.asarray(gap.get_xdata()) == pytest.approx([1.0, 1.0])  # the gap, 1 ms
+    assert gap.get_label() == "gap 1 ms"
     assert f"CV {sg.cv_interarrival:.3g}" in ax.get_title()
 
     ax = drawn["singulation_clusters.png"].axes[0]

@@ -205,3 +205,101 @@ def test_settings_are_checked(tmp_path):
                 Singulation(r, **bad)
         assert Singulation(r, gap_distance=0.0).gap_distance == 0.0   # abreast only: allowed
     assert OUTLET_X > 0
+
+
+# -- the pieces at their edges ------------------------------------------------------
+def yaw_quat(deg):
+    return q_axis([0, 0, 1], deg * np.pi / 180)
+
+
+def tipping_chips(path, n):
+    """Chips on a track displaced by 0.5 mm along x (the outlet edge at x = 0.0205 in the
+    simulation frame). Chip 1 turns from 0 to 5 degrees and tips 60 degrees as its centre
+    passes the edge at the frame before it crosses the catch plane; chip 2 (n = 2) lies flat
+    at 20 degrees until it leaves."""
+    from helpers import parts, write_bulk_result
+
+    shift = 5e-4
+    tipped = q_mul(q_axis([0, 1, 0], np.pi / 3), yaw_quat(5))
+    chip1 = [(0.0190, yaw_quat(0)), (0.0196, yaw_quat(5)), (0.0203, tipped), None, None]
+    chip2 = [(0.0150, yaw_quat(20)), (0.0165, yaw_quat(20)), (0.0180, yaw_quat(20)),
+             (0.0195, yaw_quat(20)), None]
+    frames = []
+    for k in range(5):
+        rows = [(1, chip1[k])] + ([(2, chip2[k])] if n == 2 else [])
+        rows = [(i, s) for i, s in rows if s is not None]
+        p = parts([i for i, _ in rows], [[s[0] + shift, 0.0, RADIUS] for _, s in rows], radius=RADIUS)
+        p["orientation"] = np.array([s[1] for _, s in rows]).reshape(-1, 4)
+        frames.append((k, 0.01 * k, p))
+    times, ids = [0.025, 0.035][:n], [1, 2][:n]
+    events = {"time": np.array(times), "id": np.array(ids), "position": np.zeros((n, 3)),
+              "velocity": np.zeros((n, 3)), "orientation": np.tile(tipped, (n, 1))}
+    surface = [([shift, 0, 0], [0, 0, 0])] * 5
+    return Result(write_bulk_result(path, frames, events=events, body_template=CHIP, surface=surface,
+                                    outlet={"outlet_x": 0.02, "catch_z": -3e-4, "method": "synthetic"}))
+
+
+def test_a_chip_past_the_edge_at_the_frame_before_its_exit_is_read_a_frame_earlier(tmp_path):
+    with tipping_chips(tmp_path / "tip.h5", 2) as r:
+        sg = Singulation(r, start=0.0, end=0.04).run().results
+    # chip 1: the frame before its crossing sees it tipped past the edge (of the displaced
+    # track): read at the frame before that, flat at 5 degrees (not 0, two frames back)
+    assert sg.cos_tilt == pytest.approx([1.0, 1.0], abs=1e-12)
+    assert sg.yaw_deg == pytest.approx([5.0, 20.0], abs=1e-9)
+    assert sg.face_up_fraction == 1.0 and sg.aligned_fraction == 0.5
+
+
+def test_one_chip_arriving_has_a_face(tmp_path):
+    with tipping_chips(tmp_path / "one.h5", 1) as r:
+        sg = Singulation(r, start=0.0, end=0.04).run().results
+    assert sg.n_arrivals == 1 and sg.face_up_fraction == 1.0 and sg.yaw_deg == pytest.approx([5.0])
+
+
+def test_aligned_means_within_ten_degrees():
+    cos_tilt, yaw = face_orientation([yaw_quat(a) for a in (9.9, 10.5, -10.5, 44)], CHIP)
+    assert yaw == pytest.approx([9.9, 10.5, -10.5, 44], abs=1e-9)
+    from vibrofeed.postproc.singulation import ALIGNED_ANGLE
+
+    assert ALIGNED_ANGLE == 10.0  # the README's and the summary's "aligned"
+
+
+def test_a_template_thin_along_x_measures_its_yaw_in_its_yz_face():
+    tilted = CHIP[:, [2, 0, 1, 3]]           # thin along x: its face is the yz plane
+    flat = q_axis([0, 1, 0], -np.pi / 2)     # turns x onto +z: the chip lies face up
+    q = q_mul(yaw_quat(30), flat)
+    cos_tilt, yaw = face_orientation([q], tilted)
+    assert cos_tilt == pytest.approx([1.0]) and yaw == pytest.approx([30.0], abs=1e-9)
+
+
+def test_the_thin_axis_does_not_depend_on_where_the_template_sits():
+    assert thin_axis(CHIP + [1e-3, -2e-3, 5e-4, 0]) == pytest.approx([0, 0, 1])
+
+
+def test_the_cv_of_a_few_intervals_uses_the_sample_deviation(tmp_path):
+    # arrivals 1, 2 and 3 ms apart: mean 2 ms, sample deviation 1 ms: CV 0.5
+    exits = 0.1 + np.cumsum([0.0, 0.001, 0.002, 0.003])
+    with open_feeder(tmp_path, exits, speed=0.05, lanes=np.arange(4) * 1e-3) as r:
+        sg = Singulation(r, start=0.0, end=1.0).run().results
+    assert sg.cv_interarrival == pytest.approx(0.5, rel=1e-9)
+
+
+def test_the_edge_speed_is_that_of_the_parts_within_five_diameters(tmp_path):
+    # two lanes: parts 5.5 diameters behind the edge move at 0.03 m/s, parts on the last
+    # 4 diameters at 0.06 m/s (each lane's parts at one speed; the slow lane never
+    # arrives within the window)
+    n = 40
+    fast = 0.3 + np.arange(n) * 0.01
+    slow = 0.3 + 5.5 * D / 0.03 + np.arange(n) * 0.01 + 2.0  # leave after the window
+    exits = np.r_[fast, slow]
+    speeds = np.r_[np.full(n, 0.06), np.full(n, 0.03)]
+    lanes = np.r_[np.zeros(n), np.full(n, 2e-3)]
+    with open_feeder(tmp_path, exits, speed=speeds, lanes=lanes) as r:
+        sg = Singulation(r, start=0.3, end=0.7).run().results
+    assert sg.edge_velocity == pytest.approx(0.06, rel=1e-9)
+
+
+def test_cluster_frames_include_the_window_end(tmp_path):
+    exits = 0.05 + np.arange(80) * 0.01
+    with open_feeder(tmp_path, exits, speed=0.05, lanes=np.arange(80) % 4 * 1e-3) as r:
+        sg = Singulation(r, start=0.2, end=0.5, cluster_frames=1000).run().results
+    assert sg.cluster_frames == 31   # 0.20, 0.21, ..., 0.50
