@@ -165,3 +165,61 @@ def test_the_bulk_feeder_refuses_contacts_softer_than_its_validated_range():
         resolve(deck, {"youngs": "1.9e7"})
     # the single-part deck keeps LIGGGHTS' own limit only
     assert resolve(Deck.find("single_part"), {"youngs": "1e7"})["youngs"] == "1e7"
+
+
+def test_a_surface_speed_of_exactly_2_m_per_s_is_allowed():
+    # README: the peak surface speed 2 pi freq amp is refused *above* 2 m/s
+    freq = 2.0 / (2 * math.pi * 0.005)
+    assert 2 * math.pi * freq * 0.005 == 2.0  # exactly on the limit (checked, not assumed)
+    for amp, other in (("amp_n", "amp_t"), ("amp_t", "amp_n")):
+        assert resolve(DECK, {amp: "0.005", other: "0", "freq": repr(freq)})["freq"] == repr(freq)
+        with pytest.raises(ParameterError, match=f"{amp}=0.005 m at freq="):
+            resolve(DECK, {amp: "0.005", other: "0", "freq": repr(freq * (1 + 1e-12))})
+
+
+@pytest.mark.parametrize("shape, n, size, thickness, length", [
+    ("sphere", 300, 3e-4, 1.5e-4, 0.02), ("disc", 40, 3e-4, 1.5e-4, 0.005),
+    ("chip", 1, 1e-3, 1e-4, 1e-3),  # a single part already piles above the walls
+])
+def test_a_pre_fill_exactly_as_high_as_the_walls_is_allowed(shape, n, size, thickness, length):
+    """The settled pre-fill's height n V / (0.6 (fill_to - fill_from) track_length track_width),
+    V the part's volume, may reach the walls' top but not pass it."""
+    volume = {"sphere": math.pi / 6 * size**3, "chip": size**2 * thickness,
+              "disc": math.pi / 4 * size**2 * thickness}[shape]
+    pile = n * volume / (0.6 * (0.9 - 0.1) * length * 2e-3)  # the default fill 0.1-0.9, width 2 mm
+    given = {"shape": shape, "n_parts": str(n), "part_size": repr(size), "part_thickness": repr(thickness),
+             "track_length": repr(length), "fill_from": "0.1", "fill_to": "0.9", "track_width": "2e-3"}
+    assert resolve(DECK, {**given, "wall_height": repr(pile)})["wall_height"] == repr(pile)
+    with pytest.raises(ParameterError, match=f"n_parts={n} settle .* above the walls"):
+        resolve(DECK, {**given, "wall_height": repr(math.nextafter(pile, 0))})
+
+
+def test_the_softest_validated_contact_is_2e7_pa():
+    # README "Decks": the feed rate was measured independent of youngs from 2e7 to 1e9 Pa
+    assert resolve(DECK, {"youngs": "2e7"})["youngs"] == "2e7"
+    with pytest.raises(ParameterError, match=r"youngs=2e\+07 Pa is softer .* from 2e\+07 to 1e9 Pa"):
+        resolve(DECK, {"youngs": repr(math.nextafter(2e7, 0))})
+
+
+def own_deck(tmp_path, **defaults):
+    """A deck of one's own declaring only ``defaults`` (the checks apply to what it declares)."""
+    path = tmp_path / "own.liggghts"
+    path.write_text("".join(f"variable {k} index {v} # [-] {k}\n" for k, v in defaults.items()))
+    return Deck(path)
+
+
+def test_a_deck_with_part_of_the_vocabulary_is_checked_on_what_it_declares(tmp_path):
+    # vibrating normal to the track only (no amp_t): the speed limit still holds for amp_n
+    normal_only = own_deck(tmp_path, freq=100, amp_n=1e-4)
+    assert resolve(normal_only, {})["amp_n"] == "0.0001"
+    with pytest.raises(ParameterError, match="amp_n=0.005 m at freq=100 Hz"):
+        resolve(normal_only, {"amp_n": "0.005"})
+    # an open track (no wall_height): no pre-fill is too high
+    open_track = own_deck(tmp_path, part_size=3e-4, track_width=2e-3, track_length=0.02, n_parts=300)
+    assert resolve(open_track, {"n_parts": "100000"})["n_parts"] == "100000"
+    # a gate without gate_at sits at 0.7 of the track, as in the bulk feeder, and says so
+    gate = own_deck(tmp_path, part_size=3e-4, track_width=2e-3, track_length=0.02, gate_width=8e-4,
+                    fill_to=0.6)
+    assert resolve(gate, {"fill_to": "0.7"})["fill_to"] == "0.7"
+    with pytest.raises(ParameterError, match=r"fill_to=0.71 reaches into the gate \(gate_at=0.7\)"):
+        resolve(gate, {"fill_to": "0.71"})

@@ -6,15 +6,18 @@ import math
 
 import numpy as np
 import pytest
-from scipy.interpolate import make_interp_spline
+from scipy.interpolate import PPoly, make_interp_spline
 
 from vibrofeed.validation.models.surface import (
     CallableSurface,
     CoulombPumpWaveform,
     PiecewiseConstantAccel,
     PolynomialSurface,
+    SampledWaveform,
+    SineWaveform,
     StickSlipWaveform,
     _unique_sorted,
+    sampled_pieces,
     sine_drive,
     two_level_drive,
 )
@@ -88,3 +91,168 @@ def test_constructors_refuse_what_their_docstrings_exclude():
         PolynomialSurface(spl, period=1.0)
     d = two_level_drive(1.0, 1e-3, 0.5)                        # a gentle drop is allowed
     assert d.period == pytest.approx(3e-3)
+
+
+def test_the_default_sampling_step_of_a_window_is_exactly_a_4096th():
+    # windows whose 4095th part would also round to 4095 samples: only / 4096 gives 4096
+    for t1 in (1.0, 0.3, 0.02):
+        assert sine_callables().pieces(0.0, t1).n == 4096
+
+
+def test_a_gap_of_exactly_eight_ulps_is_merged_and_a_lone_edge_next_to_the_end_too():
+    tol = 8 * np.finfo(float).eps                     # = 2**-49 on [0, 1]
+    assert _unique_sorted(np.array([0.5, 0.5 + tol]), 0.0, 1.0).tolist() == [0.0, 0.5, 1.0]
+    assert _unique_sorted(np.array([0.5, 0.5 + 2 * tol]), 0.0, 1.0).tolist() == [0.0, 0.5, 0.5 + 2 * tol, 1.0]
+    assert _unique_sorted(np.array([1.0 - 1e-16]), 0.0, 1.0).tolist() == [0.0, 1.0]
+
+
+def test_sampled_pieces_take_one_sided_accelerations_whichever_side_the_callable_gives():
+    # a = +1 before 0.5, -1 after; at 0.5 this callable gives the LEFT value (t <= 0.5)
+    def acc(t):
+        return np.where(np.asarray(t) <= 0.5, 1.0, -1.0)
+
+    def vel(t):
+        return 0.5 - np.abs(np.asarray(t) - 0.5)
+
+    def pos(t):
+        s = np.asarray(t) - 0.5
+        return 0.5 * np.asarray(t) - 0.5 * s * np.abs(s)
+
+    p = sampled_pieces(pos, vel, acc, 0.0, 1.0, breakpoints=[0.5], turning_points=[])
+    assert p.edges.tolist() == [0.0, 0.5, 1.0]
+    assert p.a_start.tolist() == [1.0, -1.0] and p.a_end.tolist() == [1.0, -1.0]
+    assert p.local(1, 0.5, 2) == -1.0 and p.local(0, 0.5, 2) == 1.0
+    assert p.v == pytest.approx([0.0, 0.5, 0.0], abs=1e-15)
+
+
+def _rise_fall(x0=0.0):
+    """a_x = +1 on [x0, x0 + 1/2], -1 on [x0 + 1/2, x0 + 1]; v = -1/4 + (t - x0) on the rise."""
+    c = np.array([[0.5, -0.5], [-0.25, 0.25], [0.0, 0.0]])
+    return PPoly(c, [x0, x0 + 0.5, x0 + 1.0], extrapolate=False)
+
+
+def test_a_non_periodic_polynomial_has_its_interior_knots_as_open_interval_breakpoints():
+    s = PolynomialSurface(_rise_fall())
+    assert s.domain == (0.0, 1.0)
+    assert s.breakpoints(0.0, 1.0).tolist() == [0.5]
+    assert s.breakpoints(0.25, 0.75).tolist() == [0.5]
+    assert s.breakpoints(0.5, 1.0).size == 0 and s.breakpoints(0.0, 0.5).size == 0   # (t0, t1) is open
+    # next breakpoint: the first more than 1e-12 max(1, |t|) after t
+    assert s.next_breakpoint(0.2) == 0.5
+    assert s.next_breakpoint(0.5 - 1.5e-12) == 0.5
+    assert s.next_breakpoint(0.5 - 0.5e-12) == 1.0
+    assert s.next_breakpoint(1.0) == math.inf
+
+
+def test_a_non_periodic_polynomial_is_cut_at_its_knots():
+    p = PolynomialSurface(_rise_fall()).pieces(0.0, 1.0)
+    assert p.edges.tolist() == [0.0, 0.5, 1.0]
+    assert p.a_start.tolist() == [1.0, -1.0] and p.a_end.tolist() == [1.0, -1.0]
+    assert p.v == pytest.approx([-0.25, 0.25, -0.25], abs=1e-15)
+
+
+def test_a_periodic_polynomial_not_starting_at_zero_repeats_from_its_own_start():
+    s = PolynomialSurface(_rise_fall(0.25), period=1.0)
+    # a_x = +1 on [0.25, 0.75) + k, -1 on [0.75, 1.25) + k
+    t = np.array([0.1, 0.5, 1.0, 1.5, -0.5])
+    assert s.acceleration(t)[0].tolist() == [-1.0, 1.0, -1.0, 1.0, 1.0]
+    assert s.velocity(np.array([0.25, 0.75, 2.25]))[0] == pytest.approx([-0.25, 0.25, -0.25], abs=1e-15)
+    assert s.breakpoints(0.0, 1.0).tolist() == [0.25, 0.75]
+    assert s.breakpoints(0.0, 2.0) == pytest.approx([0.25, 0.75, 1.25, 1.75], abs=1e-15)
+
+
+def test_the_vectorised_path_counts_a_time_after_an_edge_only_within_1e_12_periods():
+    wf = PiecewiseConstantAccel([0.01, 0.01], [1.0, -1.0])   # T = 0.02
+    # 1e-11 s = 5e-10 T before the edge at 0.01: still the first piece, on both paths
+    t = 0.01 - 1e-11
+    assert wf.acceleration(np.array([t]))[0].tolist() == [1.0] and wf.acceleration(t)[0] == 1.0
+    # 1e-15 s = 5e-14 T before it: counts as after, on both paths
+    t = 0.01 - 1e-15
+    assert wf.acceleration(np.array([t]))[0].tolist() == [-1.0] and wf.acceleration(t)[0] == -1.0
+
+
+def test_the_wrap_into_the_next_period_starts_strictly_after_t_times_one_minus_1e_12():
+    wf = PiecewiseConstantAccel([0.5, 0.5], [1.0, -1.0])     # T = 1
+    c = 1.0 * (1 - 1e-12)
+    assert wf.acceleration(c)[0] == -1.0 and wf.acceleration(np.array([c]))[0].tolist() == [-1.0]
+    after = np.nextafter(c, 2.0)
+    assert wf.acceleration(after)[0] == 1.0 and wf.acceleration(np.array([after]))[0].tolist() == [1.0]
+
+
+def test_a_time_within_1e_12_periods_before_several_edges_counts_as_after_the_last():
+    # a first piece of 1e-15 s (< 1e-12 T): the wrap to t = 0 lands within 1e-12 T before its end,
+    # so the time is in the second piece, on both paths
+    wf = PiecewiseConstantAccel([1e-15, 0.5, 0.5], [5.0, 1.0, -1.0])
+    T = wf.period
+    for t in (0.0, T * (1 - 1e-13), 3 * T - 1e-14):
+        assert wf.acceleration(np.array([t]))[0].tolist() == [1.0] and wf.acceleration(t)[0] == 1.0
+
+
+def test_piecewise_constant_accel_refuses_durations_that_are_all_zero():
+    with pytest.raises(ValueError, match="positive sum"):
+        PiecewiseConstantAccel([0.0, 0.0], [1.0, -1.0])
+
+
+def test_coulomb_pump_at_the_bound_peak_speed_is_a_symmetric_triangle():
+    accel = 40.0
+    T = 1.0 / F
+    wf = CoulombPumpWaveform(F, accel * T / 4, accel)            # the bound itself is allowed
+    assert wf.forward_fraction == pytest.approx(0.0, abs=1e-12)
+    assert wf.back_speed == pytest.approx(accel * T / 4, rel=1e-12)
+    with pytest.raises(ValueError, match="peak_speed must be"):
+        CoulombPumpWaveform(F, accel * T / 4 * (1 + 1e-9), accel)
+
+
+def test_sine_level_crossings_over_several_periods():
+    # -A w^2 sin(w t) = -A w^2 / 2: sin(w t) = 1/2 at T/12 and 5T/12 of every period
+    T = 1 / F
+    roots = SineWaveform(F, A, 0.0).accel_roots(1.0, 0.0, -0.5 * A * W * W, 0.0, 5 * T)
+    expected = sorted(k * T + f * T for k in range(5) for f in (1 / 12, 5 / 12))
+    assert roots == pytest.approx(expected, abs=1e-15)
+
+
+def test_sine_level_crossings_do_not_depend_on_how_small_the_amplitude_is():
+    # amplitude 1e-302 m: R w^2 ~ 1e-297 is still a representable acceleration scale
+    a = 1e-302
+    T = 1 / F
+    roots = SineWaveform(F, a, 0.0).accel_roots(1.0, 0.0, -0.5 * a * W * W, 0.0, T)
+    assert roots == pytest.approx([T / 12, 5 * T / 12], abs=1e-15)
+    assert SineWaveform(F, 0.0, 0.0).accel_roots(1.0, 0.0, 0.0, 0.0, T).size == 0
+
+
+def _four_sample_spline():
+    # periodic cubic spline of 0, 1, 0, -1 (h = 1/4): moments M solve
+    # M[i-1] + 4 M[i] + M[i+1] = 96 (y[i-1] - 2 y[i] + y[i+1]) -> M = 0, -48, 0, 48
+    return SampledWaveform(1.0, [0.0, 1.0, 0.0, -1.0])
+
+
+def test_sampled_waveform_needs_four_samples():
+    with pytest.raises(ValueError, match="at least 4"):
+        SampledWaveform(1.0, [0.0, 1.0, -1.0])
+    assert _four_sample_spline().acceleration(0.25)[0] == pytest.approx(-48.0, rel=1e-12)
+
+
+def test_sampled_waveform_roots_are_in_the_half_open_window():
+    wf = _four_sample_spline()
+    # a_x linear from -48 at 1/4 to 0 at 1/2: level -24 at 3/8
+    assert wf.accel_roots(1.0, 0.0, -24.0, 0.25, 0.5) == pytest.approx([0.375], abs=1e-12)
+    # a crossing exactly at t1 is found (as t1), one exactly at t0 is not
+    at_t1 = float(wf.acceleration(0.25)[0])
+    assert wf.accel_roots(1.0, 0.0, at_t1, 0.0, 0.25).tolist() == [0.25]
+    assert wf.accel_roots(1.0, 0.0, at_t1, 0.25, 0.5).size == 0
+
+
+def test_sampled_waveform_roots_do_not_depend_on_the_scale_of_the_combination():
+    # cx = 1e-200: f(t0) f(t1) ~ -1e-398 underflows to -0.0, yet the root is the same 3/8
+    wf = _four_sample_spline()
+    roots = wf.accel_roots(1e-200, 0.0, -24e-200, 0.25, 0.5)
+    assert roots == pytest.approx([0.375], abs=1e-12)
+
+
+def test_generic_roots_resolve_a_close_pair_straddling_the_middle_sample():
+    # a_x = (t - 0.4995)(t - 0.5005) on the window [0, 1]: 400 intervals put a sample at 0.5,
+    # between the two roots, so both are bracketed
+    s = CallableSurface(lambda t: np.zeros_like(np.asarray(t, dtype=float)),
+                        lambda t: np.zeros_like(np.asarray(t, dtype=float)),
+                        lambda t: (np.asarray(t) - 0.4995) * (np.asarray(t) - 0.5005))
+    assert s.accel_roots(1.0, 0.0, 0.0, 0.0, 1.0) == pytest.approx([0.4995, 0.5005], abs=1e-12)

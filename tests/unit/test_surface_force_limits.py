@@ -10,7 +10,7 @@ import pytest
 
 from vibrofeed.decks import Deck
 from vibrofeed.errors import ParameterError
-from vibrofeed.parameters import resolve, surface_forces_step_limit
+from vibrofeed.parameters import resolve, surface_forces_part, surface_forces_step_limit
 from vibrofeed.validation.models import adhesion as ad
 from vibrofeed.validation.models import squeeze_film as sf
 
@@ -99,3 +99,114 @@ def test_bad_surface_force_values_are_refused_in_the_bulk_feeder_too():
     assert "hamaker=1e-15" in refusal(hamaker=1e-15)
     assert "roughness=-1e-09" in refusal(roughness=-1e-9)
     assert "air_viscosity=1" in refusal(air_viscosity=1)
+
+
+# -- the part description (surface_forces_part), each field against its closed form
+
+def test_a_single_part_is_a_sphere_unless_it_lies_on_a_face():
+    r, f = 5e-4, 2e-4
+    sphere = {"mass": 4 / 3 * math.pi * r ** 3 * RHO, "radius": r}
+    # no face_radius (or 0): a sphere, without the flat face's area, Stefan constant or drag
+    assert surface_forces_part({"density": RHO, "radius": r}) == pytest.approx(sphere, rel=1e-12)
+    assert surface_forces_part({"density": RHO, "radius": r, "face_radius": 0.0}) == pytest.approx(
+        sphere, rel=1e-12)
+    film = sf.Film(MU, f, sf.MEAN_FREE_PATH)  # a disc face: Stefan 1.5 pi f^4, drag 16 mu f
+    assert surface_forces_part({"density": RHO, "radius": r, "face_radius": f}) == pytest.approx(
+        {**sphere, "area": math.pi * f ** 2, "stefan": film.stefan_constant,
+         "drag": film.free_coefficient / MU}, rel=1e-12)
+
+
+@pytest.mark.parametrize("shape", [0, 1, 2], ids=["sphere", "chip", "disc"])
+def test_a_bulk_part_is_its_sphere_or_its_whole_clump_on_its_face(shape):
+    a, t = 3e-4, 1.5e-4
+    p = {"density": RHO, "part_size": a, "part_thickness": t, "shape": shape}  # no size_spread: 0
+    if shape == 0:
+        want = {"mass": 4 / 3 * math.pi * (a / 2) ** 3 * RHO, "radius": a / 2}
+    else:
+        if shape == 1:  # a square face of side a
+            area, film = a * a, sf.Film(MU, 0.0, sf.MEAN_FREE_PATH, side=a)
+        else:  # a round face of diameter a
+            area, film = math.pi * (a / 2) ** 2, sf.Film(MU, a / 2, sf.MEAN_FREE_PATH)
+        # radius: the clump's spheres, of diameter part_thickness (the deck's r_sph)
+        want = {"mass": area * t * RHO, "radius": t / 2, "area": area, "stefan": film.stefan_constant,
+                "drag": film.free_coefficient / MU}
+    assert surface_forces_part(p) == pytest.approx(want, rel=1e-12)
+
+
+# -- the step limit: each force alone, and the cases that need no limit
+
+@pytest.mark.parametrize("roughness", [None, 1e-6], ids=["smooth-by-default", "rough"])
+def test_van_der_waals_alone_gives_the_adhesion_models_limit(roughness):
+    """Also on a rough track, where the vdW spring is far below 1 N/m (the limit is still finite)."""
+    rough = {} if roughness is None else {"roughness": roughness}
+    s = roughness or 0.0
+    r, f, a, t = 5e-4, 2e-4, 3e-4, 1.5e-4
+    ball, chip = 4 / 3 * math.pi * r ** 3 * RHO, a * a * t * RHO
+    cases = [  # (parameters, the model's adhesion, mass)
+        ({"radius": r}, ad.Adhesion(1e-19, s, radius=r), ball),
+        ({"radius": r, "face_radius": f}, ad.Adhesion(1e-19, s, face_radius=f), ball),
+        ({"part_size": a, "part_thickness": t, "shape": 1}, ad.Adhesion(1e-19, s, face_side=a), chip),
+    ]
+    for given, adhesion, mass in cases:
+        if roughness:
+            assert adhesion.stiffness < 1.0  # N/m: a soft spring, yet one to resolve
+        p = {"density": RHO, "hamaker": 1e-19, **rough, **given}
+        assert surface_forces_step_limit(p) == pytest.approx(ad.vdw_step_limit(adhesion, mass), rel=1e-12)
+
+
+def test_without_either_force_no_part_is_even_described():
+    # parts far too large for a float's mass: with hamaker = air_viscosity = 0 nothing is computed
+    for part in ({"part_size": 1e300}, {"radius": 1e300}, {"part_size": 1e300, "shape": 1}):
+        for off in ({}, {"hamaker": 0.0, "air_viscosity": 0.0, "roughness": 0.0}):
+            assert surface_forces_step_limit({"density": RHO, **part, **off}) == math.inf
+
+
+def test_a_limit_exactly_at_the_smallest_timestep_is_accepted():
+    """The deck refuses limits *below* 1e-9 s: a chip on a 0.27 um rough track with air, its
+    density chosen (next to the closed form's) so that the limit is exactly 1e-9 s."""
+    a, t, h = 3e-4, 1.5e-4, 2.7e-7
+    film = sf.Film(MU, 0.0, h, side=a)
+    rho = 1e-9 * 10 * film.coefficient(h) / (a * a * t)  # m / (10 c) = 1e-9 s
+    p = {"density": rho, "part_size": a, "part_thickness": t, "shape": 1, "air_viscosity": MU,
+         "roughness": h}
+    for _ in range(100):  # a few ulps of rounding apart
+        limit = surface_forces_step_limit({**p, "density": rho})
+        if limit == 1e-9:
+            break
+        rho = math.nextafter(rho, math.inf if limit < 1e-9 else 0.0)
+    assert limit == 1e-9 and rho == pytest.approx(p["density"], rel=1e-12)
+    given = {"shape": "chip", "air_viscosity": repr(MU), "roughness": repr(h)}
+    assert resolve(BULK_DECK, {**given, "density": repr(rho)})["density"] == repr(rho)
+    while surface_forces_step_limit({**p, "density": rho}) == 1e-9:
+        rho = math.nextafter(rho, 0.0)
+    assert "below 1e-09 s" in refusal(**given, density=repr(rho))
+
+
+def test_a_timestep_exactly_at_the_limit_is_accepted():
+    given = {"hamaker": "1e-19", "roughness": "1e-9"}
+    p = {k: float(v) for k, v in resolve(BULK_DECK, given).items()}
+    limit = surface_forces_step_limit(p)
+    r = 1.5e-4  # the default 300 um sphere
+    mass = 4 / 3 * math.pi * r ** 3 * RHO
+    assert limit == pytest.approx(ad.vdw_step_limit(ad.Adhesion(1e-19, 1e-9, radius=r), mass), rel=1e-12)
+    assert resolve(BULK_DECK, {**given, "dt": repr(limit)})["dt"] == repr(limit)
+    assert "is longer than" in refusal(**given, dt=repr(math.nextafter(limit, math.inf)))
+
+
+# -- a deck of one's own declaring only some of the forces' parameters: the others are off (0)
+
+def own_deck(tmp_path, **defaults):
+    path = tmp_path / "own.liggghts"
+    path.write_text("".join(f"variable {k} index {v} # [-] {k}\n" for k, v in defaults.items()))
+    return Deck(path)
+
+
+def test_a_deck_without_some_force_parameters_reports_them_as_zero(tmp_path):
+    # a face lying flat on a smooth track: too stiff for either force alone
+    part = {"radius": 5e-4, "face_radius": 2e-4, "density": RHO}
+    with pytest.raises(ParameterError) as err:
+        resolve(own_deck(tmp_path, **part, hamaker=1e-19), {})
+    assert "hamaker=1e-19 J, air_viscosity=0 Pa s with roughness=0 m need a timestep" in str(err.value)
+    with pytest.raises(ParameterError) as err:
+        resolve(own_deck(tmp_path, **part, air_viscosity=MU), {})
+    assert f"hamaker=0 J, air_viscosity={MU:g} Pa s with roughness=0 m need" in str(err.value)
