@@ -102,7 +102,8 @@ def test_stiffness_and_work_are_the_derivative_and_integral_of_the_force(face_ra
     assert -slope == pytest.approx(adh.stiffness, rel=1e-4)
     # in units of the standoff, so that quad sees the force's own scale
     work, _ = quad(lambda u: adh.force(u * adh.s) * adh.s, 0, math.inf, epsabs=0, epsrel=1e-10)
-    assert work == pytest.approx(adh.work(), rel=1e-8)
+    assert work == pytest.approx(adh.work(), rel=1e-8, abs=0)  # ~1e-16 J: no absolute slack
+    assert adh.work() > 0
 
 
 def test_a_flat_face_pulls_with_the_flat_pressure_over_its_area():
@@ -141,3 +142,45 @@ def test_vdw_step_limit_resolves_the_force_near_contact():
     # over the standoff, sqrt(2 F s / m), crosses a small fraction of the standoff.
     v = math.sqrt(2 * adh.pulloff * adh.s / mass)
     assert v * dt < 0.2 * adh.s
+
+
+def test_the_reports_quoted_figures_are_transcribed_as_printed():
+    # §3.1: A = 1e-19 J, D = 0.2 nm, "two 100 um spheres": 200 uN and -1e-15 J; flat: ~700 MPa, -67 mJ/m^2
+    assert (ad.REPORT_HAMAKER, ad.D0, ad.REPORT_SPHERE_SIZE) == (1e-19, 0.2e-9, 100e-6)
+    assert (ad.REPORT_SPHERE_FORCE, ad.REPORT_SPHERE_ENERGY) == (200e-6, 1e-15)
+    assert (ad.REPORT_FLAT_PRESSURE, ad.REPORT_FLAT_ENERGY) == (700e6, 67e-3)
+
+
+def test_the_four_readings_are_named_by_pair_and_size_convention():
+    names = [x.name for x in ad.sphere_figure_readings()]
+    assert names == ["sphere-sphere, radius 100 um", "sphere-plane, radius 100 um",
+                     "sphere-sphere, diameter 100 um", "sphere-plane, diameter 100 um"]
+    assert ad.sphere_figure_readings(size=2.5e-6)[0].name == "sphere-sphere, radius 2.5 um"
+    # in micrometres to six significant digits (:g): 123.4564 um shows as 123.456
+    assert ad.sphere_figure_readings(size=123.4564e-6)[0].name == "sphere-sphere, radius 123.456 um"
+    # R* = R1 R2 / (R1 + R2): 50, 100, 25, 50 um
+    assert [x.r_eff for x in ad.sphere_figure_readings()] == pytest.approx([50e-6, 100e-6, 25e-6, 50e-6],
+                                                                          rel=1e-12, abs=0)
+
+
+def test_an_adhesion_defaults_to_a_smooth_sphere():
+    r = 150e-6
+    sphere = ad.Adhesion(A, radius=r)
+    assert sphere == ad.Adhesion(A, 0.0, r, 0.0, 0.0)
+    assert not sphere.flat and sphere.face_area == 0.0 and sphere.s == D
+    assert sphere.pulloff == pytest.approx(A * r / (6 * D ** 2), rel=1e-12, abs=0)
+    assert sphere.work() == pytest.approx(A * r / (6 * D), rel=1e-12, abs=0)
+    chip = ad.Adhesion(A, face_side=300e-6)
+    assert chip == ad.Adhesion(A, 0.0, 0.0, 0.0, 300e-6)
+    assert chip.pulloff == pytest.approx(A / (6 * math.pi * D ** 3) * 9e-8, rel=1e-12, abs=0)
+
+
+def test_adhesions_and_readings_are_immutable_values():
+    import dataclasses
+    adh = ad.Adhesion(A, 1e-9, radius=1e-4)
+    assert hash(adh) == hash(ad.Adhesion(A, 1e-9, radius=1e-4))
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        adh.roughness = 0.0
+    reading = ad.sphere_figure_readings()[0]
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        reading.force = 0.0

@@ -106,6 +106,9 @@ def test_figure13_at_the_top_of_the_flight():
     for f, run in zip(freqs, runs):
         stroke = sf.FIG13_GAMMA * G / (2 * math.pi * f) ** 2
         assert run.end == "apex"
+        # the exact momentum integral at the apex, to 1e-9 (launch's rtol 1e-10, accumulated over the run)
+        want = sf.fig13_film(h0).impulse(h0, h0 + run.max_gap) / M
+        assert run.final_deficit == pytest.approx(want, rel=1e-9, abs=0)
         if stroke >= 5 * h0:
             assert run.final_deficit == pytest.approx(sat, rel=0.02)
         if stroke <= h0:
@@ -221,3 +224,209 @@ def test_a_square_face_film_and_its_panels():
     # a clump's n panels at one gap (a part lying flat) carry the face's force together
     gap, v = 3e-6, -0.02
     assert 9 * square.panel_force(gap, v, 9) == pytest.approx(square.force(gap, v), rel=1e-14)
+
+
+def test_stokes_layer_is_sqrt_of_two_nu_over_omega():
+    # the layer a plate vibrating at w drags along, delta = sqrt(2 nu / w): 0.2 mm at 100 Hz in air
+    nu = 1.5e-5
+    for freq in (10.0, 100.0, 1000.0):
+        assert sf.stokes_layer(freq, nu) == pytest.approx(math.sqrt(2 * nu / (2 * math.pi * freq)),
+                                                          rel=1e-14, abs=0)
+    assert sf.stokes_layer(100.0) == pytest.approx(0.22e-3, rel=0.01)
+    # air at 20 C: nu = mu / rho with rho = 1.204 kg/m^3
+    assert sf.AIR_KINEMATIC_VISCOSITY == pytest.approx(sf.AIR_VISCOSITY / 1.204, rel=0.01)
+    assert sf.stokes_layer(100.0) == pytest.approx(sf.stokes_layer(100.0, sf.AIR_KINEMATIC_VISCOSITY),
+                                                   rel=1e-14, abs=0)
+
+
+def test_film_force_opposes_the_relative_velocity_with_stefans_coefficient():
+    # F = -(1.5 pi mu r^4 / h^3 + 16 mu r) v_rel, h = max(gap, 0) + h_c
+    disc = sf.Film(MU, R, h_c=2e-6)
+    for gap, h in ((-1e-7, 2e-6), (0.0, 2e-6), (3e-6, 5e-6)):
+        for v in (0.05, -0.3):
+            want = -(1.5 * math.pi * MU * R ** 4 / h ** 3 + 16 * MU * R) * v
+            assert disc.force(gap, v) == pytest.approx(want, rel=1e-12, abs=0)
+    # a sphere: -6 pi mu R (R / h + 1) v_rel
+    sphere = sf.Film(MU, 150e-6, h_c=1e-6, flat=False)
+    assert sphere.force(1e-6, 0.02) == pytest.approx(
+        -6 * math.pi * MU * 150e-6 * (150e-6 / 2e-6 + 1) * 0.02, rel=1e-12, abs=0)
+
+
+def test_rectangle_factor_takes_aspects_in_zero_to_one():
+    assert sf.rectangle_factor(1.0) == sf.STEFAN_SQUARE
+    for aspect in (0.0, -0.5, 1.0 + 1e-12):
+        with pytest.raises(ValueError, match="aspect"):
+            sf.rectangle_factor(aspect)
+
+
+def test_a_film_is_an_immutable_value_and_a_disc_by_default():
+    import dataclasses
+    film = sf.Film(MU, R, 1e-6)
+    assert film == sf.Film(MU, R, 1e-6, flat=True, free_flow=True, side=0.0)
+    assert hash(film) == hash(sf.Film(MU, R, 1e-6, flat=True, free_flow=True, side=0.0))
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        film.h_c = 2e-6
+
+
+def test_figure13_part_is_the_reports_silicon_disc():
+    # 400 um across, 200 um thick, at Gamma = 10; silicon of the decks' default density
+    from vibrofeed.decks import Deck
+    assert sf.FIG13_GAMMA == 10.0
+    assert 2 * sf.FIG13_RADIUS == pytest.approx(400e-6, rel=1e-12) and sf.FIG13_THICKNESS == 200e-6
+    for deck in ("single_part", "bulk_feeder"):
+        assert float(Deck.find(deck).variables["density"].default) == sf.FIG13_DENSITY
+    assert sf.FIG13_MASS == pytest.approx(math.pi * (200e-6) ** 2 * 200e-6 * sf.FIG13_DENSITY, rel=1e-12)
+
+
+def free_flight(freq, gamma, g=G):
+    """A part leaving the surface a sin(w t) at w t0 = asin(g / (Gamma G)) with its velocity, in
+    free flight: the gap and the relative velocity against the time since lift-off."""
+    w = 2 * math.pi * freq
+    a = gamma * G / w ** 2
+    t0 = math.asin(g / (gamma * G)) / w
+    v0 = a * w * math.cos(w * t0)
+
+    def gap(s):
+        return a * math.sin(w * t0) + v0 * s - g * s * s / 2 - a * math.sin(w * (t0 + s))
+
+    def u(s):
+        return v0 - g * s - a * w * math.cos(w * (t0 + s))
+
+    return t0, v0, gap, u
+
+
+def first_downward_root(f, t_max, n=4000):
+    from scipy.optimize import brentq
+    s = np.linspace(t_max / n, t_max, n)
+    k = np.nonzero(np.array([f(x) for x in s]) < 0)[0][0]
+    return brentq(f, s[k - 1], s[k], xtol=1e-16, rtol=1e-15)
+
+
+@pytest.mark.parametrize("freq", [3.0, 100.0])
+def test_without_air_the_launch_is_free_flight_to_the_gaps_maximum(freq):
+    # mu -> 0 (1e-20 Pa s: deficit ~1e-17 m/s): the part flies v_l - g t from w t0 = asin(1 / Gamma)
+    # and the run stops where the gap is largest, v_part = v_surface
+    film = sf.fig13_film(5e-6, viscosity=1e-20)
+    run = sf.launch(film, M, freq, 10.0)
+    t0, v0, gap, u = free_flight(freq, 10.0)
+    t_top = first_downward_root(u, 2 / freq)
+    assert run.end == "apex"
+    assert run.t[0] == 0.0 and run.t0 == pytest.approx(t0, rel=1e-14)
+    assert run.t[-1] == pytest.approx(t_top, rel=1e-9, abs=0)
+    assert run.max_gap == run.gap[-1] == pytest.approx(gap(t_top), rel=1e-9, abs=0)
+    np.testing.assert_allclose(run.gap, [gap(s) for s in run.t], rtol=0, atol=1e-9 * gap(t_top))
+    np.testing.assert_allclose(run.v_part, v0 - G * run.t, rtol=0, atol=1e-9 * v0)
+    np.testing.assert_allclose(run.v_surface, v0 - G * run.t - [u(s) for s in run.t], rtol=0, atol=1e-9 * v0)
+    assert np.abs(run.deficit).max() < 1e-9 * v0
+
+
+def test_a_part_that_cannot_get_free_rides_the_film_back_to_contact():
+    # 0.2 um of air at 1 kHz: relaxation time tau = m / c(h0) = 3.4 ns, saturated deficit ~2000 x the
+    # launch velocity. The film holds the part at x = tau u_free(t) (to tau w and 3 x / h0), u_free the
+    # free flight's velocity relative to the surface: the gap never opens beyond 1e-3 h0 and closes
+    # again; the run ends back on the track (gap <= 0) instead of at an apex.
+    h0, freq = 0.2e-6, 1000.0
+    film = sf.fig13_film(h0)
+    tau = M / film.coefficient(h0)
+    run = sf.launch(film, M, freq, 10.0)
+    t0, v0, gap, u = free_flight(freq, 10.0)
+    assert sf.saturated_deficit(film, M) > 1000 * v0
+    assert run.end == "contact"
+    u_max = max(u(s) for s in np.linspace(0, run.t[-1], 20001))
+    assert run.max_gap == pytest.approx(tau * u_max, rel=0.01)
+    assert run.max_gap < 1e-3 * h0
+    assert -1.001e-3 * h0 < run.gap[-1] <= 0  # closed, by no more than the event's 1e-3 h0
+    assert run.gap[:-1].min() > run.gap[-1] and run.v_part[-1] < run.v_surface[-1]  # the first closing
+    assert run.gap[-1] == pytest.approx(tau * u(run.t[-1]), rel=0.01)
+    assert run.t[-1] > 1 / freq  # it rode the film over several periods
+    # the momentum the film took, impulse(h0, h) / m, negative once the film is thinner than h0
+    np.testing.assert_allclose(run.deficit, film.impulse(h0, run.gap + h0) / M, rtol=1e-6, atol=1e-9 * v0)
+
+
+def test_the_reports_frame_starts_at_peak_surface_velocity_without_gravity():
+    # report_frame: t0 = 0, v0 = a w; free flight is v_part = v0 (no gravity), gap = v0 t - a sin(w t);
+    # a window shorter than the period (where the gap would stop growing) ends the run
+    freq, gamma = 100.0, 0.5  # Gamma < 1 is allowed: nothing holds the part back in that frame
+    w = 2 * math.pi * freq
+    a = gamma * G / w ** 2
+    film = sf.fig13_film(5e-6, viscosity=1e-20)
+    run = sf.launch(film, M, freq, gamma, report_frame=True, window=0.6 / freq)
+    assert run.end == "window"
+    assert run.t0 == 0.0 and run.v_launch == pytest.approx(a * w, rel=1e-14)
+    assert run.t[0] == 0.0 and run.t[-1] == pytest.approx(0.6 / freq, rel=1e-14)
+    np.testing.assert_allclose(run.v_part, a * w, rtol=1e-9)
+    np.testing.assert_allclose(run.v_surface, a * w * np.cos(w * run.t), rtol=0, atol=1e-12 * a * w)
+    np.testing.assert_allclose(run.gap, a * w * run.t - a * np.sin(w * run.t), rtol=0, atol=1e-9 * a)
+    assert np.abs(run.deficit).max() < 1e-9 * a * w
+
+
+def test_a_part_riding_the_film_stops_after_max_periods():
+    # report's frame, 0.2 um of air at 1 kHz: the part rides the surface (gap < 1e-3 h0, never an
+    # apex nor a contact) and its deficit is the surface's velocity loss a w (1 - cos w t), to tau w
+    freq, gamma, h0 = 1000.0, 10.0, 0.2e-6
+    w = 2 * math.pi * freq
+    film = sf.fig13_film(h0)
+    run = sf.launch(film, M, freq, gamma, report_frame=True)
+    assert run.end == "max_periods"
+    assert run.t[-1] == pytest.approx(50 / freq, rel=1e-14)  # the default, 50 periods
+    assert run.max_gap < 1e-3 * h0
+    riding = [sf.riding_deficit(freq, gamma, t) for t in run.t]
+    np.testing.assert_allclose(run.deficit, riding, rtol=0, atol=1e-4 * gamma * G / w)
+    short = sf.launch(film, M, freq, gamma, report_frame=True, max_periods=2.5)
+    assert short.end == "max_periods" and short.t[-1] == pytest.approx(2.5 / freq, rel=1e-14)
+
+
+def test_launch_refuses_a_track_that_cannot_throw_the_part():
+    film = sf.fig13_film(5e-6)
+    for gamma in (1.0, 0.5):  # a w^2 <= g: the surface never pulls away faster than gravity
+        with pytest.raises(ValueError, match="never leaves"):
+            sf.launch(film, M, 100.0, gamma)
+    # gravity g larger than the standard G the amplitude is taken in
+    with pytest.raises(ValueError, match="never leaves"):
+        sf.launch(film, M, 100.0, 2.0, 2 * G)
+
+
+def test_launchs_options_are_keyword_only():
+    with pytest.raises(TypeError):
+        sf.launch(sf.fig13_film(5e-6), M, 100.0, 10.0, G, True)
+
+
+def test_a_failed_integration_is_an_error_not_a_result(monkeypatch):
+    from types import SimpleNamespace
+
+    def failing(fun, t_span, y0, **options):
+        return SimpleNamespace(status=-1, message="Required step size is less than spacing between numbers.",
+                               t=np.array([t_span[0]]), y=np.zeros((2, 1)), t_events=[[], []])
+
+    monkeypatch.setattr(sf, "solve_ivp", failing)
+    with pytest.raises(RuntimeError, match="step size"):
+        sf.launch(sf.fig13_film(5e-6), M, 100.0, 10.0)
+
+
+@pytest.mark.parametrize("film", [sf.Film(MU, R, 3e-6), sf.Film(MU, 0.0, 3e-6, side=300e-6),
+                                  sf.Film(MU, 150e-6, 3e-6, flat=False)], ids=["disc", "square", "sphere"])
+def test_radau_gets_the_ode_of_the_film_and_its_jacobian(monkeypatch, film):
+    # The ODE handed to the solver, state (gap x, relative velocity u):
+    # x' = u, u' = -g + a w^2 sin(w t) - c(x + h_c) u / m; its Jacobian by central differences.
+    seen = {}
+    real = sf.solve_ivp
+
+    def spy(fun, t_span, y0, **options):
+        seen.update(fun=fun, jac=options["jac"])
+        return real(fun, t_span, y0, **options)
+
+    monkeypatch.setattr(sf, "solve_ivp", spy)
+    freq, gamma = 100.0, 10.0
+    w = 2 * math.pi * freq
+    a = gamma * G / w ** 2
+    sf.launch(film, M, freq, gamma)
+    rhs, jac = seen["fun"], seen["jac"]
+    for t, x, u in ((1e-3, 0.0, 0.01), (4e-3, 2e-6, -0.2), (7e-3, 40e-6, 0.3)):
+        c = film.coefficient(x + film.h_c)
+        want = [u, -G + a * w * w * math.sin(w * t) - c * u / M]
+        np.testing.assert_allclose(rhs(t, np.array([x, u])), want, rtol=1e-12)
+        dx, du = 1e-5 * (x + film.h_c), 1e-3 * abs(u)
+        d_dx = (np.array(rhs(t, [x + dx, u])) - rhs(t, [x - dx, u])) / (2 * dx)
+        d_du = (np.array(rhs(t, [x, u + du])) - rhs(t, [x, u - du])) / (2 * du)
+        np.testing.assert_allclose(jac(t, np.array([x, u])), np.column_stack([d_dx, d_du]),
+                                   rtol=1e-7, atol=1e-12)
