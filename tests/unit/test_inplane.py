@@ -146,3 +146,12 @@ def test_coulomb_pump_curve_shape():
                                  n_transient=100, n_block=4, rtol=1e-12)
     assert v[0] > 0 and v[1] > 0
     assert abs(v[2]) < 1e-9 * vmax        # symmetric triangle velocity at the limit: no transport
+
+
+def test_frictionless_slip_re_sticks_exactly_at_the_end_of_the_forward_phase():
+    # mu_k = 0: the part slides back at its top speed while the surface falls away and comes back, and
+    # meets it again at the end of the next forward phase (t* = a_b t_b / a_f = t_f): it moves at the
+    # surface's peak speed for good. Numbers exact in binary: T = 1 s, t_f = 0.75 s, t_b = 0.25 s.
+    wf = StickSlipWaveform(1.0, 1.0, 3.0)
+    assert list(wf.durations) == [0.75, 0.25]
+    assert stick_slip_closed_form(wf, 0.2, 0.0, g=10.0) == wf.peak_speed == 0.375

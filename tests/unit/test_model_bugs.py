@@ -256,3 +256,20 @@ def test_one_averaging_block_is_its_own_answer():
     wf = SineWaveform.from_gamma(50.0, 0.6, 0.9, 60.0)
     ss = mean_velocity(wf, PartParams(0.6, 0.35), n_transient=2, n_block=3, max_blocks=1)
     assert ss.velocity == ss.block_velocities[0] and not ss.converged and ss.change == math.inf
+
+
+def test_summed_chattering_leaves_the_part_at_the_surfaces_along_track_speed():
+    """A part dropped with the surface's along-track speed stops relative to it at the first impact;
+    the summed bounces end with it riding the surface: vx = the surface's tangential velocity at the
+    end of the series (not its normal one: the 30 degree stroke makes them differ)."""
+    freq = 20.0
+    wf = SineWaveform.from_gamma(freq, 0.3, 0.2, 30.0)
+    m = PartOnSurface(wf, PartParams(MU_S, MU_K, e=0.5), chatter_tol=10.0)
+    t0 = 0.0
+    m.start(t0, z=wf.position(t0)[1] + 1e-7, vx=float(wf.velocity(t0)[0]), vz=float(wf.velocity(t0)[1]))
+    m.run(0.5 / freq, stop_on=("rest",))
+    rest = [ev for ev in m.events if ev.kind == "rest"][0]
+    vt, vn = wf.velocity(rest.t)
+    assert abs(vt - vn) > 1e-3 * abs(vt)
+    assert rest.vx == pytest.approx(vt, rel=1e-12, abs=0)
+    assert rest.vz == vn

@@ -7,6 +7,7 @@ import pytest
 from bulk_synthetic import OUTLET_X, RADIUS, feeder, poisson_times
 from vibrofeed.errors import InputError
 from vibrofeed.postproc import Singulation
+from vibrofeed.postproc.feedrate import period_velocities
 from vibrofeed.postproc.singulation import face_orientation, thin_axis
 from vibrofeed.results.reader import Result
 
@@ -284,17 +285,20 @@ def test_the_cv_of_a_few_intervals_uses_the_sample_deviation(tmp_path):
 
 
 def test_the_edge_speed_is_that_of_the_parts_within_five_diameters(tmp_path):
-    # two lanes: parts 5.5 diameters behind the edge move at 0.03 m/s, parts on the last
-    # 4 diameters at 0.06 m/s (each lane's parts at one speed; the slow lane never
-    # arrives within the window)
-    n = 40
+    # a lane of fast parts (0.06 m/s) arriving through the window, and slow ones (0.5 mm/s) that stay
+    # 5.2-5.8 diameters behind the edge all through it (5.5 at its middle, 0.5 s): only the fast ones
+    # are within five diameters of the edge; six would take the slow ones in
+    n, slow_speed = 40, 5e-4
     fast = 0.3 + np.arange(n) * 0.01
-    slow = 0.3 + 5.5 * D / 0.03 + np.arange(n) * 0.01 + 2.0  # leave after the window
+    slow = 0.5 + 5.5 * D / slow_speed + np.arange(5) * 1e-3
     exits = np.r_[fast, slow]
-    speeds = np.r_[np.full(n, 0.06), np.full(n, 0.03)]
-    lanes = np.r_[np.zeros(n), np.full(n, 2e-3)]
+    speeds = np.r_[np.full(n, 0.06), np.full(5, slow_speed)]
+    lanes = np.r_[np.zeros(n), 2e-3 + np.arange(5) * 1e-3]
     with open_feeder(tmp_path, exits, speed=speeds, lanes=lanes) as r:
         sg = Singulation(r, start=0.3, end=0.7).run().results
+        x_mid, v, _, _ = period_velocities(r, np.arange(30, 71), 0, OUTLET_X)
+    behind = (OUTLET_X - x_mid[v < 0.01]) / D
+    assert len(behind) and behind.min() > 5.1 and behind.max() < 5.9   # the slow ones are there
     assert sg.edge_velocity == pytest.approx(0.06, rel=1e-9)
 
 

@@ -6,8 +6,10 @@ import numpy as np
 import pytest
 
 from vibrofeed.validation.models.constants import G
+from vibrofeed.validation.models.roots import first_descent, stick_exit
 from vibrofeed.validation.models.surface import (
     CallableSurface,
+    SineWaveform,
     SquareWaveAccel,
     StickSlipWaveform,
     sine_drive,
@@ -259,3 +261,27 @@ def test_deck_waveforms_drive_the_vertical_model_along_the_track():
     edges = ss.pieces(0.0, 3 * ss.period).edges
     for tb in ss.breakpoints(0.0, 3 * ss.period):
         assert np.min(np.abs(edges - tb)) < 1e-15
+
+
+def test_stick_exit_names_the_side_the_acceleration_leaves_the_band_by():
+    # x = a sin(w t): x'' = -a w^2 sin(w t) falls through -A/2 at w t = pi/6 (the surface drops away:
+    # side -1) and rises through +A/2 at w t = pi + pi/6 (it outruns the part: side +1), inside pieces
+    f, a = 50.0, 1e-4
+    w = 2 * math.pi * f
+    A = a * w * w
+    wf = SineWaveform(f, a, 0.0)
+    P = wf.pieces(0.0, 2 / f)
+    for t, want_t, side in ((0.0, math.asin(0.5) / w, -1), (0.55 / f, (math.pi + math.asin(0.5)) / w, 1)):
+        i = int(np.searchsorted(P.edges, t, side="right")) - 1
+        t_x, j, s = stick_exit(P, i, t, -0.5 * A, 0.5 * A)
+        assert s == side
+        assert t_x == pytest.approx(want_t, rel=1e-12, abs=0)
+        assert P.edges[j] <= t_x <= P.edges[j + 1]
+
+
+def test_first_descent_of_a_function_already_at_or_below_zero_is_its_start():
+    # a piece that starts at <= 0 and falls is an event at its start (no bracket to search)
+    assert first_descent(lambda t: -0.5 - t, 0.2, 1.0, [], 1e-12) == 0.2
+    assert first_descent(lambda t: -t, 0.0, 1.0, [0.5], 1e-12) == 0.0
+    assert first_descent(lambda t: 0.5 - t, 0.0, 1.0, [], 1e-12) == pytest.approx(0.5, abs=1e-12)
+    assert first_descent(lambda t: t, 0.0, 1.0, [], 1e-12) is None
