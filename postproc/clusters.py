@@ -18,9 +18,6 @@ bodies whose spheres touch.
 from __future__ import annotations
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
-from scipy.spatial import cKDTree
 
 from ..errors import InputError
 from ..rotations import quaternion_matrices  # noqa: F401 (re-exported)
@@ -35,6 +32,8 @@ def _touching_pairs(positions: np.ndarray, radii: np.ndarray, tolerance: float) 
     # The tree's cut-off is the largest possible contact distance, widened by a
     # hair so that exactly touching pairs survive its own rounding; the exact
     # test per pair follows.
+    from scipy.spatial import cKDTree  # here, not at import: the single-part summary never needs it (0.2 s)
+
     pairs = cKDTree(positions).query_pairs(reach * (1 + 1e-9) + 1e-300, output_type="ndarray")
     if len(pairs) == 0:
         return pairs.reshape(0, 2).astype(np.int64)
@@ -48,6 +47,9 @@ def _components(n: int, pairs: np.ndarray) -> np.ndarray:
     their lowest member (node 0 is in cluster 0, the next new one is 1, ...)."""
     if n == 0:
         return np.empty(0, dtype=np.int64)
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
     graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
     _, raw = connected_components(graph, directed=False)
     # Canonical numbering: independent of scipy's internal order.

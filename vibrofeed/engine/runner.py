@@ -35,7 +35,7 @@ from ..errors import EngineError, OutputError, RunError, UsageError
 from ..parameters import resolve
 from ..results import layout as L
 from .errors import failed_command, find_error
-from .worker import MARK
+from .protocol import MARK
 
 # SLURM_ too: under a Slurm allocation (a sweep started by srun or mpirun in a batch job) the
 # worker's own mpirun would spread its ranks over the allocation's nodes instead of the

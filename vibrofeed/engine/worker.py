@@ -31,8 +31,8 @@ from pathlib import Path
 import numpy as np
 
 from .bodies import aggregate, atom_parts, spheres
+from .protocol import MARK
 
-MARK = "@vibrofeed "
 PER_ATOM = ("id", "type", "radius", "rmass", "x", "v", "omega", "f")
 
 
