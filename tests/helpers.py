@@ -26,6 +26,22 @@ def vibrofeed(*args, cwd=None, check=False, timeout=600):
     return proc
 
 
+def liggghts_text(deck_text, folder, variables, dump, extra=(), timeout=600):
+    """Run a deck's text by hand, `liggghts -in` in ``folder`` with ``-var deck_dir`` and
+    ``variables`` (name -> value); returns (stdout, the text of the dump file ``dump`` the deck
+    writes in folder, "" if none)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / "deck.liggghts"
+    path.write_text(deck_text)
+    args = ["liggghts", "-in", str(path), "-log", "none", "-nocite", "-var", "deck_dir", str(DECKS),
+            *map(str, extra)]
+    for name, value in variables.items():
+        args += ["-var", name, str(value)]
+    proc = subprocess.run(args, cwd=folder, capture_output=True, text=True, timeout=timeout)
+    out = folder / dump
+    return proc.stdout, out.read_text() if out.exists() else ""
+
+
 def write_result(path, frames, surface=None, variables=None, status="complete"):
     """A result file from synthetic frames: a list of (step, time, parts dict)."""
     from vibrofeed.results.writer import ResultWriter

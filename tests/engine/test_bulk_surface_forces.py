@@ -14,12 +14,11 @@ decks/include/surface_forces.liggghts).
 
 import math
 import re
-import subprocess
 
 import numpy as np
 import pytest
 
-from helpers import DECKS, vibrofeed
+from helpers import DECKS, liggghts_text, vibrofeed
 from vibrofeed.parameters import surface_forces_step_limit
 from vibrofeed.results.reader import Result
 from vibrofeed.validation.models import adhesion as ad
@@ -42,16 +41,9 @@ def by_hand(deck_text, folder, given, unchecked=None):
     ``given`` and ``unchecked`` (values vibrofeed would refuse); returns (output, dump text)."""
     folder.mkdir(parents=True, exist_ok=True)
     vibrofeed("prepare", "bulk_feeder", *params(given), "-o", folder / "m", check=True)
-    given = {**given, **(unchecked or {})}
-    path = folder / "deck.liggghts"
-    path.write_text(deck_text)
-    args = ["liggghts", "-in", str(path), "-log", "none", "-nocite", "-var", "deck_dir", str(DECKS),
-            "-var", "mesh_dir", str(folder / "m")]
-    for name, value in given.items():
-        args += ["-var", name, str(SHAPES.get(value, value))]
-    proc = subprocess.run(args, cwd=folder, capture_output=True, text=True, timeout=600)
-    dump = folder / "bulk_feeder.dump"
-    return proc.stdout, dump.read_text() if dump.exists() else ""
+    values = {name: SHAPES.get(value, value) for name, value in {**given, **(unchecked or {})}.items()}
+    return liggghts_text(deck_text, folder, values, "bulk_feeder.dump",
+                         extra=("-var", "mesh_dir", folder / "m"))
 
 
 def without_surface_forces(text):

@@ -14,12 +14,11 @@
 import json
 import math
 import re
-import subprocess
 
 import numpy as np
 import pytest
 
-from helpers import DECKS, vibrofeed
+from helpers import DECKS, liggghts_text, vibrofeed
 from vibrofeed.parameters import surface_forces_step_limit
 from vibrofeed.results.reader import Result
 from vibrofeed.validation.cases import CASES_DIR
@@ -32,15 +31,7 @@ DECK = DECKS / "single_part.liggghts"
 
 def by_hand(deck_text, folder, *variables):
     """Run a deck text with liggghts in ``folder``; returns (stdout, dump text)."""
-    folder.mkdir(parents=True, exist_ok=True)
-    path = folder / "deck.liggghts"
-    path.write_text(deck_text)
-    args = ["liggghts", "-in", str(path), "-log", "none", "-var", "deck_dir", str(DECKS)]
-    for name, value in variables:
-        args += ["-var", name, str(value)]
-    proc = subprocess.run(args, cwd=folder, capture_output=True, text=True, timeout=300)
-    dump = folder / "single_part.dump"
-    return proc.stdout, dump.read_text() if dump.exists() else ""
+    return liggghts_text(deck_text, folder, dict(variables), "single_part.dump", timeout=300)
 
 
 def without_surface_forces(text):
