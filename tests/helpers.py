@@ -42,6 +42,23 @@ def liggghts_text(deck_text, folder, variables, dump, extra=(), timeout=600):
     return proc.stdout, out.read_text() if out.exists() else ""
 
 
+def lying_flat(shape, size, thickness, density, hamaker, roughness, viscosity):
+    """The models' view of a bulk chip (shape 1 or "chip": a square face of side ``size``) or
+    disc (2 or "disc": a round face of diameter ``size``) of ``thickness`` lying on its face:
+    (mass [kg], its Adhesion, its Film at the roughness' clearance)."""
+    from vibrofeed.validation.models import adhesion as ad
+    from vibrofeed.validation.models import squeeze_film as sf
+
+    h_c = sf.clearance(roughness)
+    if shape in (1, "chip"):
+        return (size ** 2 * thickness * density, ad.Adhesion(hamaker, roughness, face_side=size),
+                sf.Film(viscosity, 0.0, h_c, side=size))
+    if shape in (2, "disc"):
+        return (math.pi * (size / 2) ** 2 * thickness * density,
+                ad.Adhesion(hamaker, roughness, face_radius=size / 2), sf.Film(viscosity, size / 2, h_c))
+    raise ValueError(f"not a flat part: shape {shape!r}")
+
+
 def write_result(path, frames, surface=None, variables=None, status="complete"):
     """A result file from synthetic frames: a list of (step, time, parts dict)."""
     from vibrofeed.results.writer import ResultWriter

@@ -18,7 +18,7 @@ import re
 import numpy as np
 import pytest
 
-from helpers import DECKS, liggghts_text, vibrofeed
+from helpers import DECKS, liggghts_text, lying_flat, vibrofeed
 from vibrofeed.parameters import surface_forces_step_limit
 from vibrofeed.results.reader import Result
 from vibrofeed.validation.models import adhesion as ad
@@ -157,14 +157,9 @@ def test_a_clumps_spheres_share_the_faces_law(tmp_path, shape, surface):
     out, dump = by_hand(detailed(DECK.read_text()), tmp_path, given)
     frames = frames_of(dump)
     assert len(frames) == 1001, out[-2000:]
-    if shape == "disc":
-        n, mass = 7, math.pi * (SIZE / 2) ** 2 * THICK * RHO
-        adh = ad.Adhesion(surface["hamaker"], surface["roughness"], face_radius=SIZE / 2)
-        film = sf.Film(surface["air_viscosity"], SIZE / 2, sf.clearance(surface["roughness"]))
-    else:
-        n, mass = 9, SIZE ** 2 * THICK * RHO
-        adh = ad.Adhesion(surface["hamaker"], surface["roughness"], face_side=SIZE)
-        film = sf.Film(surface["air_viscosity"], 0.0, sf.clearance(surface["roughness"]), side=SIZE)
+    n = 7 if shape == "disc" else 9
+    mass, adh, film = lying_flat(shape, SIZE, THICK, RHO, surface["hamaker"], surface["roughness"],
+                                 surface["air_viscosity"])
     dt = given["output_dt"] / (frames[1][0] - frames[0][0])
     got, want = [], []
     for _, rows in frames:
@@ -208,14 +203,8 @@ def test_the_step_limit_joins_the_automatic_timestep(tmp_path, shape, surface):
         mass = 4 / 3 * math.pi * r_min ** 3 * RHO
         adh = ad.Adhesion(hamaker, rough, radius=r_min)
         film = sf.Film(mu, r_min, sf.clearance(rough), flat=False)
-    elif shape == "chip":
-        mass = SIZE ** 2 * THICK * RHO
-        adh = ad.Adhesion(hamaker, rough, face_side=SIZE)
-        film = sf.Film(mu, 0.0, sf.clearance(rough), side=SIZE)
     else:
-        mass = math.pi * (SIZE / 2) ** 2 * THICK * RHO
-        adh = ad.Adhesion(hamaker, rough, face_radius=SIZE / 2)
-        film = sf.Film(mu, SIZE / 2, sf.clearance(rough))
+        mass, adh, film = lying_flat(shape, SIZE, THICK, RHO, hamaker, rough, mu)
     assert d["dt_vdw"] == pytest.approx(ad.vdw_step_limit(adh, mass), rel=1e-12)
     if mu > 0:
         assert d["dt_film"] == pytest.approx(sf.film_step_limit(film, mass), rel=1e-12)

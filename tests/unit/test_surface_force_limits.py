@@ -8,6 +8,7 @@ import math
 
 import pytest
 
+from helpers import lying_flat
 from vibrofeed.decks import Deck
 from vibrofeed.errors import ParameterError
 from vibrofeed.parameters import resolve, surface_forces_part, surface_forces_step_limit
@@ -41,14 +42,7 @@ def test_bulk_spheres_take_the_smallest_sphere_of_the_spread(hamaker, roughness,
 def test_a_clump_takes_its_whole_face_and_mass(shape, hamaker, roughness, mu):
     p = {**BULK, "shape": shape, "hamaker": hamaker, "roughness": roughness, "air_viscosity": mu}
     a, t = 3e-4, 1.5e-4
-    if shape == 1:
-        mass = a * a * t * RHO
-        adh = ad.Adhesion(hamaker, roughness, face_side=a)
-        film = sf.Film(mu, 0.0, sf.clearance(roughness), side=a)
-    else:
-        mass = math.pi * (a / 2) ** 2 * t * RHO
-        adh = ad.Adhesion(hamaker, roughness, face_radius=a / 2)
-        film = sf.Film(mu, a / 2, sf.clearance(roughness))
+    mass, adh, film = lying_flat(shape, a, t, RHO, hamaker, roughness, mu)
     assert surface_forces_step_limit(p) == pytest.approx(models_limit(adh, film, mass), rel=1e-12)
 
 
