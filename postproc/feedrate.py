@@ -43,9 +43,12 @@ nearly independent, so the error includes that correlation, which a Poisson
 sqrt(N)/T would not. The conveying velocity's error is the batch means of its
 whole-period intervals, the same way.
 
-The dilute-limit comparison with the single-part model (Khan & Sarma, §2.3.2)
-needs the models of ``vibrofeed.validation``, which this layer does not import:
-``vibrofeed feedrate`` makes it from ``mean_velocity`` here.
+Dilute limit
+------------
+The conveying velocity is compared with that of one part alone on the track
+under the same vibration: the rigid-part model of Khan & Sarma, §2.3.2
+(hopping and sliding), driven by the deck's parameters as the single-part
+validation cases drive it (:func:`vibrofeed.models.deck.transport`).
 """
 
 from __future__ import annotations
@@ -74,7 +77,9 @@ _MAX_LAG = 1000
 SUMMARY_KEYS = ("parts_per_s", "parts_per_s_err", "mass_per_s", "mass_per_s_err", "mean_velocity",
                 "mean_velocity_err", "steady_from", "steady_to", "n_events", "inserted", "exited",
                 "on_track", "lost", "bin_width", "velocity_lag", "profile_x", "profile_velocity",
-                "profile_count")
+                "profile_count", "model_velocity", "model_note", "velocity_ratio")
+# Parameters the single-part model needs from the deck (the rest have defaults).
+MODEL_NEEDS = ("freq", "mu", "restitution")
 
 
 # ----------------------------------------------------------------- the event table
@@ -226,6 +231,30 @@ def batch_rate(times, weights, t_a: float, t_b: float, freq: float, batches: int
     return rate, float(rates.std(ddof=1) / math.sqrt(b))
 
 
+# ----------------------------------------------------------------- dilute limit
+def dilute_limit(parameters) -> tuple[float | None, str]:
+    """(speed [m/s], note) of one part alone on the track under the same
+    vibration (module docstring); (None, why) when the deck lacks a parameter
+    or the model does not apply. The note also says when the model did not
+    converge."""
+    from ..models.deck import transport  # scipy: loaded when a model is wanted
+
+    missing = [name for name in MODEL_NEEDS if name not in parameters]
+    if missing:
+        return None, f"the result lacks {', '.join(missing)}"
+    try:
+        state = transport(parameters)
+    except (KeyError, ValueError) as exc:
+        return None, f"model not applicable ({exc})"
+    note = "" if state.converged else "model not converged (chaotic hopping?): mean of its last blocks"
+    return float(state.velocity), note
+
+
+def velocity_ratio(measured: float | None, model: float | None) -> float | None:
+    """Measured conveying velocity over the model's; None without both (or with a model of 0)."""
+    return measured / model if model and measured is not None else None
+
+
 # ----------------------------------------------------------------- conveying speed
 def period_lag(times, freq: float) -> tuple[int, float]:
     """(m, alias) of the shortest frame lag m spanning a whole number of periods.
@@ -320,6 +349,9 @@ class FeedRate(AnalysisBase):
         from x = 0 to the outlet edge.
     axis:
         Component along the track (0: x).
+    model:
+        Compare the conveying velocity with the single-part model (the dilute
+        limit, module docstring); default True.
 
     Results: ``parts_per_s``, ``parts_per_s_err``, ``mass_per_s``,
     ``mass_per_s_err`` (1 sigma, batch means); ``steady_from``, ``steady_to``
@@ -329,14 +361,17 @@ class FeedRate(AnalysisBase):
     (frames per whole-period interval) and ``velocity_alias`` (its distance
     from whole periods, in periods); ``profile_edges``, ``profile_x``,
     ``profile_velocity``, ``profile_count``; the mass balance at the last frame
-    analysed: ``inserted``, ``on_track``, ``exited``, ``lost`` (None without one).
+    analysed: ``inserted``, ``on_track``, ``exited``, ``lost`` (None without one);
+    with ``model``: ``model_velocity`` [m/s] (None when the model does not
+    apply), ``model_note`` (why not, or that it did not converge; else empty)
+    and ``velocity_ratio`` (mean_velocity / model_velocity).
 
     >>> fr = FeedRate(result).run()
     >>> fr.results.parts_per_s, fr.results.parts_per_s_err, fr.results.steady_from
     """
 
     def __init__(self, result, start: float | None = None, end: float | None = None,
-                 batches: int = 10, bins: int = 20, axis: int = 0):
+                 batches: int = 10, bins: int = 20, axis: int = 0, model: bool = True):
         super().__init__(result)
         require_outlet(result)
         if batches < 2:
@@ -344,6 +379,7 @@ class FeedRate(AnalysisBase):
         if bins < 1:
             raise InputError(f"bins must be at least 1, not {bins}")
         self.start, self.end, self.batches, self.bins, self.axis = start, end, batches, bins, axis
+        self.model = model
 
     def _compute(self, frames: np.ndarray) -> None:
         if len(frames) < 2:
@@ -375,6 +411,9 @@ class FeedRate(AnalysisBase):
                                                         self.batches)
         self._velocities(frames, t_a, t_b)
         self._mass_balance(frames)
+        if self.model:
+            r.model_velocity, r.model_note = dilute_limit(result.parameters)
+            r.velocity_ratio = velocity_ratio(r.mean_velocity, r.model_velocity)
 
     def _velocities(self, frames: np.ndarray, t_a: float, t_b: float) -> None:
         r = self.results

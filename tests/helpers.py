@@ -46,8 +46,8 @@ def lying_flat(shape, size, thickness, density, hamaker, roughness, viscosity):
     """The models' view of a bulk chip (shape 1 or "chip": a square face of side ``size``) or
     disc (2 or "disc": a round face of diameter ``size``) of ``thickness`` lying on its face:
     (mass [kg], its Adhesion, its Film at the roughness' clearance)."""
-    from vibrofeed.validation.models import adhesion as ad
-    from vibrofeed.validation.models import squeeze_film as sf
+    from vibrofeed.models import adhesion as ad
+    from vibrofeed.models import squeeze_film as sf
 
     h_c = sf.clearance(roughness)
     if shape in (1, "chip"):

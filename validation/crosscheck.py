@@ -2,7 +2,7 @@
 
 ``CrossCheck(case, out_dir).run()`` runs the deck once per sweep point through
 ``vibrofeed run`` (in parallel with ``jobs`` > 1), evaluates the model of
-``deck_models`` on the same parameters, and returns one :class:`Row` per
+``vibrofeed.models.deck`` on the same parameters, and returns one :class:`Row` per
 compared quantity plus the PNG figures it wrote. The comparison itself is the
 case's ``kind``:
 
@@ -32,81 +32,16 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import CaseError
-from . import deck_models as dm
+from ..models import deck as dm
+from ..models.constants import G
 from . import micro_checks
 from .cases import DERIVED_SWEEP_KEYS, Case
-from .models.constants import G
-
-
-@dataclass
-class Row:
-    case: str
-    quantity: str
-    model: float
-    dem: float
-    tolerance: float
-    tolerance_type: str  # "abs", "rel" or "sigma" (cases.Tolerance)
-    unit: str = ""
-    error: float = 0.0  # combined 1-sigma uncertainty of dem - model (tolerance "sigma")
-
-    @property
-    def rel_diff(self) -> float | None:
-        """(dem - model) / |model|; None when the model value is 0."""
-        if self.model == 0:
-            return None
-        return (self.dem - self.model) / abs(self.model)
-
-    @property
-    def passed(self) -> bool:
-        diff = abs(self.dem - self.model)
-        if self.tolerance_type == "sigma":
-            limit = self.tolerance * self.error
-        elif self.tolerance_type == "abs":
-            limit = self.tolerance
-        else:
-            limit = self.tolerance * abs(self.model)
-        return bool(diff <= limit)
-
-    def as_dict(self) -> dict:
-        return {"case": self.case, "quantity": self.quantity, "model": self.model,
-                "dem": self.dem, "rel_diff": self.rel_diff, "tolerance": self.tolerance,
-                "tolerance_type": self.tolerance_type, "unit": self.unit, "error": self.error,
-                "passed": self.passed}
-
-
-@dataclass
-class Run:
-    """One DEM run of a case: sweep values, full deck parameters, result file."""
-    label: str
-    values: dict
-    params: dict  # name -> string, as given to the deck (defaults included)
-    output: Path
-    request: object = None  # the engine.batch.RunRequest that computes it
-
-    def number(self, name: str) -> float:
-        return float(self.params[name])
-
-
-@dataclass
-class Outcome:
-    case: Case
-    rows: list = field(default_factory=list)
-    figures: list = field(default_factory=list)
-
-    @property
-    def passed(self) -> bool:
-        return all(r.passed for r in self.rows)
-
-
-def _label(values: dict) -> str:
-    return ",".join(f"{k}={v:g}" if isinstance(v, (int, float)) else f"{k}={v}"
-                    for k, v in values.items()) or "base"
+from .outcome import Outcome, Run, label, row
 
 
 class CrossCheck:
@@ -142,14 +77,14 @@ class CrossCheck:
                     given[DERIVED_SWEEP_KEYS[key]] = repr(float(dm.amp_from_gamma(float(value), freq)))
                 else:
                     given[key] = str(value)
-            label = _label(values)
+            point = label(values)
             params = resolve(deck, given)
             if self.case.kind == "vertical":
                 check_vertical_case(params)
-            output = self.dir / f"{label}.h5"
-            request = RunRequest(deck, params, output, label=label, ranks=self.ranks,
+            output = self.dir / f"{point}.h5"
+            request = RunRequest(deck, params, output, label=point, ranks=self.ranks,
                                  reuse=self.reuse)
-            runs.append(Run(label, values, params, output, request))
+            runs.append(Run(point, values, params, output, request))
         return runs
 
     def run(self) -> Outcome:
@@ -167,13 +102,6 @@ class CrossCheck:
         return outcome
 
 
-def _row(case: Case, quantity: str, label: str, model: float, dem: float, unit: str = "",
-         error: float = 0.0) -> Row:
-    tol = case.tolerance_of(quantity)
-    name = f"{quantity}[{label}]" if label != "base" else quantity
-    return Row(case.name, name, float(model), float(dem), tol.value, tol.kind, unit, float(error))
-
-
 def _realised_restitution(case: Case, run: Run, result, out: Outcome) -> float:
     """The DEM's e: what its contact realises at the run's impacts (median
     over the faster half), recorded as a row against the nominal value."""
@@ -183,7 +111,7 @@ def _realised_restitution(case: Case, run: Run, result, out: Outcome) -> float:
     if e_dem != e_dem:
         raise CaseError(f"case {case.name} [{run.label}]: restitution = \"realised\" needs an "
                         "impact, and the part never lands")
-    out.rows.append(_row(case, "restitution", run.label, run.number("restitution"), e_dem))
+    out.rows.append(row(case, "restitution", run.label, run.number("restitution"), e_dem))
     return e_dem
 
 
@@ -211,7 +139,7 @@ def _flights(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
     from vibrofeed.postproc.flights import Flights
     from vibrofeed.results.reader import Result
 
-    from .models.part_on_surface import simulate
+    from ..models.part_on_surface import simulate
     from .plots import plot_flights
 
     n_compare = int(case.compare.get("flights", 3))
@@ -236,10 +164,10 @@ def _flights(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
             raise CaseError(f"case {case.name} [{run.label}]: no flight longer than "
                             f"{min_flight} periods (model {len(model)}, DEM {len(dem)})")
         if "launch_phase" in case.tolerance and model[0][2] == "lift-off":
-            out.rows.append(_row(case, "launch_phase", run.label, model[0][0] / T, dem[0][0] / T, "T"))
+            out.rows.append(row(case, "launch_phase", run.label, model[0][0] / T, dem[0][0] / T, "T"))
         for k, (m, d) in enumerate(zip(model[:n_compare], dem[:n_compare]), start=1):
-            out.rows.append(_row(case, "landing_time", f"{run.label},#{k}", m[1] / T, d[1] / T, "T"))
-            out.rows.append(_row(case, "flight_duration", f"{run.label},#{k}",
+            out.rows.append(row(case, "landing_time", f"{run.label},#{k}", m[1] / T, d[1] / T, "T"))
+            out.rows.append(row(case, "flight_duration", f"{run.label},#{k}",
                                  (m[1] - m[0]) / T, (d[1] - d[0]) / T, "T"))
         radius = run.number("radius")
         panels.append(dict(label=run.label, T=T, dem_t=dem_t, dem_gap=dem_gap,
@@ -253,7 +181,6 @@ def _transport(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None
     from vibrofeed.postproc.transport import Transport
     from vibrofeed.results.reader import Result
 
-    from .models.part_on_surface import mean_velocity
     from .plots import plot_speed_curve
 
     transient = float(case.compare.get("transient_periods", 10))
@@ -265,8 +192,8 @@ def _transport(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None
             dem = Transport(r, start=transient * T).run().results.mean_velocity
             if case.compare.get("restitution", "nominal") == "realised":
                 p["restitution"] = repr(_realised_restitution(case, run, r, out))
-        model = mean_velocity(dm.waveform(p), dm.part(p), incline=run.number("incline")).velocity
-        out.rows.append(_row(case, "mean_speed", run.label, model, dem, "m/s"))
+        model = dm.transport(p).velocity
+        out.rows.append(row(case, "mean_speed", run.label, model, dem, "m/s"))
         points.append((run, model, dem))
     axis = case.compare.get("plot_axis") or (next(iter(case.sweep)) if case.sweep else None)
     if axis is not None:
@@ -295,8 +222,8 @@ def _period(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
     from vibrofeed.postproc.flights import Flights
     from vibrofeed.results.reader import Result
 
-    from .models.hopping import bifurcation_diagram
-    from .models.part_on_surface import simulate
+    from ..models.hopping import bifurcation_diagram
+    from ..models.part_on_surface import simulate
     from .plots import plot_bifurcation
 
     transient = float(case.compare.get("transient_periods", 20))
@@ -321,7 +248,7 @@ def _period(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
                                    if b - a >= min_flight * T])
         model_p = landing_period(model_landings, T, transient * T, tol=tol)
         dem_p = landing_period(dem_landings, T, transient * T, tol=tol)
-        out.rows.append(_row(case, "period", run.label, model_p, dem_p, "T"))
+        out.rows.append(row(case, "period", run.label, model_p, dem_p, "T"))
         late = fl.flights[keep & (fl.flights[:, 0] >= transient * T)]
         dem_points.append((gamma, (late[:, 1] - late[:, 0]) / T))
     gammas = case.compare.get("diagram_gammas")
@@ -338,7 +265,7 @@ def _vertical(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
     from vibrofeed.postproc.transport import Transport
     from vibrofeed.results.reader import Result
 
-    from .models.vertical import periodic_transport, simulate
+    from ..models.vertical import periodic_transport, simulate
     from .plots import plot_vertical
 
     transient = float(case.compare.get("transient_periods", 5))
@@ -355,7 +282,7 @@ def _vertical(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
             t_end = float(r.time[-1])
         n = max(int(round(t_end / T)), 3)
         model = periodic_transport(surface, contact, n_periods=n, skip_periods=int(transient))
-        out.rows.append(_row(case, "net_speed", run.label, model.net_speed, dem.mean_velocity, "m/s"))
+        out.rows.append(row(case, "net_speed", run.label, model.net_speed, dem.mean_velocity, "m/s"))
         traj = simulate(surface, contact, t_end=t_end, t_eval=np.linspace(0, t_end, 2000))
         panels.append(dict(label=run.label, T=T, dem_t=t, dem_x=x[:, 0] - x[0, 0], surface_x=xs,
                            model_t=traj.t, model_x=traj.z - traj.z[0]))
@@ -364,7 +291,7 @@ def _vertical(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
 
 def check_vertical_case(params: dict) -> None:
     """Refuse a vertical-transport case the feasibility bounds rule out."""
-    from .models.vertical import check_feasible
+    from ..models.vertical import check_feasible
 
     wf = dm.waveform(params)
     a_max = float(np.max(np.abs(wf.acceleration(np.linspace(0, wf.period, 4001))[0])))
@@ -427,10 +354,10 @@ def _replay(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
         dems.append(dem)
         n = min(len(model.predicted_mm), len(dem.predicted_mm))
         diff = float(np.mean(np.abs(model.predicted_mm[:n] - dem.predicted_mm[:n])))
-        out.rows.append(_row(case, "mean_difference_mm", run.label, 0.0, diff, "mm"))
-        out.rows.append(_row(case, "mean_abs_error_mm", run.label, model.mean_abs_error_mm,
+        out.rows.append(row(case, "mean_difference_mm", run.label, 0.0, diff, "mm"))
+        out.rows.append(row(case, "mean_abs_error_mm", run.label, model.mean_abs_error_mm,
                              dem.mean_abs_error_mm, "mm"))
-        out.rows.append(_row(case, "final_displacement_mm", run.label, model.final_predicted_mm,
+        out.rows.append(row(case, "final_displacement_mm", run.label, model.final_predicted_mm,
                              dem.final_predicted_mm, "mm"))
     out.figures.append(plot_replay(dems, fig_dir / "dem_replays.png", engine="dem"))
 
@@ -459,7 +386,7 @@ def _pulloff(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
         tension = -fz  # the contact pulls the pulled sphere back
         model = jkr_pulloff(run.number("surface_energy"), run.number("part_size"),
                             int(run.number("pair")))
-        out.rows.append(_row(case, "pulloff", run.label, model, float(tension.max()), "N"))
+        out.rows.append(row(case, "pulloff", run.label, model, float(tension.max()), "N"))
         panels.append({"label": run.label, "t": t, "tension": tension, "model": model})
     out.figures.append(plot_pulloff(case, panels, fig_dir / "pulloff.png"))
 
@@ -492,7 +419,7 @@ def _reference(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None
     figures = {}
     for run in runs:
         with Result(run.output) as r:
-            figures[run.label] = FeedRate(r).run().summary()
+            figures[run.label] = FeedRate(r, model=False).run().summary()
     base = figures[ref.label]
     for run in runs:
         if run is ref:
@@ -500,9 +427,10 @@ def _reference(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None
         s = figures[run.label]
         for quantity in case.tolerance:
             err, unit = REFERENCE_QUANTITIES[quantity]
-            out.rows.append(_row(case, quantity, run.label, base[quantity], s[quantity], unit,
+            out.rows.append(row(case, quantity, run.label, base[quantity], s[quantity], unit,
                                  error=math.hypot(base[err], s[err])))
-    out.figures.append(plot_reference(case, runs, figures, ref, fig_dir / "reference.png"))
+    out.figures.append(plot_reference(case, runs, figures, ref, REFERENCE_QUANTITIES,
+                                      fig_dir / "reference.png"))
 
 
 KINDS = {"flights": _flights, "transport": _transport, "period": _period, "vertical": _vertical,

@@ -38,8 +38,7 @@ def plot_flights(case, panels: list[dict], path: Path) -> Path:
 
 def plot_speed_curve(case, runs, points, axis: str, path: Path) -> Path:
     """Mean conveying speed vs the swept quantity: model curve, DEM points."""
-    from . import deck_models as dm
-    from .models.part_on_surface import mean_velocity
+    from ..models import deck as dm
 
     plt = pyplot()
 
@@ -58,7 +57,7 @@ def plot_speed_curve(case, runs, points, axis: str, path: Path) -> Path:
                 p[target] = repr(float(dm.amp_from_gamma(x, float(p["freq"]))))
             else:
                 p[axis] = repr(float(x))
-            curve.append(mean_velocity(dm.waveform(p), dm.part(p), incline=float(p["incline"])).velocity)
+            curve.append(dm.transport(p).velocity)
         ax.plot(grid, np.array(curve) * 1e3, **MODEL_STYLE)
     else:
         ax.plot(xs, np.array([m for _, m, _ in points]) * 1e3, "kx", label="model")
@@ -147,13 +146,11 @@ def plot_pulloff(case, panels: list[dict], path: Path) -> Path:
     return save(fig, path)
 
 
-def plot_reference(case, runs, figures: dict, ref, path: Path) -> Path:
+def plot_reference(case, runs, figures: dict, ref, quantities: dict, path: Path) -> Path:
     """Each compared quantity vs the first swept parameter: DEM points with
     their 1-sigma errors, the reference point's value and its tolerance band
     (the band uses the reference's own error: each point's limit also
-    includes its own, see the table)."""
-    from .crosscheck import REFERENCE_QUANTITIES
-
+    includes its own, see the table). ``quantities``: name -> (key of its error, unit)."""
     plt = pyplot()
     axis = next(iter(case.sweep))
     quantities = list(case.tolerance)
@@ -161,7 +158,7 @@ def plot_reference(case, runs, figures: dict, ref, path: Path) -> Path:
                              layout="constrained")
     xs = np.array([float(r.values[axis]) for r in runs])
     for ax, q in zip(axes[0], quantities):
-        err_key, unit = REFERENCE_QUANTITIES[q]
+        err_key, unit = quantities[q]
         scale, unit = (1e3, "mm/s") if unit == "m/s" else (1.0, unit)
         ys = np.array([figures[r.label][q] for r in runs]) * scale
         es = np.array([figures[r.label][err_key] for r in runs]) * scale

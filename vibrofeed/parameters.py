@@ -292,7 +292,7 @@ def _check_bulk_feeder(p: Mapping[str, float]) -> None:
 
 
 # Step limits of the micro-scale surface forces, as decks/include/surface_forces.liggghts
-# derives them (validation/models/adhesion.py and squeeze_film.py hold the same laws):
+# derives them (vibrofeed/models/adhesion.py and squeeze_film.py hold the same laws):
 # a limit below this would mean hours of steps for a fraction of a second.
 SURFACE_FORCES_MIN_DT = 1e-9  # s
 VDW_D0 = 2e-10  # m, contact distance of smooth surfaces (Khan & Sarma, §3.1)
@@ -300,7 +300,7 @@ AIR_MEAN_FREE_PATH = 6.8e-8  # m, the smallest air-film clearance
 
 
 # Stefan's law for a square plate of side a: F = STEFAN_SQUARE mu a^4 V / h^3 (the
-# rectangle's series solution of the Reynolds equation; validation/models/squeeze_film.py
+# rectangle's series solution of the Reynolds equation; vibrofeed/models/squeeze_film.py
 # computes it, tests/unit/test_squeeze_film.py checks this copy).
 STEFAN_SQUARE = 0.421731044868524
 

@@ -4,7 +4,7 @@ decks/include/surface_forces.liggghts).
 * Off (hamaker = air_viscosity = 0, the defaults) the block changes nothing: spheres
   with a size spread and discs run bit for bit as the deck without it.
 * On, the z-force LIGGGHTS applies to an airborne sphere is the models' law
-  (validation/models/adhesion.py, squeeze_film.py) at that sphere's own radius, gap
+  (vibrofeed/models/adhesion.py, squeeze_film.py) at that sphere's own radius, gap
   and velocity relative to the floor, to 1e-6; past the outlet edge it is gravity alone.
 * A chip's or disc's clump spheres each carry 1/n of the face's law (flat-flat vdW,
   Stefan's film for a disc or a square) at their own gap and velocity.
@@ -19,11 +19,11 @@ import numpy as np
 import pytest
 
 from helpers import DECKS, liggghts_text, lying_flat, vibrofeed
+from vibrofeed.models import adhesion as ad
+from vibrofeed.models import squeeze_film as sf
+from vibrofeed.models.constants import G
 from vibrofeed.parameters import surface_forces_step_limit
 from vibrofeed.results.reader import Result
-from vibrofeed.validation.models import adhesion as ad
-from vibrofeed.validation.models import squeeze_film as sf
-from vibrofeed.validation.models.constants import G
 
 DECK = DECKS / "bulk_feeder.liggghts"
 SHAPES = {"sphere": 0, "chip": 1, "disc": 2}

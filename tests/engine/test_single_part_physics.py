@@ -24,9 +24,9 @@ import pytest
 from scipy.optimize import brentq
 
 from helpers import vibrofeed
+from vibrofeed.models.constants import G
 from vibrofeed.postproc.flights import Flights
 from vibrofeed.results.reader import Result
-from vibrofeed.validation.models.constants import G
 
 FREQ = 50.0
 W = 2 * np.pi * FREQ

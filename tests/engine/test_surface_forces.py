@@ -3,7 +3,7 @@
 * Off (hamaker = air_viscosity = 0, the defaults) the block changes nothing: the
   trajectory is bit for bit that of the deck without it.
 * On, the force LIGGGHTS applies to an airborne part is the models' law
-  (validation/models/adhesion.py, squeeze_film.py) at the recorded gap and
+  (vibrofeed/models/adhesion.py, squeeze_film.py) at the recorded gap and
   relative velocity, to round-off, for a sphere and for a flat face.
 * The timestep obeys the step limits the models and vibrofeed.parameters
   derive, and a requested dt above them is refused by vibrofeed and by the
@@ -19,12 +19,12 @@ import numpy as np
 import pytest
 
 from helpers import DECKS, liggghts_text, vibrofeed
+from vibrofeed.models import adhesion as ad
+from vibrofeed.models import squeeze_film as sf
+from vibrofeed.models.constants import G
 from vibrofeed.parameters import surface_forces_step_limit
 from vibrofeed.results.reader import Result
 from vibrofeed.validation.cases import CASES_DIR
-from vibrofeed.validation.models import adhesion as ad
-from vibrofeed.validation.models import squeeze_film as sf
-from vibrofeed.validation.models.constants import G
 
 DECK = DECKS / "single_part.liggghts"
 

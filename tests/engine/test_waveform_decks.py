@@ -1,5 +1,5 @@
 """The deck's waveforms: the mesh is where vibrofeed records the surface, and
-the recorded motion is the model's waveform (validation.deck_models)."""
+the recorded motion is the model's waveform (models.deck)."""
 
 import math
 import shutil
@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from helpers import DECKS, vibrofeed
+from vibrofeed.models import deck as dm
 from vibrofeed.results.reader import Result
-from vibrofeed.validation import deck_models as dm
 
 WAVEFORMS = {0: "sine", 1: "square", 2: "stick-slip", 3: "Coulomb pump"}
 PARAMS = {"freq": "50", "amp_t": "1e-4", "amp_n": "8e-5", "phase": "60", "duty": "0.7"}

@@ -1,4 +1,4 @@
-"""Van der Waals adhesion (validation/models/adhesion.py) against Khan & Sarma,
+"""Van der Waals adhesion (vibrofeed/models/adhesion.py) against Khan & Sarma,
 "Vibratory Assembly Update: Part Transportation Mechanics Analysis", §3.1.
 
 The flat-surface figures of §3.1 follow from its formulas; the sphere figures
@@ -11,8 +11,8 @@ import math
 import pytest
 from scipy.integrate import quad
 
-from vibrofeed.validation.models import adhesion as ad
-from vibrofeed.validation.models.constants import G
+from vibrofeed.models import adhesion as ad
+from vibrofeed.models.constants import G
 
 A = ad.REPORT_HAMAKER
 D = ad.D0

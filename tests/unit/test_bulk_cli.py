@@ -43,8 +43,8 @@ def test_feedrate_prints_a_table_and_json_with_the_contract_keys(run_file):
     assert figures["steady_from"] == pytest.approx(fr.steady_from)
     assert figures["lost"] == 0 and figures["exited"] == 240
     # the dilute limit: the single-part model of the same vibration
-    from vibrofeed.validation import deck_models as dm
-    from vibrofeed.validation.models.part_on_surface import PartParams, mean_velocity
+    from vibrofeed.models import deck as dm
+    from vibrofeed.models.part_on_surface import PartParams, mean_velocity
 
     params = {k: float(v[0]) for k, v in VIBRATION.items()} | {"freq": 100.0}
     model = mean_velocity(dm.waveform(params), PartParams(0.5, 0.5, 0.3)).velocity

@@ -1,4 +1,4 @@
-"""The micro-scale feeding study's analysis (validation/micro_checks.py, README "Micro-scale
+"""The micro-scale feeding study's analysis (validation/studies/feeding.py, README "Micro-scale
 forces in the feeder"): Bond numbers worked out by hand, the sticking part's model speed as
 the model under a heavier gravity, and a sweep folder of synthetic results whose feed rates
 and speeds are known by construction, grouped over replicates over the study's window."""
@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 
 from bulk_synthetic import feeder
+from vibrofeed.models import deck as dm
+from vibrofeed.models.constants import G
+from vibrofeed.models.part_on_surface import PartParams, mean_velocity
 from vibrofeed.sweep import summary as S
-from vibrofeed.validation import deck_models as dm
-from vibrofeed.validation import micro_checks as mc
-from vibrofeed.validation.models.constants import G
-from vibrofeed.validation.models.part_on_surface import PartParams, mean_velocity
+from vibrofeed.validation.studies import feeding as mc
 
 DIE = {"shape": "chip", "part_size": 3e-4, "part_thickness": 2e-4, "density": 2330.0}
 

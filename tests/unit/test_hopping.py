@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from vibrofeed.validation.models import hopping as H
-from vibrofeed.validation.models.subhopping import normalised_speed
+from vibrofeed.models import hopping as H
+from vibrofeed.models.subhopping import normalised_speed
 
 
 def test_period_one_limits_closed_form_values():

@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from vibrofeed.validation.models.constants import G
-from vibrofeed.validation.models.inplane import (
+from vibrofeed.models.constants import G
+from vibrofeed.models.inplane import (
     coulomb_pump_speed_curve,
     optimal_stick_slip_speed,
     optimal_stick_slip_waveform,
@@ -14,8 +14,8 @@ from vibrofeed.validation.models.inplane import (
     stick_slip_closed_form,
     stick_slip_speed_curve,
 )
-from vibrofeed.validation.models.part_on_surface import PartParams, mean_velocity
-from vibrofeed.validation.models.surface import (
+from vibrofeed.models.part_on_surface import PartParams, mean_velocity
+from vibrofeed.models.surface import (
     CoulombPumpWaveform,
     PiecewiseConstantAccel,
     SampledWaveform,

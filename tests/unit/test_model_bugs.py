@@ -20,10 +20,10 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from vibrofeed.validation.models import hopping as H
-from vibrofeed.validation.models.constants import G
-from vibrofeed.validation.models.part_on_surface import PartOnSurface, PartParams
-from vibrofeed.validation.models.surface import SineWaveform
+from vibrofeed.models import hopping as H
+from vibrofeed.models.constants import G
+from vibrofeed.models.part_on_surface import PartOnSurface, PartParams
+from vibrofeed.models.surface import SineWaveform
 
 MU_S, MU_K = 0.8, 0.3
 
@@ -214,7 +214,7 @@ def test_invalid_part_and_placement_are_refused():
 
 def test_simulate_sums_chattering_by_default():
     wf = SineWaveform(10.0, 0.0, 0.0)
-    from vibrofeed.validation.models.part_on_surface import simulate
+    from vibrofeed.models.part_on_surface import simulate
 
     tr = simulate(wf, PartParams(0.5, 0.5, e=0.5), n_periods=3.0, initial=dict(z=1e-3))
     assert len(tr.events_of("rest")) == 1 and tr.phase[-1] == "stick"
@@ -235,14 +235,14 @@ def test_hopping_defaults():
 
 
 def test_square_wave_closed_form_refuses_hopping():
-    from vibrofeed.validation.models.subhopping import square_wave_speed
+    from vibrofeed.models.subhopping import square_wave_speed
 
     with pytest.raises(ValueError, match="regime"):
         square_wave_speed(50.0, 0.8 * G, G, 0.75, 0.6)  # acc_n = g: the part is weightless in B
 
 
 def test_steady_speed_is_the_mean_of_the_last_two_blocks():
-    from vibrofeed.validation.models.part_on_surface import mean_velocity
+    from vibrofeed.models.part_on_surface import mean_velocity
 
     wf = SineWaveform.from_gamma(50.0, 0.6, 0.9, 60.0)
     ss = mean_velocity(wf, PartParams(0.6, 0.35), n_transient=2, n_block=3, max_blocks=4)
@@ -251,7 +251,7 @@ def test_steady_speed_is_the_mean_of_the_last_two_blocks():
 
 
 def test_one_averaging_block_is_its_own_answer():
-    from vibrofeed.validation.models.part_on_surface import mean_velocity
+    from vibrofeed.models.part_on_surface import mean_velocity
 
     wf = SineWaveform.from_gamma(50.0, 0.6, 0.9, 60.0)
     ss = mean_velocity(wf, PartParams(0.6, 0.35), n_transient=2, n_block=3, max_blocks=1)

@@ -7,14 +7,14 @@ import math
 import numpy as np
 import pytest
 
-from vibrofeed.validation.models.constants import G
-from vibrofeed.validation.models.inplane import (
+from vibrofeed.models.constants import G
+from vibrofeed.models.inplane import (
     optimal_stick_slip_speed,
     optimal_stick_slip_waveform,
     sliding_limit_speed,
 )
-from vibrofeed.validation.models.surface import CallableSurface, sine_drive
-from vibrofeed.validation.models.vertical import Contact, periodic_transport, simulate
+from vibrofeed.models.surface import CallableSurface, sine_drive
+from vibrofeed.models.vertical import Contact, periodic_transport, simulate
 
 M = 0.009
 
@@ -82,7 +82,7 @@ def test_a_slow_drive_that_never_breaks_static_friction_is_stuck_throughout():
 
 
 def test_the_optimal_waveform_reaches_the_bound_with_friction_not_summing_to_one():
-    from vibrofeed.validation.models.part_on_surface import PartParams, mean_velocity
+    from vibrofeed.models.part_on_surface import PartParams, mean_velocity
 
     a_max, mu_s, mu_k, f = 2 * G, 0.5, 0.3, 20.0
     wf = optimal_stick_slip_waveform(a_max, mu_s, mu_k, f)
@@ -92,7 +92,7 @@ def test_the_optimal_waveform_reaches_the_bound_with_friction_not_summing_to_one
 
 
 def test_a_two_level_drive_that_never_breaks_the_part_loose_moves_nothing():
-    from vibrofeed.validation.models.vertical import two_level_transport
+    from vibrofeed.models.vertical import two_level_transport
 
     c = Contact(mass=M, normal_force=2 * M * G, mu_s=0.72, mu_k=0.6)
     # stick_upper = (1.44 - 1) g, stick_lower = -(1.44 + 1) g: a rise of 0.4 g and a drop

@@ -21,9 +21,9 @@ import numpy as np
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from vibrofeed.validation.models.constants import G
-from vibrofeed.validation.models.part_on_surface import PartOnSurface, PartParams, simulate
-from vibrofeed.validation.models.surface import SineWaveform
+from vibrofeed.models.constants import G
+from vibrofeed.models.part_on_surface import PartOnSurface, PartParams, simulate
+from vibrofeed.models.surface import SineWaveform
 
 FAST = settings(max_examples=15, deadline=None)
 

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from vibrofeed.validation.models.constants import G
-from vibrofeed.validation.models.part_on_surface import PartOnSurface, PartParams, mean_velocity, simulate
-from vibrofeed.validation.models.subhopping import FIGURE8, normalised_speed, square_wave_speed
-from vibrofeed.validation.models.surface import SineWaveform, SquareWaveAccel
+from vibrofeed.models.constants import G
+from vibrofeed.models.part_on_surface import PartOnSurface, PartParams, mean_velocity, simulate
+from vibrofeed.models.subhopping import FIGURE8, normalised_speed, square_wave_speed
+from vibrofeed.models.surface import SineWaveform, SquareWaveAccel
 
 F = 50.0
 W = 2 * math.pi * F

@@ -5,7 +5,7 @@ import json
 import pytest
 
 from helpers import vibrofeed, write_trial
-from vibrofeed.validation.models.constants import G
+from vibrofeed.models.constants import G
 
 MASS = 0.009
 KEYS = {"mean_abs_error_mm", "max_displacement_mm", "final_measured_mm", "final_predicted_mm",

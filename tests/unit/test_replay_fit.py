@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from vibrofeed.validation.models.constants import G
-from vibrofeed.validation.models.surface import CallableSurface
-from vibrofeed.validation.models.vertical import Contact, simulate
+from vibrofeed.models.constants import G
+from vibrofeed.models.surface import CallableSurface
+from vibrofeed.models.vertical import Contact, simulate
 from vibrofeed.validation.replay.fit import (
     EDGE_FRAMES,
     MEASURED_NORMAL_FORCE_MG,

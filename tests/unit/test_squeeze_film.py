@@ -1,4 +1,4 @@
-"""Squeeze-film air damping (validation/models/squeeze_film.py) against Khan &
+"""Squeeze-film air damping (vibrofeed/models/squeeze_film.py) against Khan &
 Sarma, "Vibratory Assembly Update: Part Transportation Mechanics Analysis",
 §3.2 and its Figure 13 (a silicon disc 400 um across, 200 um thick, launched at
 Gamma = 10 from several clearances).
@@ -20,8 +20,8 @@ import pytest
 from scipy.integrate import quad
 from scipy.optimize import minimize_scalar
 
-from vibrofeed.validation.models import squeeze_film as sf
-from vibrofeed.validation.models.constants import G
+from vibrofeed.models import squeeze_film as sf
+from vibrofeed.models.constants import G
 
 MU = sf.AIR_VISCOSITY
 M = sf.FIG13_MASS

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy.interpolate import PPoly, make_interp_spline
 
-from vibrofeed.validation.models.surface import (
+from vibrofeed.models.surface import (
     CallableSurface,
     CoulombPumpWaveform,
     PiecewiseConstantAccel,

@@ -1,6 +1,6 @@
 """The surface forces' step limit and refusals in both decks' vocabularies
 (vibrofeed/parameters.py; decks/include/surface_forces.liggghts derives the same):
-the limit is the models' (validation/models/adhesion.py, squeeze_film.py) for the
+the limit is the models' (vibrofeed/models/adhesion.py, squeeze_film.py) for the
 part it binds -- a single part, the smallest sphere of a bulk size spread, a chip's
 square face, a disc's round one -- and bad combinations are refused in one line."""
 
@@ -11,9 +11,9 @@ import pytest
 from helpers import lying_flat
 from vibrofeed.decks import Deck
 from vibrofeed.errors import ParameterError
+from vibrofeed.models import adhesion as ad
+from vibrofeed.models import squeeze_film as sf
 from vibrofeed.parameters import resolve, surface_forces_part, surface_forces_step_limit
-from vibrofeed.validation.models import adhesion as ad
-from vibrofeed.validation.models import squeeze_film as sf
 
 MU = sf.AIR_VISCOSITY
 RHO = 2330.0

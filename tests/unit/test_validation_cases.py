@@ -5,10 +5,11 @@ import math
 import numpy as np
 import pytest
 
+from vibrofeed.models import deck as dm
+from vibrofeed.models.part_on_surface import Event
 from vibrofeed.validation import cases as C
-from vibrofeed.validation import deck_models as dm
-from vibrofeed.validation.crosscheck import KINDS, Row, check_vertical_case, landing_period, model_flights
-from vibrofeed.validation.models.part_on_surface import Event
+from vibrofeed.validation.crosscheck import KINDS, check_vertical_case, landing_period, model_flights
+from vibrofeed.validation.outcome import Row
 
 # The quantities each kind reports (a case needs a tolerance for each it uses).
 QUANTITIES = {"flights": {"landing_time", "flight_duration"}, "transport": {"mean_speed"},

@@ -1,13 +1,13 @@
-"""Vertical stick/slip transport model (validation/models/vertical.py) against closed forms."""
+"""Vertical stick/slip transport model (vibrofeed/models/vertical.py) against closed forms."""
 
 import math
 
 import numpy as np
 import pytest
 
-from vibrofeed.validation.models.constants import G
-from vibrofeed.validation.models.roots import first_descent, stick_exit
-from vibrofeed.validation.models.surface import (
+from vibrofeed.models.constants import G
+from vibrofeed.models.roots import first_descent, stick_exit
+from vibrofeed.models.surface import (
     CallableSurface,
     SineWaveform,
     SquareWaveAccel,
@@ -15,7 +15,7 @@ from vibrofeed.validation.models.surface import (
     sine_drive,
     two_level_drive,
 )
-from vibrofeed.validation.models.vertical import (
+from vibrofeed.models.vertical import (
     Contact,
     check_feasible,
     periodic_transport,

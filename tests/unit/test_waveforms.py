@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from vibrofeed.validation.models.constants import G
-from vibrofeed.validation.models.surface import (
+from vibrofeed.models.constants import G
+from vibrofeed.models.surface import (
     CoulombPumpWaveform,
     PiecewiseConstantAccel,
     SampledWaveform,

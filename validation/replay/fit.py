@@ -31,9 +31,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from ..models.constants import G
-from ..models.surface import PolynomialSurface
-from ..models.vertical import Contact, simulate
+from ...models.constants import G
+from ...models.surface import PolynomialSurface
+from ...models.vertical import Contact, simulate
 from .trials import PositionFit, Trial, fit_platform
 
 __all__ = [

@@ -83,7 +83,7 @@ from scipy.linalg import cho_solve_banded, cholesky_banded
 from scipy.optimize import brentq
 
 from ...errors import TrialFileError
-from ..models.surface import PolynomialSurface
+from ...models.surface import PolynomialSurface
 
 __all__ = [
     "TrialFileError",

@@ -23,8 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..models.roots import slip_end, stick_decision, stick_exit
-from ..models.vertical import Contact
+from ...models.roots import slip_end, stick_decision, stick_exit
+from ...models.vertical import Contact
 
 __all__ = ["simulate_speed_dependent"]
 

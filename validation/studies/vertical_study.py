@@ -18,9 +18,9 @@ import numpy as np
 from scipy.interpolate import PPoly, make_interp_spline
 from scipy.signal import lsim
 
-from ..models.constants import G
-from ..models.surface import PolynomialSurface
-from ..models.vertical import Contact, simulate
+from ...models.constants import G
+from ...models.surface import PolynomialSurface
+from ...models.vertical import Contact, simulate
 from ..replay.fit import (
     EDGE_FRAMES,
     MU_S,

@@ -71,7 +71,7 @@ def report(path, folder: Path | None = None) -> str:
     lines, figures = [], []
     with Result(path) as result:
         fr = FeedRate(result).run()
-        summary = F.add_dilute_limit(fr.summary(), result.parameters)
+        summary = fr.summary()
         sg = Singulation(result).run()
         lines += ["", "Feed rate", F.table(summary), "", "Singulation", S.table(sg.summary())]
         if folder is not None:

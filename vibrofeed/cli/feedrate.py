@@ -52,42 +52,6 @@ def plot_folder(path: str | None) -> Path | None:
     return folder
 
 
-# Parameters the single-part model needs from the deck (the rest have defaults).
-MODEL_NEEDS = ("freq", "mu", "restitution")
-
-
-def dilute_limit(parameters: dict) -> tuple[float | None, str]:
-    """(speed [m/s], note) of one part alone on the track under the same
-    vibration: the rigid-part model of Khan & Sarma, §2.3.2 (hopping and
-    sliding), driven through ``vibrofeed.validation.deck_models`` like the
-    single-part validation cases; (None, why) when the deck lacks a parameter."""
-    missing = [name for name in MODEL_NEEDS if name not in parameters]
-    if missing:
-        return None, f"the result lacks {', '.join(missing)}"
-    from ..validation import deck_models as dm
-    from ..validation.models.part_on_surface import PartParams, mean_velocity
-
-    mu = float(parameters["mu"])
-    part = PartParams(mu_s=mu, mu_k=mu, e=min(float(parameters["restitution"]), 0.999))
-    try:
-        state = mean_velocity(dm.waveform(parameters), part,
-                              incline=float(parameters.get("incline", 0.0)))
-    except (KeyError, ValueError) as exc:
-        return None, f"model not applicable ({exc})"
-    note = "" if state.converged else "model not converged (chaotic hopping?): mean of its last blocks"
-    return float(state.velocity), note
-
-
-def add_dilute_limit(summary: dict, parameters: dict) -> dict:
-    """``summary`` with ``model_velocity``, ``model_note`` and ``velocity_ratio``
-    (measured mean conveying velocity / model) added (see :func:`dilute_limit`)."""
-    model, note = dilute_limit(parameters)
-    measured = summary.get("mean_velocity")
-    summary["model_velocity"], summary["model_note"] = model, note
-    summary["velocity_ratio"] = measured / model if model and measured is not None else None
-    return summary
-
-
 def _fmt(value, scale: float = 1.0, spec: str = ".4g") -> str:
     if value is None or (isinstance(value, float) and not math.isfinite(value)):
         return "n/a"
@@ -124,10 +88,8 @@ def run(args) -> int:
     folder = plot_folder(args.plot)
     with Result(args.result) as result:
         fr = FeedRate(result, start=args.start, end=args.end, batches=args.batches,
-                      bins=args.bins).run()
+                      bins=args.bins, model=not args.no_model).run()
         summary = fr.summary()
-        if not args.no_model:
-            add_dilute_limit(summary, result.parameters)
         figures = fr.plot(folder) if folder is not None else []
     if args.json:
         print(json.dumps(summary, indent=2))

@@ -60,7 +60,7 @@ def _plot_path(path: str | None) -> Path | None:
 
 
 def run(args) -> int:
-    from ..validation.models.constants import G
+    from ..models.constants import G
     from ..validation.replay.trials import read_trial
 
     plot = _plot_path(args.plot)

@@ -13,7 +13,7 @@ in the result file; the row keeps scalars, NaN turned into None.
 
 from __future__ import annotations
 
-import math
+from ..postproc.base import to_json
 
 FEEDRATE = ("parts_per_s", "parts_per_s_err", "mass_per_s", "mass_per_s_err", "mean_velocity",
             "mean_velocity_err", "steady_from", "steady_to", "n_events", "inserted", "exited",
@@ -25,18 +25,16 @@ MODEL = ("model_velocity", "velocity_ratio")
 
 
 def _scalar(value):
+    value = to_json(value)  # NaN: None
     if isinstance(value, bool):
         return int(value)
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
     return value if isinstance(value, int | float) or value is None else None
 
 
 def metrics(path) -> dict:
     """The figures of the result at ``path`` (module docstring)."""
-    from ..cli.feedrate import dilute_limit
     from ..postproc import Transport
-    from ..postproc.feedrate import FeedRate
+    from ..postproc.feedrate import FeedRate, dilute_limit, velocity_ratio
     from ..postproc.singulation import Singulation
     from ..results.reader import Result
 
@@ -47,13 +45,12 @@ def metrics(path) -> dict:
             out.update({k: _scalar(fr.get(k)) for k in FEEDRATE})
             sg = Singulation(r).run().summary()
             out.update({k: _scalar(sg.get(k)) for k in SINGULATION})
+            out.update({k: _scalar(fr.get(k)) for k in MODEL})
         else:
             out["n_parts"] = len(r.part_ids)
             v = Transport(r).run().results.mean_velocity if out["n_parts"] and r.n_frames > 2 else None
             out["mean_velocity"] = _scalar(None if v is None else float(v))
-        parameters = r.parameters
-    model, _ = dilute_limit(parameters)
-    measured = out.get("mean_velocity")
-    out["model_velocity"] = _scalar(model)
-    out["velocity_ratio"] = _scalar(measured / model) if model and measured is not None else None
+            model, _ = dilute_limit(r.parameters)
+            out["model_velocity"] = _scalar(model)
+            out["velocity_ratio"] = _scalar(velocity_ratio(out["mean_velocity"], model))
     return out

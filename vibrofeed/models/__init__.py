@@ -8,6 +8,9 @@ hopping          Gamma > 1: flights, period-one limits, bifurcations
 subhopping       Gamma < 1: stick/slip transport on flat and inclined tracks
 inplane          horizontal-only waveforms (stick-slip, Coulomb pump)
 vertical         a part squeezed against a vertically vibrating wall
+adhesion         van der Waals attraction between a part and the track
+squeeze_film     the air film's squeeze damping under a part
+deck             a deck's parameters -> these models' objects (the same numbers as the DEM)
 
 Sources: K. A. Khan, S. E. Sarma, "Vibratory Assembly Update: Part
 Transportation Mechanics Analysis" (MIT Auto-ID Center), sections 2.1-2.4, for

@@ -1,7 +1,7 @@
 """Surface motions: the one description of how a vibrating surface moves.
 
 Frame (project convention): x along the track, z normal to the surface. All
-quantities are SI: m, m/s, m/s^2. Every model of ``validation.models`` is driven
+quantities are SI: m, m/s, m/s^2. Every model of ``vibrofeed.models`` is driven
 by a :class:`SurfaceMotion`, and so is the deck generator: one object answers
 
 ``position(t)``, ``velocity(t)``, ``acceleration(t)``

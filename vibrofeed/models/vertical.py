@@ -9,7 +9,7 @@ mu_s >= mu_k; gravity g. With A_s = mu_s F_n / m and A_k = mu_k F_n / m:
 * sticking: z_p' = z_s', possible while  -A_s - g <= z_s'' <= A_s - g;
 * slipping: z_p'' = A_k sgn(z_s' - z_p') - g.
 
-The surface is any ``SurfaceMotion`` (``validation.models.surface``); its
+The surface is any ``SurfaceMotion`` (``vibrofeed.models.surface``); its
 along-track coordinate x is the z here, as in the decks, where a wall at
 incline = 90 moves up along x.
 

@@ -2,7 +2,7 @@
 
 Implements the single-part kinematics of the report (Khan & Sarma, "Vibratory
 Assembly Update: Part Transportation Mechanics Analysis", sections 2.1-2.4) for
-any periodic surface motion of `validation.models.surface`, independent of
+any periodic surface motion of `vibrofeed.models.surface`, independent of
 LIGGGHTS, so that DEM trajectories can be overlaid on it.
 
 Model (SI units; surface frame x along the track, z normal to the surface)
@@ -37,7 +37,7 @@ Model (SI units; surface frame x along the track, z normal to the surface)
   (n = 0) falls inside the summed interval.
 
 Events are found by root isolation on the analytic trajectories (see
-`validation.models.roots`): flight is a parabola against the surface motion,
+`vibrofeed.models.roots`): flight is a parabola against the surface motion,
 stick follows the surface, slip has a closed form in the surface velocity and
 displacement. No fixed time grid is used for events.
 """

@@ -1,8 +1,9 @@
 """The analytic model of a deck run: the same surface motion and contact.
 
 One place translates the deck vocabulary (README, "Decks") into the model
-objects of this package, so the DEM and the model of a validation case are
-driven by the same numbers. The waveform formulas of
+objects of this package, so the DEM and the model (of a validation case, of
+a feed-rate report's dilute limit, of a sweep row) are driven by the same
+numbers. The waveform formulas of
 ``decks/single_part.liggghts`` and the classes here are checked against each
 other through the engine (tests/engine/test_waveform_decks.py).
 """
@@ -12,16 +13,16 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 
-from .models.constants import G
-from .models.part_on_surface import PartParams
-from .models.surface import (
+from .constants import G
+from .part_on_surface import PartParams, SteadyState, mean_velocity
+from .surface import (
     CoulombPumpWaveform,
     SineWaveform,
     SquareWaveAccel,
     StickSlipWaveform,
     SurfaceMotion,
 )
-from .models.vertical import Contact
+from .vertical import Contact
 
 SINE, SQUARE, STICK_SLIP, COULOMB_PUMP = 0, 1, 2, 3
 
@@ -65,11 +66,22 @@ def waveform(p: Mapping) -> SurfaceMotion:
     raise ValueError(f"waveform must be 0, 1, 2 or 3, got {kind}")
 
 
-def part(p: Mapping) -> PartParams:
+def part(p: Mapping, weighed: bool = True) -> PartParams:
     """The model part of a deck run: LIGGGHTS has one friction coefficient,
-    so mu_s = mu_k = mu; e = restitution."""
+    so mu_s = mu_k = mu; e = restitution (below 1: a perfectly elastic part
+    never settles). ``weighed``: its mass from the deck (:func:`mass`), else
+    the model's unit mass, which only scales the forces the model reports,
+    never its motion."""
     mu = _f(p, "mu")
-    return PartParams(mu_s=mu, mu_k=mu, e=min(_f(p, "restitution"), 0.999), mass=mass(p))
+    e = min(_f(p, "restitution"), 0.999)
+    return PartParams(mu_s=mu, mu_k=mu, e=e, mass=mass(p) if weighed else PartParams.mass)
+
+
+def transport(p: Mapping, g: float = G) -> SteadyState:
+    """The steady conveying of one part of a deck run alone on its track
+    (Khan & Sarma, §2.3.2: hopping and sliding): the deck's surface motion,
+    part and ``incline`` (default 0); ``g`` the gravity it feels."""
+    return mean_velocity(waveform(p), part(p, weighed=False), incline=_f(p, "incline", 0.0), g=g)
 
 
 def mass(p: Mapping) -> float:
