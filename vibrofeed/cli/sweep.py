@@ -38,15 +38,15 @@ def add_arguments(p) -> None:
 
 
 def run(args) -> int:
-    from ..sweep import mpi
-    from ..sweep.execute import sweep
+    from ..engine import batch
+    from ..sweep.execute import serve, sweep
 
-    comm = mpi.world()
+    comm = batch.world()
     if comm is not None and comm.Get_rank() != 0:
-        return mpi.serve(comm)
+        return serve(comm)
     try:
         return sweep(args.sweep, args.output, workers=args.jobs, retry_failed=args.retry_failed,
                      dry_run=args.dry_run, quiet=args.quiet, comm=comm, out=sys.stdout)
     finally:
         if comm is not None:
-            mpi.release(comm)
+            batch.release(comm)

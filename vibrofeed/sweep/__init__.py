@@ -9,8 +9,9 @@
   manifest, and which jobs a rerun skips (their files checked, not merely present).
 - :mod:`.summary` writes ``summary.h5`` and ``summary.csv`` atomically, one
   row per finished job; :mod:`.metrics` computes a finished job's figures.
-- :mod:`.execute` runs the jobs through the isolated runner, ``-j`` at a
-  time; :mod:`.mpi` across the groups of ranks of an ``mpirun`` (rank 0
-  dispatches); :mod:`.progress` reports done / running / failed and the ETA.
+- :mod:`.execute` runs the jobs through the executor validation shares
+  (:mod:`vibrofeed.engine.batch`), ``-j`` at a time or across the groups of
+  ranks of an ``mpirun`` (rank 0 dispatches); :mod:`.progress` reports done /
+  running / failed and the ETA.
 - :mod:`.report` is ``vibrofeed sweep-report``: the table, the best setting, the maps.
 """

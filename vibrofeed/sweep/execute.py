@@ -8,24 +8,26 @@ the others go on. Its analysis (:mod:`.metrics`) runs where the job ran, and
 an analysis that raises is that job's failure too (the result stays; a rerun
 with ``--retry-failed`` analyses it again without running it).
 
-Without MPI, ``workers`` jobs run at once, each waited for by a thread (the
-threads only wait for their worker processes and analyse). Under ``mpirun``
-see :mod:`.mpi`. Only one process writes the summary: this one, or rank 0.
+The jobs go through the executor validation shares
+(:mod:`vibrofeed.engine.batch`), longest expected first: without MPI,
+``workers`` jobs at once, each waited for by a thread (the threads only wait
+for their worker processes and analyse); under ``mpirun``, across groups of
+``ranks_per_run`` ranks, rank 0 dispatching. Only one process writes the
+summary: this one, or rank 0.
 """
 
 from __future__ import annotations
 
 import json
 import os
-import queue
 import shlex
 import sys
-import threading
 import time
-from collections import deque
 from pathlib import Path
 
 from ..decks import Deck
+from ..engine import batch
+from ..engine.runner import run_deck
 from ..errors import RunError, UsageError, VibrofeedError
 from . import folder as F
 from . import summary as S
@@ -58,8 +60,6 @@ def _one_line(text: str) -> str:
 def run_job(job: Job, folder: Path, deck: Deck, ranks: int, parameters: list[str],
             command: str = "", warn=None) -> tuple[dict, bool]:
     """(summary row, computed here) of one job; never raises for the job's own failure."""
-    from ..engine.runner import run_deck
-
     row = base_row(job, parameters)
     started = time.monotonic()
 
@@ -109,29 +109,34 @@ class Recorder:
 
 def run_local(todo: list[Job], workers: int, run_one, recorder: Recorder,
               progress: SweepProgress) -> None:
-    """``workers`` jobs at a time, each in a daemon thread (an interrupted sweep
-    exits at once; its runs' workers get SIGTERM as their parent dies)."""
-    waiting = deque(dispatch_order(todo))
-    finished: queue.Queue = queue.Queue()
-    running = 0
+    """``workers`` jobs at a time, longest expected first (the executor's local pool)."""
+    batch.run_local(dispatch_order(todo), workers, run_one, progress.started,
+                    lambda job, answer: recorder.add(job, *answer))
 
-    def work(job: Job) -> None:
-        try:
-            finished.put((job, *run_one(job)))
-        except BaseException as exc:  # noqa: BLE001 (re-raised in the main thread)
-            finished.put((job, exc, False))
 
-    while waiting or running:
-        while waiting and running < workers:
-            job = waiting.popleft()
-            progress.started(job)
-            threading.Thread(target=work, args=(job,), daemon=True).start()
-            running += 1
-        job, row, computed = finished.get()
-        running -= 1
-        if isinstance(row, BaseException):
-            raise row
-        recorder.add(job, row, computed)
+def run_mpi(comm, todo: list[Job], setup: dict, run_one, recorder: Recorder,
+            progress: SweepProgress) -> None:
+    """Rank 0 of an ``mpirun``: the jobs, longest expected first, across the groups of
+    ``ranks_per_run`` ranks (the executor's MPI dispatch; the other ranks run :func:`serve`)."""
+    batch.dispatch(comm, dispatch_order(todo), setup, run_one, progress.started,
+                   lambda job, answer: recorder.add(job, *answer))
+
+
+def serve(comm) -> int:
+    """The life of an ``mpirun`` rank other than 0: lead a group of ranks running the jobs
+    rank 0 hands out, or hold a slot of one (:func:`vibrofeed.engine.batch.serve`)."""
+    return batch.serve(comm, _group_leader)
+
+
+def _group_leader(setup: dict):
+    """The job function of a group's leader, from the setup rank 0 sends (:func:`run_mpi`)."""
+    deck, folder = Deck(setup["deck"]), Path(setup["folder"])
+
+    def warn(job, message):
+        print(f"vibrofeed: warning: job {job.index}: {message}", file=sys.stderr, flush=True)
+
+    return lambda job: run_job(job, folder, deck, setup["ranks"], setup["parameters"], setup["command"],
+                               warn)
 
 
 def describe(jobs: list[Job], spec: SweepSpec, states: dict[int, str]) -> str:
@@ -223,11 +228,9 @@ def _run(spec, deck, jobs, folder, ours, parameters, groups, workers, retry_fail
         if comm is None:
             run_local(todo, workers, run_one, recorder, progress)
         else:
-            from .mpi import dispatch
-
             setup = {"deck": str(deck.path), "folder": str(folder), "ranks": spec.ranks_per_run,
                      "parameters": parameters, "command": command}
-            dispatch(comm, todo, spec.ranks_per_run, setup, run_one, recorder, progress)
+            run_mpi(comm, todo, setup, run_one, recorder, progress)
     finally:
         progress.close()
     rows = list(recorder.rows.values())
