@@ -22,11 +22,10 @@ and fills ``self.results`` through hooks that :meth:`run` calls in order:
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from ..errors import InputError
+from ..jsonable import to_json
 
 
 class Results(dict):
@@ -70,21 +69,6 @@ class Results(dict):
 
     def __reduce__(self):  # pickle as a plain mapping (attribute access would find no keys yet)
         return type(self), (dict(self),)
-
-
-def to_json(value):
-    """``value`` with numpy arrays and scalars as lists and numbers, NaN as None."""
-    if isinstance(value, dict):
-        return {str(k): to_json(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [to_json(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return to_json(value.tolist())
-    if isinstance(value, np.generic):
-        value = value.item()
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
 
 
 class AnalysisBase:

@@ -36,6 +36,7 @@ import math
 import numpy as np
 from scipy.interpolate import CubicHermiteSpline, PPoly
 
+from ..models.constants import G
 from .base import AnalysisBase
 
 LIFT_OFF_MIN_FRAMES = 3  # contact must last this many frames to count as sustained
@@ -43,7 +44,7 @@ LIFT_OFF_MIN_FRAMES = 3  # contact must last this many frames to count as sustai
 
 def _normal_gravity(result) -> float:
     """Gravity's component into the surface [m/s^2] (the incline tilts it)."""
-    g = result.derived.get("g", 9.81)
+    g = result.derived.get("g", G)
     return g * math.cos(math.radians(float(result.parameters.get("incline", 0.0))))
 
 

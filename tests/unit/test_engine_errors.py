@@ -1,7 +1,8 @@
 """LIGGGHTS error messages and the deck line they come from, read off logs."""
 
 from vibrofeed.decks import Deck
-from vibrofeed.engine.errors import EngineError, failed_command, find_error
+from vibrofeed.engine.log import failed_command, find_error
+from vibrofeed.errors import EngineError
 
 MESH_ERROR = (  # as LIGGGHTS prints it, the trailing space of its first line included
     "Setting up run at Sun Nov 22 06:20:32 2026\n"

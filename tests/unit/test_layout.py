@@ -259,7 +259,7 @@ def test_light_commands_load_no_heavy_module(argv):
 
 def test_results_and_analyses_load_no_plotting_library():
     loaded = _modules_loaded_by("import vibrofeed.results.reader, vibrofeed.results.check, "
-                                "vibrofeed.postproc, vibrofeed.engine.runner, vibrofeed.summary")
+                                "vibrofeed.postproc, vibrofeed.engine.runner, vibrofeed.run_summary")
     assert not {m.split(".")[0] for m in loaded} & {"matplotlib", "pyvista"}
     assert not any(m.startswith("vibrofeed.validation") for m in loaded)
 

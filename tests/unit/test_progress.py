@@ -3,7 +3,7 @@ whether or not a progress bar is shown."""
 
 import io
 
-from vibrofeed.progress import RunProgress
+from vibrofeed.run_progress import RunProgress
 
 
 def test_warnings_are_printed_without_a_bar():

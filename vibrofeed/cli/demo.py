@@ -39,8 +39,8 @@ def run(args) -> int:
     from ..decks import Deck
     from ..engine.runner import run_deck
     from ..parameters import parse_assignments
-    from ..progress import RunProgress
-    from ..summary import run_summary
+    from ..run_progress import RunProgress
+    from ..run_summary import run_summary
 
     folder = Path(args.output)
     if folder.exists() and not folder.is_dir():

@@ -42,11 +42,11 @@ def run(args) -> int:
     from ..decks import Deck
     from ..engine.runner import run_deck
     from ..parameters import parse_assignments
-    from ..progress import RunProgress
+    from ..run_progress import RunProgress
 
     # The summary's analyses import scipy (~0.3 s): load them while the worker starts
     # and runs, not before (a short single-part run lasts about as long).
-    warm = threading.Thread(target=importlib.import_module, args=("vibrofeed.summary",), daemon=True)
+    warm = threading.Thread(target=importlib.import_module, args=("vibrofeed.run_summary",), daemon=True)
     warm.start()
     deck = Deck.find(args.deck)
     params = parse_assignments(args.param)
@@ -61,7 +61,7 @@ def run(args) -> int:
         print(f"vibrofeed: kept {result.output}: a complete result of the same run "
               f"(run id {result.run_id[:12]}...)", file=sys.stderr)
     warm.join()
-    from ..summary import run_summary
+    from ..run_summary import run_summary
 
     print(run_summary(result))
     return 0

@@ -34,7 +34,7 @@ from ..decks import Deck
 from ..errors import EngineError, OutputError, RunError, UsageError
 from ..parameters import resolve
 from ..results import layout as L
-from .errors import failed_command, find_error
+from .log import failed_command, find_error
 from .protocol import MARK
 
 # SLURM_ too: under a Slurm allocation (a sweep started by srun or mpirun in a batch job) the

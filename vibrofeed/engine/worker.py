@@ -30,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..models.constants import G
 from .bodies import aggregate, atom_parts, spheres
 from .protocol import MARK
 
@@ -151,7 +152,7 @@ class BulkFrames:
         from .outlet import Outlet, gravity_vector
 
         self.n_spheres = int(round(lmp.variable("body_spheres")))
-        g = lmp.variable("g") if lmp.has_variable("g") else 9.81
+        g = lmp.variable("g") if lmp.has_variable("g") else G
         incline = float(spec.get("variables", {}).get("incline", 0.0))
         self.outlet = Outlet(lmp.variable("outlet_x"), lmp.variable("catch_z"),
                              gravity_vector(g, incline))

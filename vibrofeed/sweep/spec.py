@@ -213,6 +213,40 @@ def load(path) -> SweepSpec:
     return parse(text, path)
 
 
+class _Reader:
+    """What the steps of :func:`parse` share: the file's name and key lines, to name the
+    line of a refusal, and which key sets each parameter (a parameter is set once)."""
+
+    def __init__(self, source: Path, lines: dict[tuple, int]):
+        self.source, self.lines = source, lines
+        self.owner: dict[str, tuple] = {}  # parameter -> the key path that sets it
+
+    def where(self, *key) -> str:
+        while key and key not in self.lines:
+            key = key[:-1]
+        return f"{self.source}:{self.lines[key]}" if key else str(self.source)
+
+    def fail(self, key: tuple, message: str):
+        raise InputError(f"{self.where(*key)}: {message}")
+
+    def claim(self, name: str, key: tuple) -> None:
+        if name in self.owner:
+            self.fail(key, f"parameter {name!r} is set twice (also at line "
+                           f"{self.lines.get(self.owner[name], '?')}); "
+                           "a parameter is fixed, or in one grid list, zip group or the points")
+        self.owner[name] = key
+
+    def values_list(self, key: tuple, name: str, value) -> list:
+        if not isinstance(value, list) or not value:
+            self.fail(key, f"{name} must be a non-empty list of values, got {value!r}")
+        for v in value:
+            if not _scalar(v):
+                self.fail(key, f"{name}: {v!r} is not a number or a string")
+        if len({json.dumps(v) for v in value}) != len(value):
+            self.fail(key, f"{name} lists a value twice: {value!r} (replicates repeat a setting)")
+        return value
+
+
 def parse(text: str, source: Path | str = "sweep.toml") -> SweepSpec:
     source = Path(source)
     try:
@@ -220,109 +254,107 @@ def parse(text: str, source: Path | str = "sweep.toml") -> SweepSpec:
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"{source}: not valid TOML: {exc}") from None
     lines = key_lines(text)
+    r = _Reader(source, lines)
+    numbers = _top_level(data, r)
+    fixed = _fixed(data, r)
+    axes = _grid_axes(data, r) + _zip_axes(data, r) + _point_axes(data, r)
+    if "seed" in r.owner and r.owner["seed"][0] != "fixed" and numbers["replicates"] > 1:
+        r.fail(r.owner["seed"], "seed is varied and replicates > 1: replicates set the seeds "
+                                "(seed, seed+1, ...); fix seed or set replicates = 1")
+    return SweepSpec(source=source, text=text, data=data, deck=data["deck"].strip(),
+                     ranks_per_run=numbers["ranks_per_run"], replicates=numbers["replicates"],
+                     description=data.get("description", ""), fixed=fixed, axes=axes, lines=lines)
 
-    def where(*key) -> str:
-        while key and key not in lines:
-            key = key[:-1]
-        return f"{source}:{lines[key]}" if key else str(source)
 
-    def fail(key: tuple, message: str):
-        raise InputError(f"{where(*key)}: {message}")
-
+def _top_level(data: dict, r: _Reader) -> dict[str, int]:
+    """Check the top-level keys, the deck and the sections' types; ranks_per_run and replicates."""
     for key in data:
         if key not in TOP_KEYS:
-            fail((key,), f"unknown key {key!r}; a sweep file has {', '.join(TOP_KEYS)} "
-                         "(deck parameters go in [fixed], [grid], [zip.NAME] or [[point]])")
+            r.fail((key,), f"unknown key {key!r}; a sweep file has {', '.join(TOP_KEYS)} "
+                           "(deck parameters go in [fixed], [grid], [zip.NAME] or [[point]])")
     if "deck" not in data:
-        fail((), "no deck: add deck = \"bulk_feeder\" (a deck name or file)")
+        r.fail((), "no deck: add deck = \"bulk_feeder\" (a deck name or file)")
     if not isinstance(data["deck"], str) or not data["deck"].strip():
-        fail(("deck",), "deck must be a deck name or a file name (a string)")
+        r.fail(("deck",), "deck must be a deck name or a file name (a string)")
     numbers = {}
     for key, default in (("ranks_per_run", 1), ("replicates", 1)):
         value = data.get(key, default)
         if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-            fail((key,), f"{key} must be a whole number >= 1, got {value!r}")
+            r.fail((key,), f"{key} must be a whole number >= 1, got {value!r}")
         numbers[key] = value
     if not isinstance(data.get("description", ""), str):
-        fail(("description",), "description must be a string")
+        r.fail(("description",), "description must be a string")
     for key in SECTIONS:
         if key in data and not isinstance(data[key], dict if key != "point" else list):
             form = "[[point]] tables" if key == "point" else f"a table [{key}]"
-            fail((key,), f"{key} must be {form}")
+            r.fail((key,), f"{key} must be {form}")
+    return numbers
 
-    owner: dict[str, tuple] = {}  # parameter -> the key path that sets it
 
-    def claim(name: str, key: tuple) -> None:
-        if name in owner:
-            fail(key, f"parameter {name!r} is set twice (also at line {lines.get(owner[name], '?')}); "
-                      "a parameter is fixed, or in one grid list, zip group or the points")
-        owner[name] = key
-
+def _fixed(data: dict, r: _Reader) -> dict:
+    """The [fixed] parameters: one value each."""
     fixed = {}
     for name, value in data.get("fixed", {}).items():
         if not _scalar(value):
-            fail(("fixed", name), f"[fixed] {name} must be one number or string, got {value!r} "
-                                  "(lists of values go in [grid] or [zip.NAME])")
-        claim(name, ("fixed", name))
+            r.fail(("fixed", name), f"[fixed] {name} must be one number or string, got {value!r} "
+                                    "(lists of values go in [grid] or [zip.NAME])")
+        r.claim(name, ("fixed", name))
         fixed[name] = value
+    return fixed
 
-    axes: list[Axis] = []
 
-    def values_list(key: tuple, name: str, value) -> list:
-        if not isinstance(value, list) or not value:
-            fail(key, f"{name} must be a non-empty list of values, got {value!r}")
-        for v in value:
-            if not _scalar(v):
-                fail(key, f"{name}: {v!r} is not a number or a string")
-        if len({json.dumps(v) for v in value}) != len(value):
-            fail(key, f"{name} lists a value twice: {value!r} (replicates repeat a setting)")
-        return value
-
+def _grid_axes(data: dict, r: _Reader) -> list[Axis]:
+    """One axis per [grid] list."""
+    axes = []
     for name, value in data.get("grid", {}).items():
         key = ("grid", name)
-        claim(name, key)
-        axes.append(Axis("grid", name, [name], [{name: v} for v in values_list(key, name, value)]))
+        r.claim(name, key)
+        axes.append(Axis("grid", name, [name], [{name: v} for v in r.values_list(key, name, value)]))
+    return axes
+
+
+def _zip_axes(data: dict, r: _Reader) -> list[Axis]:
+    """One axis per [zip.NAME] group: its lists, of equal lengths, vary together."""
+    axes = []
     for group, table in data.get("zip", {}).items():
         if not isinstance(table, dict) or not table:
-            fail(("zip", group), f"zip.{group} must be a table of lists: [zip.{group}] then name = [...]")
+            r.fail(("zip", group), f"zip.{group} must be a table of lists: [zip.{group}] then name = [...]")
         length = None
         columns = {}
         for name, value in table.items():
             key = ("zip", group, name)
-            claim(name, key)
-            columns[name] = values_list(key, f"zip.{group}.{name}", value)
+            r.claim(name, key)
+            columns[name] = r.values_list(key, f"zip.{group}.{name}", value)
             if length is not None and len(value) != length:
-                fail(key, f"zip.{group}: {name} has {len(value)} values, the lists before it "
-                          f"{length}; lists that vary together need equal lengths")
+                r.fail(key, f"zip.{group}: {name} has {len(value)} values, the lists before it "
+                            f"{length}; lists that vary together need equal lengths")
             length = len(value)
         rows = [{name: columns[name][i] for name in columns} for i in range(length)]
-        if len({json.dumps(r, sort_keys=True) for r in rows}) != len(rows):
-            fail(("zip", group), f"zip.{group} lists a setting twice")
+        if len({json.dumps(row, sort_keys=True) for row in rows}) != len(rows):
+            r.fail(("zip", group), f"zip.{group} lists a setting twice")
         axes.append(Axis("zip", group, list(columns), rows))
+    return axes
+
+
+def _point_axes(data: dict, r: _Reader) -> list[Axis]:
+    """The [[point]] tables, explicit settings: one axis, or none without them."""
     points = data.get("point", [])
-    if points:
-        keys: list[str] = []
-        for i, point in enumerate(points):
-            if not isinstance(point, dict) or not point:
-                fail(("point", i), "each [[point]] must set at least one parameter")
-            for name, value in point.items():
-                if not _scalar(value):
-                    fail(("point", i, name), f"[[point]] {name} must be one number or string, "
-                                             f"got {value!r}")
-                if name not in keys:  # first [[point]] naming it
-                    claim(name, ("point", i, name))
-                    keys.append(name)
-        if len({json.dumps(p, sort_keys=True) for p in points}) != len(points):
-            fail(("point",), "two [[point]] tables are the same setting")
-        axes.append(Axis("point", "point", keys, [dict(p) for p in points]))
-
-    if "seed" in owner and owner["seed"][0] != "fixed" and numbers["replicates"] > 1:
-        fail(owner["seed"], "seed is varied and replicates > 1: replicates set the seeds "
-                            "(seed, seed+1, ...); fix seed or set replicates = 1")
-
-    return SweepSpec(source=source, text=text, data=data, deck=data["deck"].strip(),
-                     ranks_per_run=numbers["ranks_per_run"], replicates=numbers["replicates"],
-                     description=data.get("description", ""), fixed=fixed, axes=axes, lines=lines)
+    if not points:
+        return []
+    keys: list[str] = []
+    for i, point in enumerate(points):
+        if not isinstance(point, dict) or not point:
+            r.fail(("point", i), "each [[point]] must set at least one parameter")
+        for name, value in point.items():
+            if not _scalar(value):
+                r.fail(("point", i, name), f"[[point]] {name} must be one number or string, "
+                                           f"got {value!r}")
+            if name not in keys:  # first [[point]] naming it
+                r.claim(name, ("point", i, name))
+                keys.append(name)
+    if len({json.dumps(p, sort_keys=True) for p in points}) != len(points):
+        r.fail(("point",), "two [[point]] tables are the same setting")
+    return [Axis("point", "point", keys, [dict(p) for p in points])]
 
 
 def describe_change(old: dict, new: dict) -> str:

@@ -25,6 +25,8 @@ import os
 import tempfile
 from pathlib import Path
 
+from ..jsonable import to_json
+
 FORMAT = "vibrofeed-sweep-summary"
 FORMAT_VERSION = (1, 0)
 H5_NAME, CSV_NAME = "summary.h5", "summary.csv"
@@ -175,6 +177,6 @@ def read(folder) -> tuple[list[dict], dict]:
             elif ds.dtype.kind == "i":
                 data[c] = [int(v) for v in ds[()]]
             else:
-                data[c] = [None if math.isnan(v) else float(v) for v in ds[()]]
+                data[c] = to_json(ds[()])  # NaN: None
     n = len(data[cols[0]]) if cols else 0
     return [{c: data[c][i] for c in cols} for i in range(n)], meta

@@ -7,8 +7,7 @@ included, so the last deck command echoed before the ERROR is the one that
 failed, and :attr:`Deck.commands <vibrofeed.decks.Deck>` (includes expanded,
 each command with its file and line) says where it is written.
 
-The exception classes live in :mod:`vibrofeed.errors`; the names are
-re-exported here for the engine's readers.
+The exception classes live in :mod:`vibrofeed.errors`.
 """
 
 from __future__ import annotations
@@ -17,7 +16,6 @@ import re
 from dataclasses import dataclass
 
 from ..decks import Command, Deck, normalize
-from ..errors import EngineError, RunError  # noqa: F401  (re-exported)
 
 _ERROR_START = re.compile(r"^ERROR(?: on proc (?P<proc>\d+))?:\s?(?P<text>.*)$")
 _SOURCE_LOC = re.compile(r"\s*\((?:\./)?src/[^():]+:\d+\)\s*$|\s*\([\w./-]+\.(?:cpp|h):\d+\)\s*$")
