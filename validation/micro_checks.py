@@ -38,6 +38,7 @@ import numpy as np
 from ..errors import CaseError
 from ..models import deck as dm
 from ..models.constants import G
+from . import plots
 from .outcome import row
 
 
@@ -102,7 +103,7 @@ def vdw_pulloff(case, runs, out, fig_dir: Path) -> None:
         model = _adhesion(p).pulloff
         out.rows.append(row(case, "pulloff", run.label, model, dem, "N"))
         panels.append({"label": run.label, "hamaker": run.number("hamaker"), "model": model, "dem": dem})
-    out.figures.append(_plot_pulloff(case, panels, fig_dir / "pulloff.png"))
+    out.figures.append(plots.plot_vdw_pulloff(case, panels, fig_dir / "pulloff.png"))
 
 
 # ----------------------------------------------------------------- kind: sticking
@@ -125,7 +126,7 @@ def sticking(case, runs, out, fig_dir: Path) -> None:
         out.rows.append(row(case, "leaves", run.label, model, left))
         points.append({"hamaker": run.number("hamaker"), "gamma": gamma, "gamma_c": gamma_c,
                        "left": bool(left), "max_gap": float(tr["gap"].max())})
-    out.figures.append(_plot_sticking(case, points, fig_dir / "sticking.png"))
+    out.figures.append(plots.plot_sticking(case, points, fig_dir / "sticking.png"))
 
 
 # ----------------------------------------------------------------- kind: squeeze_launch
@@ -169,65 +170,7 @@ def squeeze_launch(case, runs, out, fig_dir: Path) -> None:
         out.rows.append(row(case, "max_gap", run.label, model.max_gap, tr["gap"][k], "m"))
         panels.append({"label": run.label, "dem_t": tr["t"][flight] - t_l, "dem_gap": tr["gap"][flight],
                        "model_t": model.t, "model_gap": model.gap, "freq": freq})
-    out.figures.append(_plot_launch(case, panels, fig_dir / "launch.png"))
-
-
-# ----------------------------------------------------------------- figures
-def _plot_pulloff(case, panels, path: Path) -> Path:
-    from vibrofeed.figures import pyplot, save
-
-    from .plots import DEM_STYLE, MODEL_STYLE
-
-    plt = pyplot()
-    fig, ax = plt.subplots(figsize=(6, 3.6), layout="constrained")
-    x = np.arange(len(panels))
-    ax.plot(x, [1e6 * q["model"] for q in panels], "s", mfc="none", **MODEL_STYLE)
-    ax.plot(x, [1e6 * q["dem"] for q in panels], "o", **{**DEM_STYLE, "lw": 0})
-    ax.set_xticks(x, [q["label"] for q in panels], rotation=20, fontsize=7)
-    ax.set_ylabel("pull-off [uN]")
-    ax.legend(fontsize=8)
-    fig.suptitle(case.title, fontsize=9)
-    return save(fig, path)
-
-
-def _plot_sticking(case, points, path: Path) -> Path:
-    from vibrofeed.figures import pyplot, save
-
-    plt = pyplot()
-    fig, ax = plt.subplots(figsize=(6, 3.6), layout="constrained")
-    a = sorted({q["hamaker"] for q in points})
-    line = {q["hamaker"]: q["gamma_c"] for q in points}
-    ax.plot(a, [line[h] for h in a], "k--", lw=1, label="model: Gamma_c = 1 + F_pulloff / (m g)")
-    for left, style in ((True, dict(marker="^", color="tab:red", label="DEM: leaves")),
-                        (False, dict(marker="v", color="tab:blue", label="DEM: stays"))):
-        sel = [q for q in points if q["left"] == left]
-        if sel:
-            ax.plot([q["hamaker"] for q in sel], [q["gamma"] for q in sel], ls="none", **style)
-    ax.set_xlabel("Hamaker constant [J]")
-    ax.set_ylabel("Gamma = a w^2 / g")
-    ax.legend(fontsize=8)
-    fig.suptitle(case.title, fontsize=9)
-    return save(fig, path)
-
-
-def _plot_launch(case, panels, path: Path) -> Path:
-    from vibrofeed.figures import pyplot, save
-
-    from .plots import DEM_STYLE, MODEL_STYLE
-
-    plt = pyplot()
-    fig, axes = plt.subplots(len(panels), 1, figsize=(7, 2.3 * len(panels)), squeeze=False,
-                             layout="constrained")
-    for ax, q in zip(axes[:, 0], panels):
-        T = 1.0 / q["freq"]
-        ax.plot(q["dem_t"] / T, 1e6 * q["dem_gap"], **DEM_STYLE)
-        ax.plot(q["model_t"] / T, 1e6 * q["model_gap"], **{**MODEL_STYLE, "label": "ODE of §3.2"})
-        ax.set_ylabel("gap [um]")
-        ax.set_title(q["label"], fontsize=9, loc="left")
-    axes[-1, 0].set_xlabel("(t - t_lift-off) / T")
-    axes[0, 0].legend(fontsize=8)
-    fig.suptitle(case.title, fontsize=9)
-    return save(fig, path)
+    out.figures.append(plots.plot_launch(case, panels, fig_dir / "launch.png"))
 
 
 #: The kinds of this module, merged into ``crosscheck.KINDS``.

@@ -17,12 +17,29 @@ MODEL_STYLE = dict(color="black", lw=1.0, ls="--", label="model")
 SURFACE_STYLE = dict(color="tab:blue", lw=0.8, alpha=0.7, label="surface")
 
 
+def _column(n: int, width: float, height: float):
+    """(figure, axes) of ``n`` panels stacked, each ``height`` inches high."""
+    fig, axes = pyplot().subplots(n, 1, figsize=(width, height * n), squeeze=False, layout="constrained")
+    return fig, axes[:, 0]
+
+
+def _finish(fig, axes, xlabel: str | None, title: str | None, path: Path, legend: dict | None = None,
+             title_size: int = 10) -> Path:
+    """A column's x label under its last panel, the legend in its first (``legend``: its
+    options; None: each panel has its own), the title over it all; saved to ``path``."""
+    if xlabel is not None:
+        axes[-1].set_xlabel(xlabel)
+    if legend is not None:
+        axes[0].legend(**legend)
+    if title is not None:
+        fig.suptitle(title, fontsize=title_size)
+    return save(fig, path)
+
+
 def plot_flights(case, panels: list[dict], path: Path) -> Path:
     """Height of the part's lowest point and of the surface vs time, per sweep point."""
-    plt = pyplot()
-    fig, axes = plt.subplots(len(panels), 1, figsize=(8, 2.3 * len(panels)), squeeze=False,
-                             layout="constrained")
-    for ax, p in zip(axes[:, 0], panels):
+    fig, axes = _column(len(panels), 8, 2.3)
+    for ax, p in zip(axes, panels):
         T, um = p["T"], 1e6
         surf = np.interp(p["dem_t"], p["surface_t"], p["surface_z"])
         ax.plot(p["surface_t"] / T, p["surface_z"] * um, **SURFACE_STYLE)
@@ -30,10 +47,7 @@ def plot_flights(case, panels: list[dict], path: Path) -> Path:
         ax.plot(p["model_t"] / T, (p["model_gap"] + p["surface_z"]) * um, **MODEL_STYLE)
         ax.set_ylabel("height [um]")
         ax.set_title(p["label"], fontsize=9, loc="left")
-    axes[-1, 0].set_xlabel("t / T")
-    axes[0, 0].legend(fontsize=8, loc="upper right")
-    fig.suptitle(case.title, fontsize=10)
-    return save(fig, path)
+    return _finish(fig, axes, "t / T", case.title, path, dict(fontsize=8, loc="upper right"))
 
 
 def plot_speed_curve(case, runs, points, axis: str, path: Path) -> Path:
@@ -94,29 +108,21 @@ def plot_bifurcation(case, grid, diagram, dem_points, path: Path) -> Path:
 
 def plot_vertical(case, panels: list[dict], path: Path) -> Path:
     """Part displacement up the wall vs time: DEM, model and the wall itself."""
-    plt = pyplot()
-    fig, axes = plt.subplots(len(panels), 1, figsize=(8, 2.5 * len(panels)), squeeze=False,
-                             layout="constrained")
-    for ax, p in zip(axes[:, 0], panels):
+    fig, axes = _column(len(panels), 8, 2.5)
+    for ax, p in zip(axes, panels):
         T = p["T"]
         ax.plot(p["dem_t"] / T, p["surface_x"] * 1e3, **SURFACE_STYLE)
         ax.plot(p["dem_t"] / T, p["dem_x"] * 1e3, **DEM_STYLE)
         ax.plot(p["model_t"] / T, p["model_x"] * 1e3, **MODEL_STYLE)
         ax.set_ylabel("up the wall [mm]")
         ax.set_title(p["label"], fontsize=9, loc="left")
-    axes[-1, 0].set_xlabel("t / T")
-    axes[0, 0].legend(fontsize=8)
-    fig.suptitle(case.title, fontsize=10)
-    return save(fig, path)
+    return _finish(fig, axes, "t / T", case.title, path, dict(fontsize=8))
 
 
 def plot_replay(results, path, engine: str = "model") -> Path:
     """Measured and predicted part position, and the platform, per trial."""
-    plt = pyplot()
-    path = Path(path)
-    fig, axes = plt.subplots(len(results), 1, figsize=(8, 2.8 * len(results)), squeeze=False,
-                             layout="constrained")
-    for ax, r in zip(axes[:, 0], results):
+    fig, axes = _column(len(results), 8, 2.8)
+    for ax, r in zip(axes, results):
         ax.plot(r.t, r.platform_mm, **{**SURFACE_STYLE, "label": "platform"})
         ax.plot(r.t, r.measured_mm, color="black", lw=1.2, label="part, measured")
         ax.plot(r.t, r.predicted_mm, color=DEM_STYLE["color"], lw=1.2, ls="--",
@@ -124,26 +130,20 @@ def plot_replay(results, path, engine: str = "model") -> Path:
         ax.set_ylabel("vertical displacement [mm]")
         ax.set_title(f"{r.name}: F_n = {r.normal_force:.3g} N, mu_k = {r.mu_k:.3g}; "
                      f"mean abs error {r.mean_abs_error_mm:.3f} mm", fontsize=9, loc="left")
-    axes[-1, 0].set_xlabel("t [s]")
-    axes[0, 0].legend(fontsize=8)
-    return save(fig, path)
+    return _finish(fig, axes, "t [s]", None, Path(path), dict(fontsize=8))
 
 
 def plot_pulloff(case, panels: list[dict], path: Path) -> Path:
     """Tension on the pulled sphere against time, with JKR's pull-off, per run."""
-    plt = pyplot()
-    fig, axes = plt.subplots(len(panels), 1, figsize=(7, 2.4 * len(panels)), squeeze=False,
-                             layout="constrained")
-    for ax, p in zip(axes[:, 0], panels):
+    fig, axes = _column(len(panels), 7, 2.4)
+    for ax, p in zip(axes, panels):
         ax.plot(p["t"], 1e6 * p["tension"], **DEM_STYLE)
         ax.axhline(1e6 * p["model"], **{**MODEL_STYLE, "label": "JKR 1.5 pi gamma R*"})
         ax.set_ylim(-0.5e6 * p["model"], 1.3e6 * p["model"])  # the pull-off, not the initial push
         ax.set_ylabel("tension [uN]")
         ax.set_title(p["label"], fontsize=9, loc="left")
         ax.legend(fontsize=8)
-    axes[-1, 0].set_xlabel("time [s]")
-    fig.suptitle(case.title, fontsize=10)
-    return save(fig, path)
+    return _finish(fig, axes, "time [s]", case.title, path)
 
 
 def plot_reference(case, runs, figures: dict, ref, quantities: dict, path: Path) -> Path:
@@ -176,3 +176,42 @@ def plot_reference(case, runs, figures: dict, ref, quantities: dict, path: Path)
         ax.legend(fontsize=8)
     fig.suptitle(case.title, fontsize=10)
     return save(fig, path)
+
+
+# ----------------------------------------------------------------- the micro-scale kinds
+def plot_vdw_pulloff(case, panels: list[dict], path: Path) -> Path:
+    """Van der Waals pull-off per run: the model's and the DEM's at its lift-off."""
+    fig, (ax,) = _column(1, 6, 3.6)
+    x = np.arange(len(panels))
+    ax.plot(x, [1e6 * q["model"] for q in panels], "s", mfc="none", **MODEL_STYLE)
+    ax.plot(x, [1e6 * q["dem"] for q in panels], "o", **{**DEM_STYLE, "lw": 0})
+    ax.set_xticks(x, [q["label"] for q in panels], rotation=20, fontsize=7)
+    ax.set_ylabel("pull-off [uN]")
+    return _finish(fig, [ax], None, case.title, path, dict(fontsize=8), title_size=9)
+
+
+def plot_sticking(case, points: list[dict], path: Path) -> Path:
+    """Each run's Gamma against the Hamaker constant, left or stayed, under the model's Gamma_c."""
+    fig, (ax,) = _column(1, 6, 3.6)
+    a = sorted({q["hamaker"] for q in points})
+    line = {q["hamaker"]: q["gamma_c"] for q in points}
+    ax.plot(a, [line[h] for h in a], "k--", lw=1, label="model: Gamma_c = 1 + F_pulloff / (m g)")
+    for left, style in ((True, dict(marker="^", color="tab:red", label="DEM: leaves")),
+                        (False, dict(marker="v", color="tab:blue", label="DEM: stays"))):
+        sel = [q for q in points if q["left"] == left]
+        if sel:
+            ax.plot([q["hamaker"] for q in sel], [q["gamma"] for q in sel], ls="none", **style)
+    ax.set_ylabel("Gamma = a w^2 / g")
+    return _finish(fig, [ax], "Hamaker constant [J]", case.title, path, dict(fontsize=8), title_size=9)
+
+
+def plot_launch(case, panels: list[dict], path: Path) -> Path:
+    """The gap over the flight after lift-off through the air film: DEM and the §3.2 ODE."""
+    fig, axes = _column(len(panels), 7, 2.3)
+    for ax, q in zip(axes, panels):
+        T = 1.0 / q["freq"]
+        ax.plot(q["dem_t"] / T, 1e6 * q["dem_gap"], **DEM_STYLE)
+        ax.plot(q["model_t"] / T, 1e6 * q["model_gap"], **{**MODEL_STYLE, "label": "ODE of §3.2"})
+        ax.set_ylabel("gap [um]")
+        ax.set_title(q["label"], fontsize=9, loc="left")
+    return _finish(fig, axes, "(t - t_lift-off) / T", case.title, path, dict(fontsize=8), title_size=9)

@@ -21,7 +21,7 @@ DECK = "bulk_feeder"
 
 
 def add_arguments(p) -> None:
-    from .run import ranks
+    from .options import ranks
 
     p.add_argument("-o", "--output", default="results", metavar="DIR",
                    help="folder for the result, the picture and the plots (default: results)")

@@ -3,11 +3,7 @@ the conveying speed along the track and its dilute-limit model."""
 
 from __future__ import annotations
 
-import json
-import math
-from pathlib import Path
-
-from ..errors import UsageError
+from .options import add_output_arguments, fmt, plot_folder, print_figures
 
 DESCRIPTION = ("Feed rate of a bulk-feeder result: parts/s and mass/s leaving the track over the "
                "detected steady window (batch-means error), the mean conveying velocity over whole "
@@ -30,50 +26,22 @@ def add_arguments(p) -> None:
     add_output_arguments(p)
 
 
-def add_output_arguments(p) -> None:
-    """--json and --plot DIR, shared by the analysis commands."""
-    p.add_argument("--json", action="store_true", help="print the figures as JSON")
-    p.add_argument("--plot", metavar="DIR",
-                   help="write the figures (PNG) into DIR (created if missing; its parent must exist)")
-
-
-def plot_folder(path: str | None) -> Path | None:
-    """The figures' folder, checked before any work: created if missing, but a
-    mistyped parent is refused rather than created silently."""
-    if path is None:
-        return None
-    folder = Path(path)
-    if folder.exists() and not folder.is_dir():
-        raise UsageError(f"--plot {path}: not a folder")
-    if not folder.exists():
-        if not folder.absolute().parent.is_dir():
-            raise UsageError(f"--plot {path}: folder {folder.absolute().parent} does not exist")
-        folder.mkdir()
-    return folder
-
-
-def _fmt(value, scale: float = 1.0, spec: str = ".4g") -> str:
-    if value is None or (isinstance(value, float) and not math.isfinite(value)):
-        return "n/a"
-    return format(value * scale, spec)
-
-
 def table(s: dict) -> str:
     """The figures as the command prints them."""
     lines = [
-        f"feed rate      {_fmt(s['parts_per_s'])} ± {_fmt(s['parts_per_s_err'], spec='.2g')} parts/s, "
-        f"{_fmt(s['mass_per_s'], 1e6)} ± {_fmt(s['mass_per_s_err'], 1e6, '.2g')} mg/s",
-        f"steady window  {_fmt(s['steady_from'])} .. {_fmt(s['steady_to'])} s "
+        f"feed rate      {fmt(s['parts_per_s'])} ± {fmt(s['parts_per_s_err'], spec='.2g')} parts/s, "
+        f"{fmt(s['mass_per_s'], 1e6)} ± {fmt(s['mass_per_s_err'], 1e6, '.2g')} mg/s",
+        f"steady window  {fmt(s['steady_from'])} .. {fmt(s['steady_to'])} s "
         f"({s['n_events']} exits in the run analysed)",
-        f"conveying      {_fmt(s['mean_velocity'], 1e3)} ± {_fmt(s['mean_velocity_err'], 1e3, '.2g')} "
+        f"conveying      {fmt(s['mean_velocity'], 1e3)} ± {fmt(s['mean_velocity_err'], 1e3, '.2g')} "
         f"mm/s (whole-period displacement, {s['velocity_lag']} frames per interval)",
     ]
     if "model_velocity" in s:
         if s["model_velocity"] is None:
             lines.append(f"single part    n/a ({s['model_note']})")
         else:
-            lines.append(f"single part    {_fmt(s['model_velocity'], 1e3)} mm/s (model, dilute limit); "
-                         f"bulk / model = {_fmt(s['velocity_ratio'], spec='.3f')}"
+            lines.append(f"single part    {fmt(s['model_velocity'], 1e3)} mm/s (model, dilute limit); "
+                         f"bulk / model = {fmt(s['velocity_ratio'], spec='.3f')}"
                          + (f"; {s['model_note']}" if s["model_note"] else ""))
     if s.get("inserted") is not None:
         lines.append(f"mass balance   inserted {s['inserted']}, on track {s['on_track']}, exited "
@@ -91,10 +59,5 @@ def run(args) -> int:
                       bins=args.bins, model=not args.no_model).run()
         summary = fr.summary()
         figures = fr.plot(folder) if folder is not None else []
-    if args.json:
-        print(json.dumps(summary, indent=2))
-    else:
-        print(table(summary))
-        for path in figures:
-            print(f"figure: {path}")
+    print_figures(summary, figures, args.json, table)
     return 0

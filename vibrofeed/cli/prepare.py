@@ -4,16 +4,15 @@ from __future__ import annotations
 
 import shlex
 
+from .options import add_deck_arguments
+
 DESCRIPTION = ("Write the files a deck needs for a run (e.g. the bulk feeder's track mesh and clump "
                "templates) into DIR, as `vibrofeed run` does in its own folder, and print the "
                "`liggghts -in` line that runs the deck by hand with them.")
 
 
 def add_arguments(p) -> None:
-    p.add_argument("deck", metavar="DECK",
-                   help="deck file, or a deck name from decks/ (see `vibrofeed decks`)")
-    p.add_argument("-p", "--param", action="append", metavar="NAME=VALUE",
-                   help="set a deck parameter (repeatable; the geometry depends on them)")
+    add_deck_arguments(p, "the geometry depends on them")
     p.add_argument("-o", "--output", metavar="DIR", required=True,
                    help="folder for the files (created if missing)")
 

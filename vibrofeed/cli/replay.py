@@ -19,7 +19,7 @@ REPLAY_KEYS = ("mean_abs_error_mm", "max_displacement_mm", "final_measured_mm",
 
 
 def add_arguments(p) -> None:
-    from .run import ranks
+    from .options import ranks
 
     p.add_argument("trials", nargs="+", metavar="TRIAL.csv", help="measured trial files")
     p.add_argument("--mass", type=float, metavar="KG", help="part mass [kg]")

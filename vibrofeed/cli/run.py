@@ -7,28 +7,14 @@ import shlex
 import sys
 import threading
 
+from .options import add_deck_arguments, ranks
+
 DESCRIPTION = ("Run a deck through LIGGGHTS and write one H5MD result file "
                "(OUT.h5, with the LIGGGHTS log next to it as OUT.log).")
 
 
-def ranks(text: str) -> int:
-    """argparse type of -n: a positive whole number of MPI ranks."""
-    import argparse
-
-    try:
-        n = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a whole number of MPI ranks, got {text!r}") from None
-    if n < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1, got {n}")
-    return n
-
-
 def add_arguments(p) -> None:
-    p.add_argument("deck", metavar="DECK",
-                   help="deck file, or a deck name from decks/ (see `vibrofeed decks`)")
-    p.add_argument("-p", "--param", action="append", metavar="NAME=VALUE",
-                   help="set a deck parameter (repeatable; see `vibrofeed params DECK`)")
+    add_deck_arguments(p, "see `vibrofeed params DECK`")
     p.add_argument("-o", "--output", metavar="OUT.h5", help="result file (default: DECK.h5 here)")
     p.add_argument("-n", "--ranks", type=ranks, default=1, metavar="RANKS",
                    help="MPI ranks for LIGGGHTS (default 1)")

@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-import json
-
-from .feedrate import _fmt, add_output_arguments
+from .options import add_output_arguments, fmt, plot_folder, print_figures
 
 DESCRIPTION = ("Singulation of a bulk-feeder result over the steady window: inter-arrival times at "
                "the outlet (coefficient of variation), doubles (parts closer than a gap, or touching), "
@@ -33,11 +31,11 @@ def add_arguments(p) -> None:
 def table(s: dict) -> str:
     """The figures as the command prints them."""
     if s["gap"] is not None:
-        rule = f"closer than {_fmt(s['gap'], 1e3)} ms"
+        rule = f"closer than {fmt(s['gap'], 1e3)} ms"
         if s["gap_distance"] is not None:
-            rule += f" or {_fmt(s['gap_distance'], 1e6)} um"
+            rule += f" or {fmt(s['gap_distance'], 1e6)} um"
     elif s["gap_distance"]:
-        rule = f"closer than {_fmt(s['gap_distance'], 1e6)} um of clear track"
+        rule = f"closer than {fmt(s['gap_distance'], 1e6)} um of clear track"
     else:
         rule = "abreast or overlapping along the track"
     shown = list(s["cluster_sizes"].items())
@@ -45,30 +43,29 @@ def table(s: dict) -> str:
     if len(shown) > 8:
         sizes += f", ... up to {shown[-1][0]}"
     lines = [
-        f"window         {_fmt(s['steady_from'])} .. {_fmt(s['steady_to'])} s, "
+        f"window         {fmt(s['steady_from'])} .. {fmt(s['steady_to'])} s, "
         f"{s['n_arrivals']} arrivals",
-        f"inter-arrival  mean {_fmt(s['mean_interarrival'], 1e3)} ms, "
-        f"CV {_fmt(s['cv_interarrival'], spec='.3f')} (1: random, 0: periodic)",
-        f"doubles        {_fmt(s['doubles_rate'], 100, '.1f')} % of consecutive pairs "
-        f"({s['n_doubles']}, {_fmt(s['doubles_per_s'])} /s; {rule}, or touching)",
-        f"singulated     {_fmt(s['singulated_fraction'], 100, '.1f')} % of the parts at the outlet; "
-        f"mean clear gap {_fmt(s['mean_gap'], 1e6)} um "
-        f"(edge speed {_fmt(s['edge_velocity'], 1e3)} mm/s)",
+        f"inter-arrival  mean {fmt(s['mean_interarrival'], 1e3)} ms, "
+        f"CV {fmt(s['cv_interarrival'], spec='.3f')} (1: random, 0: periodic)",
+        f"doubles        {fmt(s['doubles_rate'], 100, '.1f')} % of consecutive pairs "
+        f"({s['n_doubles']}, {fmt(s['doubles_per_s'])} /s; {rule}, or touching)",
+        f"singulated     {fmt(s['singulated_fraction'], 100, '.1f')} % of the parts at the outlet; "
+        f"mean clear gap {fmt(s['mean_gap'], 1e6)} um "
+        f"(edge speed {fmt(s['edge_velocity'], 1e3)} mm/s)",
         f"clusters       per frame on the track, size: number = {sizes}; alone "
-        f"{_fmt(s['track_singulated_fraction'], 100, '.1f')} %",
+        f"{fmt(s['track_singulated_fraction'], 100, '.1f')} %",
     ]
     if s.get("face_up_fraction") is not None:
-        lines.append(f"orientation    face up {_fmt(s['face_up_fraction'], 100, '.1f')} %, face down "
-                     f"{_fmt(s['face_down_fraction'], 100, '.1f')} %, on edge "
-                     f"{_fmt(s['on_edge_fraction'], 100, '.1f')} %; aligned with the track "
-                     f"{_fmt(s['aligned_fraction'], 100, '.1f')} %")
+        lines.append(f"orientation    face up {fmt(s['face_up_fraction'], 100, '.1f')} %, face down "
+                     f"{fmt(s['face_down_fraction'], 100, '.1f')} %, on edge "
+                     f"{fmt(s['on_edge_fraction'], 100, '.1f')} %; aligned with the track "
+                     f"{fmt(s['aligned_fraction'], 100, '.1f')} %")
     return "\n".join(lines)
 
 
 def run(args) -> int:
     from ..postproc.singulation import Singulation
     from ..results.reader import Result
-    from .feedrate import plot_folder
 
     folder = plot_folder(args.plot)
     with Result(args.result) as result:
@@ -77,10 +74,5 @@ def run(args) -> int:
                          cluster_frames=args.cluster_frames).run()
         summary = sg.summary()
         figures = sg.plot(folder) if folder is not None else []
-    if args.json:
-        print(json.dumps(summary, indent=2))
-    else:
-        print(table(summary))
-        for path in figures:
-            print(f"figure: {path}")
+    print_figures(summary, figures, args.json, table)
     return 0

@@ -4,24 +4,13 @@ from __future__ import annotations
 
 import sys
 
+from .options import jobs
+
 DESCRIPTION = ("Run every job of a sweep file (a deck, fixed parameters, a grid, zipped lists or "
                "explicit points, replicates with distinct seeds) through the isolated runner, -j at a "
                "time or across the ranks of mpirun, and keep DIR/summary.h5 and DIR/summary.csv true "
                "after every job. A rerun skips finished jobs (their files checked) and retries failed "
                "ones with --retry-failed.")
-
-
-def workers(text: str) -> int:
-    """argparse type of -j: a positive whole number of jobs."""
-    import argparse
-
-    try:
-        n = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a whole number of jobs, got {text!r}") from None
-    if n < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1, got {n}")
-    return n
 
 
 def add_arguments(p) -> None:
@@ -32,7 +21,7 @@ def add_arguments(p) -> None:
                    help="check the sweep, print the job table (and what a rerun would skip), run nothing")
     p.add_argument("--retry-failed", action="store_true",
                    help="run the jobs the summary lists as failed again")
-    p.add_argument("-j", "--jobs", type=workers, default=1, metavar="K",
+    p.add_argument("-j", "--jobs", type=jobs, default=1, metavar="K",
                    help="jobs at a time without mpirun (default 1; each uses ranks_per_run ranks)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
 

@@ -12,7 +12,7 @@ DESCRIPTION = ("Summarise a sweep folder (the -o DIR of `vibrofeed sweep`, read 
 
 
 def add_arguments(p) -> None:
-    from .feedrate import add_output_arguments
+    from .options import add_output_arguments
 
     p.add_argument("folder", metavar="DIR", help="a sweep's output folder (holding summary.h5)")
     add_output_arguments(p)
@@ -20,7 +20,7 @@ def add_arguments(p) -> None:
 
 def run(args) -> int:
     from ..sweep.report import report, text
-    from .feedrate import plot_folder
+    from .options import plot_folder
 
     rep = report(args.folder, plot_folder(args.plot))
     print(json.dumps(rep, indent=2) if args.json else text(rep))

@@ -13,7 +13,7 @@ DESCRIPTION = ("Run each validation case (validation/cases/*.toml) through LIGGG
 
 
 def add_arguments(p) -> None:
-    from .run import ranks
+    from .options import jobs, ranks
 
     p.add_argument("cases", nargs="*", metavar="CASE", help="case names (default: all; see --list)")
     p.add_argument("-o", "--output", default="validation-results", metavar="DIR",
@@ -22,7 +22,7 @@ def add_arguments(p) -> None:
     p.add_argument("--json", action="store_true",
                    help="print the table as JSON rows (case, quantity, model, dem, rel_diff, "
                         "tolerance, passed)")
-    p.add_argument("-j", "--jobs", type=ranks, default=2, metavar="N",
+    p.add_argument("-j", "--jobs", type=jobs, default=2, metavar="N",
                    help="DEM runs at once (default 2)")
     p.add_argument("-n", "--ranks", type=ranks, default=1, metavar="RANKS",
                    help="MPI ranks per DEM run")

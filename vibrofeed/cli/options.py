@@ -1,0 +1,78 @@
+"""What several commands share: DECK and -p, the counts (-n RANKS, -j JOBS), --json and
+--plot DIR, and how the analysis commands print their figures."""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable
+from pathlib import Path
+
+from ..errors import UsageError
+
+
+def count(what: str) -> Callable[[str], int]:
+    """argparse type of a positive whole number of ``what`` (MPI ranks, jobs)."""
+    def parse(text: str) -> int:
+        import argparse
+
+        try:
+            n = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"must be a whole number of {what}, got {text!r}") from None
+        if n < 1:
+            raise argparse.ArgumentTypeError(f"must be at least 1, got {n}")
+        return n
+
+    return parse
+
+
+ranks = count("MPI ranks")
+jobs = count("jobs")
+
+
+def add_deck_arguments(p, param_help: str) -> None:
+    """DECK and -p NAME=VALUE, shared by the commands that run or prepare a deck."""
+    p.add_argument("deck", metavar="DECK",
+                   help="deck file, or a deck name from decks/ (see `vibrofeed decks`)")
+    p.add_argument("-p", "--param", action="append", metavar="NAME=VALUE",
+                   help=f"set a deck parameter (repeatable; {param_help})")
+
+
+def add_output_arguments(p) -> None:
+    """--json and --plot DIR, shared by the analysis commands."""
+    p.add_argument("--json", action="store_true", help="print the figures as JSON")
+    p.add_argument("--plot", metavar="DIR",
+                   help="write the figures (PNG) into DIR (created if missing; its parent must exist)")
+
+
+def plot_folder(path: str | None) -> Path | None:
+    """The figures' folder, checked before any work: created if missing, but a
+    mistyped parent is refused rather than created silently."""
+    if path is None:
+        return None
+    folder = Path(path)
+    if folder.exists() and not folder.is_dir():
+        raise UsageError(f"--plot {path}: not a folder")
+    if not folder.exists():
+        if not folder.absolute().parent.is_dir():
+            raise UsageError(f"--plot {path}: folder {folder.absolute().parent} does not exist")
+        folder.mkdir()
+    return folder
+
+
+def fmt(value, scale: float = 1.0, spec: str = ".4g") -> str:
+    """A figure of a table: ``value * scale`` in ``spec``, n/a when missing or not finite."""
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return "n/a"
+    return format(value * scale, spec)
+
+
+def print_figures(summary: dict, figures: list, as_json: bool, table: Callable[[dict], str]) -> None:
+    """An analysis command's output: the summary as JSON, or its table then the figures written."""
+    if as_json:
+        print(json.dumps(summary, indent=2))
+    else:
+        print(table(summary))
+        for path in figures:
+            print(f"figure: {path}")
