@@ -202,3 +202,35 @@ def test_a_result_without_an_outlet_is_refused(tmp_path):
             FeedRate(r, batches=1)
         with pytest.raises(InputError, match="two frames"):
             FeedRate(r).run(stop=1)
+
+
+# -- the dilute limit ------------------------------------------------------------------
+SINE = {"amp_t": ("4.97e-5", "m", "", "0"), "amp_n": ("2e-5", "m", "", "0"), "phase": ("0", "deg", "", "0"),
+        "mu": ("0.4", "", "", "0.5"), "restitution": ("0.2", "", "", "0.3")}
+
+
+def test_the_dilute_limit_is_the_single_part_model_of_the_decks_vibration(tmp_path):
+    from vibrofeed.models.constants import G
+    from vibrofeed.models.part_on_surface import PartParams, mean_velocity
+    from vibrofeed.models.surface import SineWaveform
+
+    exits = 0.1 + np.arange(200) / 250.0
+    with open_feeder(tmp_path, exits, speed=0.01, amp=4e-5, variables=SINE) as r:
+        fr = FeedRate(r).run().results
+        without = FeedRate(r, model=False).run()
+    # Gamma_n 0.32 < 1: sliding only, the model of Khan & Sarma §2.3.2 written out by hand
+    want = mean_velocity(SineWaveform(FREQ, 4.97e-5, 2e-5, 0.0), PartParams(0.4, 0.4, 0.2), 0.0, G).velocity
+    assert fr.model_velocity == pytest.approx(want, rel=1e-12) and want > 0
+    assert fr.model_note == ""
+    assert fr.velocity_ratio == pytest.approx(fr.mean_velocity / want, rel=1e-12)
+    assert fr.mean_velocity == pytest.approx(0.01, rel=1e-9)
+    assert not {"model_velocity", "model_note", "velocity_ratio"} & set(without.results)
+    assert list(without.summary())[-1] == "profile_count"
+
+
+def test_a_result_without_the_models_parameters_says_which_it_lacks(tmp_path):
+    with open_feeder(tmp_path, 0.1 + np.arange(50) / 100.0, amp=4e-5) as r:
+        fr = FeedRate(r).run()
+    assert fr.results.model_velocity is None and fr.results.velocity_ratio is None
+    assert fr.results.model_note == "the result lacks mu, restitution"
+    assert list(fr.summary())[-3:] == ["model_velocity", "model_note", "velocity_ratio"]
