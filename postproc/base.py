@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
-from ..jsonable import to_json
+from ..values import to_json
 
 
 class Results(dict):

@@ -50,11 +50,11 @@ def _settings(folder, start: float = STUDY_START) -> list[dict]:
     the fixed ones too, ``deck_parameters`` one job's resolved deck parameters."""
     import json
 
-    from vibrofeed.jsonable import to_json
     from vibrofeed.postproc.feedrate import FeedRate
     from vibrofeed.postproc.singulation import Singulation
     from vibrofeed.results.reader import Result
     from vibrofeed.sweep import report
+    from vibrofeed.values import to_json
 
     folder = Path(folder)
     rows, meta = report.load(folder)

@@ -3,7 +3,8 @@ the conveying speed along the track and its dilute-limit model."""
 
 from __future__ import annotations
 
-from .options import add_output_arguments, fmt, plot_folder, print_figures
+from ..values import fmt
+from .options import add_output_arguments, plot_folder, print_figures
 
 DESCRIPTION = ("Feed rate of a bulk-feeder result: parts/s and mass/s leaving the track over the "
                "detected steady window (batch-means error), the mean conveying velocity over whole "

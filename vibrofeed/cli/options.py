@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 import json
-import math
 from collections.abc import Callable
 from pathlib import Path
 
@@ -59,13 +58,6 @@ def plot_folder(path: str | None) -> Path | None:
             raise UsageError(f"--plot {path}: folder {folder.absolute().parent} does not exist")
         folder.mkdir()
     return folder
-
-
-def fmt(value, scale: float = 1.0, spec: str = ".4g") -> str:
-    """A figure of a table: ``value * scale`` in ``spec``, n/a when missing or not finite."""
-    if value is None or (isinstance(value, float) and not math.isfinite(value)):
-        return "n/a"
-    return format(value * scale, spec)
 
 
 def print_figures(summary: dict, figures: list, as_json: bool, table: Callable[[dict], str]) -> None:

@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from .options import add_output_arguments, fmt, plot_folder, print_figures
+from ..values import fmt
+from .options import add_output_arguments, plot_folder, print_figures
 
 DESCRIPTION = ("Singulation of a bulk-feeder result over the steady window: inter-arrival times at "
                "the outlet (coefficient of variation), doubles (parts closer than a gap, or touching), "

@@ -13,7 +13,7 @@ in the result file; the row keeps scalars, NaN turned into None.
 
 from __future__ import annotations
 
-from ..jsonable import to_json
+from ..values import to_json
 
 FEEDRATE = ("parts_per_s", "parts_per_s_err", "mass_per_s", "mass_per_s_err", "mean_velocity",
             "mean_velocity_err", "steady_from", "steady_to", "n_events", "inserted", "exited",

@@ -29,6 +29,7 @@ import math
 from pathlib import Path
 
 from ..errors import UsageError
+from ..values import fmt
 from . import summary as S
 
 # column -> (name, unit shown, scale to that unit, format)
@@ -92,21 +93,17 @@ def best(entries: list[dict]) -> dict | None:
     return top
 
 
-def _fmt(value, scale=1.0, spec=".4g") -> str:
-    return "n/a" if value is None else format(value * scale, spec)
-
-
 def _with_err(entry, name) -> str:
     _, _, scale, spec = FIGURES[name]
     value, err = entry[name], entry[f"{name}_err"]
     if value is None:
         return "n/a"
-    return _fmt(value, scale, spec) + ("" if err is None else f" ± {_fmt(err, scale, '.2g')}")
+    return fmt(value, scale, spec) + ("" if err is None else f" ± {fmt(err, scale, '.2g')}")
 
 
 def table(entries: list[dict], varied: list[str], shown: list[str]) -> str:
     head = varied + ["runs"] + [heading(n) for n in shown]
-    rows = [[_fmt(e["parameters"][p], spec="g") if isinstance(e["parameters"][p], int | float)
+    rows = [[fmt(e["parameters"][p], spec="g") if isinstance(e["parameters"][p], int | float)
              else str(e["parameters"][p]) for p in varied] + [f"{e['done']}/{e['runs']}"]
             + [_with_err(e, n) for n in shown] for e in entries]
     widths = [max(len(r[i]) for r in [head] + rows) for i in range(len(head))]
@@ -156,7 +153,7 @@ def text(rep: dict) -> str:
     if b is None:
         lines.append("best: none (no job finished with a figure)")
     else:
-        setting = " ".join(f"{k}={_fmt(v, spec='g') if isinstance(v, float) else v}"
+        setting = " ".join(f"{k}={fmt(v, spec='g') if isinstance(v, float) else v}"
                            for k, v in b["parameters"].items()) or "(the only setting)"
         title, unit, _, _ = FIGURES[rep["merit"]]
         lines.append(f"best: {setting}: {title} {_with_err(b, rep['merit'])} {unit}"

@@ -25,7 +25,7 @@ import os
 import tempfile
 from pathlib import Path
 
-from ..jsonable import to_json
+from ..values import to_json
 
 FORMAT = "vibrofeed-sweep-summary"
 FORMAT_VERSION = (1, 0)

@@ -1,4 +1,4 @@
-"""Values as JSON holds them: one conversion for every report, row and summary."""
+"""Figures as reports hold them: JSON-ready (NaN as None) and as a table prints them."""
 
 from __future__ import annotations
 
@@ -20,3 +20,10 @@ def to_json(value):
     if isinstance(value, float) and not math.isfinite(value):
         return None
     return value
+
+
+def fmt(value, scale: float = 1.0, spec: str = ".4g") -> str:
+    """A figure of a table: ``value * scale`` in ``spec``, n/a when missing or not finite."""
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return "n/a"
+    return format(value * scale, spec)
