@@ -42,21 +42,6 @@ from . import plots
 from .outcome import row
 
 
-def _adhesion(p):
-    from ..models.adhesion import Adhesion
-
-    return Adhesion(float(p["hamaker"]), float(p["roughness"]), radius=float(p["radius"]),
-                    face_radius=float(p.get("face_radius", 0.0)))
-
-
-def _film(p):
-    from ..models.squeeze_film import Film, clearance
-
-    face = float(p.get("face_radius", 0.0))
-    return Film(float(p["air_viscosity"]), face if face > 0 else float(p["radius"]),
-                clearance(float(p["roughness"])), flat=face > 0, free_flow=True)
-
-
 def _require_flat_plate(case, run) -> None:
     if run.number("incline") != 0 or run.number("amp_t") != 0 or int(run.number("waveform")) != 0:
         raise CaseError(f"case {case.name} [{run.label}]: needs a flat plate (incline 0) moving as a "
@@ -100,7 +85,7 @@ def vdw_pulloff(case, runs, out, fig_dir: Path) -> None:
                             "raise gamma above the sticking threshold")
         a_n = float(dm.waveform(p).acceleration(np.array([t_l]))[1][0])
         dem = mass * (-a_n - G)
-        model = _adhesion(p).pulloff
+        model = dm.adhesion(p).pulloff
         out.rows.append(row(case, "pulloff", run.label, model, dem, "N"))
         panels.append({"label": run.label, "hamaker": run.number("hamaker"), "model": model, "dem": dem})
     out.figures.append(plots.plot_vdw_pulloff(case, panels, fig_dir / "pulloff.png"))
@@ -118,7 +103,7 @@ def sticking(case, runs, out, fig_dir: Path) -> None:
         _require_flat_plate(case, run)
         p = run.params
         gamma = dm.gamma_from_amp(run.number("amp_n"), run.number("freq"))
-        gamma_c = sticking_gamma(_adhesion(p), dm.mass(p))
+        gamma_c = sticking_gamma(dm.adhesion(p), dm.mass(p))
         with Result(run.output) as r:
             tr = _trajectory(r)
         left = float(tr["gap"].max() > leave_gap)
@@ -141,7 +126,7 @@ def squeeze_launch(case, runs, out, fig_dir: Path) -> None:
         p = run.params
         if run.number("hamaker") != 0 or run.number("air_viscosity") <= 0:
             raise CaseError(f"case {case.name} [{run.label}]: needs air_viscosity > 0 and hamaker = 0")
-        freq, mass, film = run.number("freq"), dm.mass(p), _film(p)
+        freq, mass, film = run.number("freq"), dm.mass(p), dm.film(p)
         gamma = dm.gamma_from_amp(run.number("amp_n"), freq)
         model = launch(film, mass, freq, gamma)
         if model.end != "apex":

@@ -22,16 +22,12 @@ def bond_number(p: dict) -> float:
     """Pull-off over weight of a bulk_feeder part (parameters ``p``, deck defaults
     for the rest): A R / (6 s^2) for a sphere, A S / (6 pi s^3) over a chip's or
     disc's face S (models/adhesion.py), over m g."""
-    from ...models.adhesion import Adhesion
-
     shape = {"sphere": 0, "chip": 1, "disc": 2}.get(str(p.get("shape", 0)), None)
     shape = int(float(p.get("shape", 0))) if shape is None else shape
-    size, hamaker, roughness = float(p.get("part_size", 3e-4)), float(p.get("hamaker", 0.0)), \
-        float(p.get("roughness", 0.0))
-    part = {"shape": min(shape, 2), "part_size": size, "density": float(p.get("density", 2330.0)),
-            "part_thickness": float(p.get("part_thickness", 1.5e-4))}
-    face = ({"radius": size / 2}, {"face_side": size}, {"face_radius": size / 2})[part["shape"]]
-    return Adhesion(hamaker, roughness, **face).pulloff / (dm.mass(part) * G) if hamaker > 0 else 0.0
+    defaults = {"part_size": 3e-4, "part_thickness": 1.5e-4, "density": 2330.0, "hamaker": 0.0,
+                "roughness": 0.0}
+    part = {"shape": min(shape, 2), **{name: float(p.get(name, value)) for name, value in defaults.items()}}
+    return dm.adhesion(part).pulloff / (dm.mass(part) * G) if part["hamaker"] > 0 else 0.0
 
 
 #: The feeding study's analysis window [s]: from 5 periods at 100 Hz (the start-up) to

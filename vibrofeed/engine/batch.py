@@ -8,7 +8,7 @@ run's outcome and never stops the others. Two ways to spread the runs:
 * :func:`run_local`: ``workers`` at a time on this machine, each waited for by
   a daemon thread (the threads only wait for their worker processes; an
   interrupted batch exits at once and its runs' workers get SIGTERM as their
-  parent dies). :func:`run_many` runs :class:`RunRequest` s this way.
+  parent dies). :func:`run_many` runs :class:`RunRequest` objects this way.
 * Under ``mpirun`` (or ``srun``), :func:`dispatch` on rank 0 and :func:`serve`
   on the others: the ranks form groups of ``per_run`` consecutive ranks (ranks
   beyond the last whole group stay idle); the lowest rank of a group is its

@@ -13,8 +13,10 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 
+from .adhesion import Adhesion
 from .constants import G
 from .part_on_surface import PartParams, SteadyState, mean_velocity
+from .squeeze_film import Film, clearance
 from .surface import (
     CoulombPumpWaveform,
     SineWaveform,
@@ -100,6 +102,30 @@ def mass(p: Mapping) -> float:
     if shape == 2:
         return math.pi / 4.0 * size ** 2 * thickness * rho
     raise ValueError(f"shape must be 0, 1 or 2, got {shape}")
+
+
+def adhesion(p: Mapping) -> Adhesion:
+    """The van der Waals adhesion of the deck's part to the track (``hamaker``,
+    ``roughness``): the single-part deck's sphere of ``radius`` (on a flat face
+    of ``face_radius`` when > 0), or the bulk deck's ``shape`` 0 sphere of
+    diameter ``part_size``, 1 chip or 2 disc lying on its face."""
+    hamaker, roughness = _f(p, "hamaker"), _f(p, "roughness")
+    if "radius" in p:
+        return Adhesion(hamaker, roughness, radius=_f(p, "radius"), face_radius=_f(p, "face_radius", 0.0))
+    shape, size = int(_f(p, "shape", 0)), _f(p, "part_size")
+    if shape not in (0, 1, 2):
+        raise ValueError(f"shape must be 0, 1 or 2, got {shape}")
+    face = ({"radius": size / 2}, {"face_side": size}, {"face_radius": size / 2})[shape]
+    return Adhesion(hamaker, roughness, **face)
+
+
+def film(p: Mapping) -> Film:
+    """The squeeze film under the single-part deck's part (``air_viscosity``, the
+    clearance of ``roughness``): under its flat face of ``face_radius`` when > 0,
+    else under the sphere of ``radius``; flowing freely out at the rim."""
+    face = _f(p, "face_radius", 0.0)
+    return Film(_f(p, "air_viscosity"), face if face > 0 else _f(p, "radius"), clearance(_f(p, "roughness")),
+                flat=face > 0, free_flow=True)
 
 
 def vertical_contact(p: Mapping) -> Contact:
