@@ -182,3 +182,27 @@ def test_jkr_pulloff_closed_form():
     assert jkr_pulloff(0.05, 3e-4, 0) == pytest.approx(1.5 * 3.141592653589793 * 0.05 * 75e-6)
     assert jkr_pulloff(0.05, 3e-4, 0) == pytest.approx(17.671e-6, rel=1e-4)
     assert jkr_pulloff(0.05, 3e-4, 1) == pytest.approx(2 * jkr_pulloff(0.05, 3e-4, 0))
+
+
+@pytest.mark.parametrize("params, pulloff", [
+    # single-part sphere and flat-faced part; bulk sphere, chip, disc: A R / (6 s^2), A S / (6 pi s^3)
+    ({"hamaker": 1e-19, "roughness": 1e-8, "radius": 1e-4}, 1e-19 * 1e-4 / (6 * 1.02e-8 ** 2)),
+    ({"hamaker": 1e-19, "roughness": 1e-8, "radius": 1e-4, "face_radius": 5e-5},
+     1e-19 * math.pi * 25e-10 / (6 * math.pi * 1.02e-8 ** 3)),
+    ({"hamaker": 1e-19, "roughness": 1e-8, "shape": 0, "part_size": 2e-4}, 1e-19 * 1e-4 / (6 * 1.02e-8 ** 2)),
+    ({"hamaker": 1e-19, "roughness": 1e-8, "shape": 1, "part_size": 3e-4},
+     1e-19 * 9e-8 / (6 * math.pi * 1.02e-8 ** 3)),
+    ({"hamaker": 1e-19, "roughness": 1e-8, "shape": 2, "part_size": 2e-4},
+     1e-19 * math.pi * 1e-8 / (6 * math.pi * 1.02e-8 ** 3)),
+])
+def test_adhesion_of_every_deck_part(params, pulloff):
+    assert dm.adhesion(params).pulloff == pytest.approx(pulloff, rel=1e-12)
+
+
+def test_the_film_is_under_the_flat_face_when_the_part_has_one():
+    sphere = dm.film({"air_viscosity": 1.8e-5, "roughness": 1e-7, "radius": 1e-4})
+    face = dm.film({"air_viscosity": 1.8e-5, "roughness": 1e-7, "radius": 1e-4, "face_radius": 5e-5})
+    assert (sphere.flat, sphere.radius, face.flat, face.radius) == (False, 1e-4, True, 5e-5)
+    assert sphere.viscosity == face.viscosity == 1.8e-5 and sphere.free_flow and face.free_flow
+    with pytest.raises(ValueError, match="shape must be 0, 1 or 2"):
+        dm.adhesion({"hamaker": 1e-19, "roughness": 0.0, "shape": 3, "part_size": 1e-4})
