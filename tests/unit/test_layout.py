@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import ast
 import json
-import re
 import subprocess
 import sys
 import tomllib
@@ -262,20 +261,6 @@ def test_results_and_analyses_load_no_plotting_library():
                                 "vibrofeed.postproc, vibrofeed.engine.runner, vibrofeed.run_summary")
     assert not {m.split(".")[0] for m in loaded} & {"matplotlib", "pyvista"}
     assert not any(m.startswith("vibrofeed.validation") for m in loaded)
-
-
-def test_every_command_module_has_the_command_shape_and_is_in_the_readme():
-    import importlib
-
-    from vibrofeed.cli import COMMANDS
-
-    readme = (REPO / "README.md").read_text()
-    for name, (module_name, help_text) in COMMANDS.items():
-        module = importlib.import_module(module_name)
-        assert callable(module.add_arguments) and callable(module.run), name
-        assert module.DESCRIPTION and help_text, name
-        assert re.search(rf"`vibrofeed {re.escape(name)}[ `]", readme), \
-            f"command {name} is not documented in README.md"
 
 
 def test_every_exception_class_belongs_to_the_error_tree():

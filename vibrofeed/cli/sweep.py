@@ -14,7 +14,7 @@ DESCRIPTION = ("Run every job of a sweep file (a deck, fixed parameters, a grid,
 
 
 def add_arguments(p) -> None:
-    p.add_argument("sweep", metavar="SWEEP.toml", help="the sweep file (see README, `vibrofeed sweep`)")
+    p.add_argument("sweep", metavar="SWEEP.toml", help="the sweep file (see docs/commands.md)")
     p.add_argument("-o", "--output", metavar="DIR",
                    help="folder for the results and the summary (default: results/<SWEEP>)")
     p.add_argument("--dry-run", action="store_true",

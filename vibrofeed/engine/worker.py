@@ -233,7 +233,7 @@ def run(spec: dict) -> int:
         missing += [name for name in L.BULK_CONTRACT if name not in bulk_names]
     if missing:
         report("error", message=f"the deck does not define the equal-style variable(s) "
-                                f"{', '.join(missing)} that vibrofeed reads (see README, Decks)")
+                                f"{', '.join(missing)} that vibrofeed reads (see docs/decks.md)")
         return 3
     n_steps = int(round(lmp.variable("n_steps")))
     every = int(round(lmp.variable("output_every")))
