@@ -182,7 +182,7 @@ def squeeze_launch(case, runs, out, fig_dir: Path) -> None:
 
 # ----------------------------------------------------------------- figures
 def _plot_pulloff(case, panels, path: Path) -> Path:
-    from vibrofeed.figures import pyplot, save
+    from vibrofeed.pictures.plots import pyplot, save
 
     from .plots import DEM_STYLE, MODEL_STYLE
 
@@ -199,7 +199,7 @@ def _plot_pulloff(case, panels, path: Path) -> Path:
 
 
 def _plot_sticking(case, points, path: Path) -> Path:
-    from vibrofeed.figures import pyplot, save
+    from vibrofeed.pictures.plots import pyplot, save
 
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(6, 3.6), layout="constrained")
@@ -219,7 +219,7 @@ def _plot_sticking(case, points, path: Path) -> Path:
 
 
 def _plot_launch(case, panels, path: Path) -> Path:
-    from vibrofeed.figures import pyplot, save
+    from vibrofeed.pictures.plots import pyplot, save
 
     from .plots import DEM_STYLE, MODEL_STYLE
 
@@ -449,7 +449,7 @@ def feeding_figure(study: dict, path) -> Path:
     Bond number, one line per mode (Gamma_n), from the adhesion sweep; and
     against the frequency, one line per air-film setting, from the squeeze-film
     sweep (there the conveying speed over that without the film)."""
-    from vibrofeed.figures import pyplot, save
+    from vibrofeed.pictures.plots import pyplot, save
 
     plt = pyplot()
     fig, axes = plt.subplots(2, 3, figsize=(13, 6.4), layout="constrained")

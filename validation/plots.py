@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..figures import pyplot, save
+from ..pictures.plots import pyplot, save
 
 DEM_STYLE = dict(color="tab:red", lw=1.2, label="DEM (LIGGGHTS)")
 MODEL_STYLE = dict(color="black", lw=1.0, ls="--", label="model")

@@ -118,6 +118,7 @@ def table(s: dict) -> str:
 
 
 def run(args) -> int:
+    from ..pictures.plots import feedrate_figures
     from ..postproc.feedrate import FeedRate
     from ..results.reader import Result
 
@@ -128,7 +129,7 @@ def run(args) -> int:
         summary = fr.summary()
         if not args.no_model:
             add_dilute_limit(summary, result.parameters)
-        figures = fr.plot(folder) if folder is not None else []
+        figures = feedrate_figures(fr, folder) if folder is not None else []
     if args.json:
         print(json.dumps(summary, indent=2))
     else:

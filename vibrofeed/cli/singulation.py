@@ -66,6 +66,7 @@ def table(s: dict) -> str:
 
 
 def run(args) -> int:
+    from ..pictures.plots import singulation_figures
     from ..postproc.singulation import Singulation
     from ..results.reader import Result
     from .feedrate import plot_folder
@@ -76,7 +77,7 @@ def run(args) -> int:
                          tolerance=args.tolerance, start=args.start, end=args.end,
                          cluster_frames=args.cluster_frames).run()
         summary = sg.summary()
-        figures = sg.plot(folder) if folder is not None else []
+        figures = singulation_figures(sg, folder) if folder is not None else []
     if args.json:
         print(json.dumps(summary, indent=2))
     else:

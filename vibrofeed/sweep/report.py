@@ -198,7 +198,7 @@ def plotted(entries, groups: list[list[str]], chosen) -> tuple[list[str], list[d
 def plots(entries, groups: list[list[str]], merit: str, chosen, folder: Path, units=None) -> list[str]:
     """The maps of the module docstring; ``groups``: the varied axes, each the list of
     parameters that vary together (one for a grid axis, several for a zipped group)."""
-    from ..figures import pyplot, save
+    from ..pictures.plots import pyplot, save
 
     plt = pyplot()
     label, scale = heading(merit), FIGURES[merit][2]
