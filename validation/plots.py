@@ -15,6 +15,28 @@ from ..pictures.plots import pyplot, save
 DEM_STYLE = dict(color="tab:red", lw=1.2, label="DEM (LIGGGHTS)")
 MODEL_STYLE = dict(color="black", lw=1.0, ls="--", label="model")
 SURFACE_STYLE = dict(color="tab:blue", lw=0.8, alpha=0.7, label="surface")
+# Swept quantities that are not deck variables: their axis labels.
+DERIVED_AXES = {"gamma": "Gamma_n = amp_n w^2 / g [-]", "gamma_t": "Gamma_t = amp_t w^2 / g [-]"}
+
+
+def heading(case) -> str:
+    """The case a figure shows: its name (as `vibrofeed validate --case` takes it) and title."""
+    return f"{case.name}: {case.title}"
+
+
+def axis_label(case, name: str) -> str:
+    """``name [unit]`` of a swept quantity, the unit from the case's deck."""
+    if name in DERIVED_AXES:
+        return DERIVED_AXES[name]
+    from vibrofeed.decks import Deck
+    from vibrofeed.errors import VibrofeedError
+
+    try:
+        variable = Deck.find(case.deck).variables.get(name)
+    except VibrofeedError:
+        variable = None
+    unit = variable.unit if variable is not None else ""
+    return f"{name} [{unit}]" if unit else name
 
 
 def plot_flights(case, panels: list[dict], path: Path) -> Path:
@@ -28,11 +50,11 @@ def plot_flights(case, panels: list[dict], path: Path) -> Path:
         ax.plot(p["surface_t"] / T, p["surface_z"] * um, **SURFACE_STYLE)
         ax.plot(p["dem_t"] / T, (p["dem_gap"] + surf) * um, **DEM_STYLE)
         ax.plot(p["model_t"] / T, (p["model_gap"] + p["surface_z"]) * um, **MODEL_STYLE)
-        ax.set_ylabel("height [um]")
+        ax.set_ylabel("height [µm]")
         ax.set_title(p["label"], fontsize=9, loc="left")
-    axes[-1, 0].set_xlabel("t / T")
+    axes[-1, 0].set_xlabel("t / T (vibration periods) [-]")
     axes[0, 0].legend(fontsize=8, loc="upper right")
-    fig.suptitle(case.title, fontsize=10)
+    fig.suptitle(heading(case), fontsize=10)
     return save(fig, path)
 
 
@@ -69,9 +91,9 @@ def plot_speed_curve(case, runs, points, axis: str, path: Path) -> Path:
     ax.errorbar(xs, model, yerr=err, fmt="none", ecolor="gray", capsize=3, label="tolerance")
     ax.plot(xs, dem, "o", color=DEM_STYLE["color"], label=DEM_STYLE["label"])
     ax.axhline(0, color="gray", lw=0.5)
-    ax.set_xlabel(axis)
+    ax.set_xlabel(axis_label(case, axis))
     ax.set_ylabel("mean speed along the track [mm/s]")
-    ax.set_title(case.title, fontsize=10)
+    ax.set_title(heading(case), fontsize=10)
     ax.legend(fontsize=8)
     return save(fig, path)
 
@@ -86,9 +108,9 @@ def plot_bifurcation(case, grid, diagram, dem_points, path: Path) -> Path:
     for g, jumps in dem_points:
         ax.plot(np.full(len(jumps), g), jumps, "o", mfc="none", color=DEM_STYLE["color"], ms=5)
     ax.plot([], [], "o", mfc="none", color=DEM_STYLE["color"], label=DEM_STYLE["label"])
-    ax.set_xlabel("Gamma = amp_n w^2 / g")
+    ax.set_xlabel(DERIVED_AXES["gamma"])
     ax.set_ylabel("jump length [periods]")
-    ax.set_title(case.title, fontsize=10)
+    ax.set_title(heading(case), fontsize=10)
     ax.legend(fontsize=8)
     return save(fig, path)
 
@@ -105,9 +127,9 @@ def plot_vertical(case, panels: list[dict], path: Path) -> Path:
         ax.plot(p["model_t"] / T, p["model_x"] * 1e3, **MODEL_STYLE)
         ax.set_ylabel("up the wall [mm]")
         ax.set_title(p["label"], fontsize=9, loc="left")
-    axes[-1, 0].set_xlabel("t / T")
+    axes[-1, 0].set_xlabel("t / T (vibration periods) [-]")
     axes[0, 0].legend(fontsize=8)
-    fig.suptitle(case.title, fontsize=10)
+    fig.suptitle(heading(case), fontsize=10)
     return save(fig, path)
 
 
@@ -139,11 +161,11 @@ def plot_pulloff(case, panels: list[dict], path: Path) -> Path:
         ax.plot(p["t"], 1e6 * p["tension"], **DEM_STYLE)
         ax.axhline(1e6 * p["model"], **{**MODEL_STYLE, "label": "JKR 1.5 pi gamma R*"})
         ax.set_ylim(-0.5e6 * p["model"], 1.3e6 * p["model"])  # the pull-off, not the initial push
-        ax.set_ylabel("tension [uN]")
+        ax.set_ylabel("tension [µN]")
         ax.set_title(p["label"], fontsize=9, loc="left")
         ax.legend(fontsize=8)
     axes[-1, 0].set_xlabel("time [s]")
-    fig.suptitle(case.title, fontsize=10)
+    fig.suptitle(heading(case), fontsize=10)
     return save(fig, path)
 
 
@@ -174,8 +196,8 @@ def plot_reference(case, runs, figures: dict, ref, path: Path) -> Path:
                     label="DEM ± 1 sigma (batch means)")
         if xs.min() > 0 and xs.max() / xs.min() > 10:
             ax.set_xscale("log")
-        ax.set_xlabel(axis)
+        ax.set_xlabel(axis_label(case, axis))
         ax.set_ylabel(f"{q.replace('_', ' ')} [{unit}]")
         ax.legend(fontsize=8)
-    fig.suptitle(case.title, fontsize=10)
+    fig.suptitle(heading(case), fontsize=10)
     return save(fig, path)
