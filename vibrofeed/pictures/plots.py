@@ -20,8 +20,8 @@ from .caption import run_caption
 # Velocity-profile bins holding fewer than this fraction of the median non-empty bin's
 # samples are drawn light: their mean rests on few parts.
 THIN_BIN = 0.25
-# Characters per line of a figure's run caption.
-CAPTION_WIDTH = 120
+# Characters of a figure's run caption per inch of the figure's width (7-point text).
+CAPTION_PER_INCH = 20
 
 
 def pyplot():
@@ -45,7 +45,8 @@ def save(fig, path) -> Path:
 
 def name_run(fig, text: str) -> None:
     """Head ``fig`` with ``text`` (which run or sweep it shows), wrapped to the figure."""
-    fig.suptitle("\n".join(textwrap.wrap(text, CAPTION_WIDTH)), fontsize=7, color="0.25")
+    width = int(CAPTION_PER_INCH * fig.get_figwidth())
+    fig.suptitle("\n".join(textwrap.wrap(text, width)), fontsize=7, color="0.25")
 
 
 def thin_bins(count) -> np.ndarray:
