@@ -50,6 +50,8 @@ STROBE_TOLERANCE = 0.02
 # Fraction of the picture's width left to the scene (the colour bar takes the rest).
 SCENE_WIDTH = 0.86
 MARGIN_PX = 12
+# Room in view past the far end of the track, as a fraction of its length: parts falling off.
+FALL_ROOM = 0.12
 BAR_Y_PX = 30  # the scale bar's height above the picture's bottom edge (the footer below it)
 
 
@@ -244,7 +246,8 @@ class _Painter:
     def _set_camera(self) -> None:
         """Parallel projection square to x, the view bounds fitted into the scene's part of
         the picture (left of the colour bar): ``px_per_m`` pixels per metre along x."""
-        lo, hi = self.bounds[0::2], self.bounds[1::2]
+        lo, hi = self.bounds[0::2], self.bounds[1::2].copy()
+        hi[0] += FALL_ROOM * (hi[0] - lo[0])  # the parts falling past the outlet edge stay in view
         w, h = self.size
         direction = VIEW_DIRECTION / np.linalg.norm(VIEW_DIRECTION)
         up = np.array([0.0, 0.0, 1.0]) - direction[2] * direction
