@@ -234,7 +234,7 @@ def test_movie_has_every_frame(tmp_path, render):
     with Result(bulk_file(tmp_path / "m.h5", [0.005, 0.01, 0.015], n_frames=4)) as r:
         done = render_file(r, out, size=(160, 96), fps=10)
     assert done.frames == 4 and done.size == (160, 96)
-    assert "stroboscopic" in done.note   # frames one period apart
+    assert "stroboscopic" in done.note and "output_dt=0.00125" in done.note   # one period apart
     raw = subprocess.run([_ffmpeg(), "-loglevel", "error", "-i", str(out), "-f", "rawvideo",
                           "-pix_fmt", "rgb24", "-"], capture_output=True, check=True).stdout
     video = np.frombuffer(raw, np.uint8).reshape(-1, 96, 160, 3)

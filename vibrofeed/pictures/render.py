@@ -432,6 +432,6 @@ def render(result, output, frame: int = -1, color: str = "speed", size=DEFAULT_S
     if painter.strobe:
         note = (f"the frames drawn fall every {painter.strobe} vibration period"
                 f"{'s' if painter.strobe > 1 else ''}: the movie is stroboscopic (the track's "
-                "oscillation is not seen, the parts' drift is); write frames at another spacing "
-                "(run -p output_dt=...) to see the vibration")
+                "oscillation is not seen, the parts' drift is); to see the vibration, run with "
+                f"-p output_dt={1 / (8 * painter.freq):.3g} (8 frames per period)")
     return Rendered(output, len(frames), (w, h), _time.perf_counter() - start, note)
