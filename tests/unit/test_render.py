@@ -369,3 +369,12 @@ def test_movie_frames_say_they_are_stroboscopic(tmp_path, painter):
         p.draw(scene.read_frame(r, 3))
         title = p.plotter.actors["title"].GetText(2)   # the upper-left corner
     assert "stroboscopic: one frame every 1 vibration period" in title
+
+
+@pytest.mark.skipif(_ffmpeg() is None, reason="MP4 needs ffmpeg (pip install imageio-ffmpeg)")
+def test_command_line_says_a_movie_is_stroboscopic(tmp_path):
+    path = bulk_file(tmp_path / "run.h5", [0.005, 0.01], n_frames=3)
+    out = tmp_path / "m.mp4"
+    proc = vibrofeed("render", path, "-o", out, "--size", "160x96", "-q", check=True)
+    assert f"wrote {out}" in proc.stdout and out.stat().st_size > 0
+    assert proc.stderr.startswith("note: the frames drawn fall every 1 vibration period")
