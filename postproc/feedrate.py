@@ -54,12 +54,10 @@ validation cases drive it (:func:`vibrofeed.models.deck.transport`).
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 
 from ..errors import InputError
-from ..figures import pyplot, save
 from ..results import layout as L
 from .base import AnalysisBase
 
@@ -313,17 +311,45 @@ def period_velocities(result, frames, axis: int = 0, x_max: float = math.inf):
     return np.concatenate(xs), np.concatenate(vs), np.concatenate(ks), (m, alias)
 
 
+def _batch_starts(groups, batches: int) -> np.ndarray:
+    """The first interval number of each of at most ``batches`` contiguous batches of
+    the distinct interval numbers ``groups`` (non-decreasing), lengths differing by at most one."""
+    uniq = np.unique(groups)
+    b = min(int(batches), len(uniq))
+    return np.array([part[0] for part in np.array_split(uniq, max(b, 1))])
+
+
+def profile_error(which, values, groups, bins: int, batches: int) -> np.ndarray:
+    """(bins,) batch-means error of each bin's mean speed: the batches of
+    :func:`_batch_starts`, each giving the mean of its values in the bin; the standard
+    deviation of those means over sqrt(their number). NaN where fewer than two
+    batches have values in the bin."""
+    out = np.full(bins, np.nan)
+    if len(values) == 0:
+        return out
+    batch = np.searchsorted(_batch_starts(groups, batches), groups, side="right") - 1
+    nb = int(batch.max()) + 1
+    key = which * nb + batch
+    count = np.bincount(key, minlength=bins * nb).reshape(bins, nb)
+    total = np.bincount(key, weights=values, minlength=bins * nb).reshape(bins, nb)
+    for k in range(bins):
+        seen = count[k] > 0
+        if seen.sum() >= 2:
+            means = total[k, seen] / count[k, seen]
+            out[k] = means.std(ddof=1) / math.sqrt(seen.sum())
+    return out
+
+
 def _mean_and_batch_error(values, groups, batches: int) -> tuple[float, float]:
     """Mean of ``values`` and its batch-means error over contiguous groups
     (``groups``: the interval number of each value, non-decreasing)."""
     if len(values) == 0:
         return math.nan, math.nan
     mean = float(values.mean())
-    uniq = np.unique(groups)
-    b = min(int(batches), len(uniq))
-    if b < 2:
+    first = _batch_starts(groups, batches)
+    if len(first) < 2:
         return mean, math.nan
-    first = [part[0] for part in np.array_split(uniq, b)]  # first interval of each batch
+    b = len(first)
     cuts = np.r_[np.searchsorted(groups, first), len(groups)]
     means = np.add.reduceat(values, cuts[:-1]) / np.diff(cuts)
     return mean, float(means.std(ddof=1) / math.sqrt(b))
@@ -360,7 +386,8 @@ class FeedRate(AnalysisBase):
     ``mean_velocity_err`` [m/s] over the steady window, ``velocity_lag``
     (frames per whole-period interval) and ``velocity_alias`` (its distance
     from whole periods, in periods); ``profile_edges``, ``profile_x``,
-    ``profile_velocity``, ``profile_count``; the mass balance at the last frame
+    ``profile_velocity``, ``profile_velocity_err`` (batch means per bin, NaN in a bin
+    seen by fewer than two batches), ``profile_count``; the mass balance at the last frame
     analysed: ``inserted``, ``on_track``, ``exited``, ``lost`` (None without one);
     with ``model``: ``model_velocity`` [m/s] (None when the model does not
     apply), ``model_note`` (why not, or that it did not converge; else empty)
@@ -432,6 +459,7 @@ class FeedRate(AnalysisBase):
         with np.errstate(invalid="ignore", divide="ignore"):
             r.profile_velocity = np.where(count > 0, total / np.maximum(count, 1), np.nan)
         r.profile_edges, r.profile_x, r.profile_count = edges, 0.5 * (edges[1:] + edges[:-1]), count
+        r.profile_velocity_err = profile_error(which, v, interval, self.bins, self.batches)
 
     def _mass_balance(self, frames: np.ndarray) -> None:
         balance = self.result.mass_balance
@@ -444,34 +472,3 @@ class FeedRate(AnalysisBase):
     def summary(self) -> dict:
         """The command's figures (JSON-ready)."""
         return self.as_dict([k for k in SUMMARY_KEYS if k in self.results])
-
-    def plot(self, folder) -> list:
-        """Cumulative exits with the steady window and the fitted rate, and the
-        velocity profile along the track: two PNGs in ``folder``; their paths."""
-        plt = pyplot()
-        r = self.results
-        out = []
-        fig, ax = plt.subplots(figsize=(7, 4), layout="constrained")
-        t = np.concatenate([[self.times[0]], r.event_times])
-        n = np.arange(len(t))
-        ax.step(t, n, where="post", color="tab:blue", lw=1.2, label="exits")
-        ax.axvspan(r.steady_from, r.steady_to, color="tab:green", alpha=0.12, label="steady window")
-        n_a = np.searchsorted(r.event_times, r.steady_from, side="left")
-        tt = np.array([r.steady_from, r.steady_to])
-        ax.plot(tt, n_a + r.parts_per_s * (tt - r.steady_from), "k--", lw=1.0,
-                label=f"{r.parts_per_s:.4g} ± {r.parts_per_s_err:.2g} parts/s")
-        ax.set_xlabel("time [s]")
-        ax.set_ylabel("parts exited")
-        ax.legend(loc="upper left", fontsize=8)
-        out.append(save(fig, Path(folder) / "feedrate_cumulative.png"))
-
-        fig, ax = plt.subplots(figsize=(7, 4), layout="constrained")
-        ax.plot(r.profile_x * 1e3, r.profile_velocity * 1e3, "o-", color="tab:red", ms=3,
-                label="whole-period displacement")
-        ax.axhline(r.mean_velocity * 1e3, color="k", ls="--", lw=1.0,
-                   label=f"mean {r.mean_velocity * 1e3:.3g} mm/s")
-        ax.set_xlabel("position along the track x [mm]")
-        ax.set_ylabel("conveying velocity [mm/s]")
-        ax.legend(fontsize=8)
-        out.append(save(fig, Path(folder) / "feedrate_velocity_profile.png"))
-        return out

@@ -38,12 +38,10 @@ same way unless ``start``/``end`` are given)
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 
 from ..errors import InputError
-from ..figures import pyplot, save
 from ..results import layout as L
 from .base import AnalysisBase
 from .clusters import clump_labels, cluster_labels, pairs_touch, quaternion_matrices
@@ -306,37 +304,3 @@ class Singulation(AnalysisBase):
     def summary(self) -> dict:
         """The command's figures (JSON-ready)."""
         return self.as_dict([k for k in SUMMARY_KEYS if k in self.results])
-
-    def plot(self, folder) -> list:
-        """Inter-arrival histogram and cluster-size distribution: two PNGs in
-        ``folder``; their paths."""
-        plt = pyplot()
-        r = self.results
-        out = []
-        fig, ax = plt.subplots(figsize=(7, 4), layout="constrained")
-        if len(r.interarrival):
-            _, edges, _ = ax.hist(r.interarrival * 1e3, bins="auto", color="tab:blue", alpha=0.8,
-                                  label="arrivals")
-            # what random (Poisson) arrivals at the same rate would give: exponential times
-            mean = r.mean_interarrival * 1e3
-            expected = len(r.interarrival) * -np.diff(np.exp(-edges / mean))
-            ax.step(edges, np.r_[expected, expected[-1]], where="post", color="k", ls="--", lw=1.0,
-                    label="random arrivals, same rate")
-            ax.legend(fontsize=8)
-        if r.gap is not None:
-            ax.axvline(r.gap * 1e3, color="tab:red", ls=":", label=f"gap {r.gap * 1e3:.3g} ms")
-            ax.legend(fontsize=8)
-        ax.set_xlabel("inter-arrival time [ms]")
-        ax.set_ylabel("arrivals")
-        ax.set_title(f"CV {r.cv_interarrival:.3g}, doubles {r.doubles_rate:.1%}", fontsize=9)
-        out.append(save(fig, Path(folder) / "singulation_interarrival.png"))
-
-        fig, ax = plt.subplots(figsize=(7, 4), layout="constrained")
-        sizes = sorted(r.cluster_sizes)
-        ax.bar(sizes, [r.cluster_sizes[s] for s in sizes], color="tab:orange")
-        ax.set_xlabel("cluster size [parts]")
-        ax.set_ylabel("clusters per frame")
-        ax.set_title(f"{r.cluster_frames} frames; alone on the track: "
-                     f"{r.track_singulated_fraction:.1%}", fontsize=9)
-        out.append(save(fig, Path(folder) / "singulation_clusters.png"))
-        return out

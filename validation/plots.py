@@ -10,11 +10,33 @@ from pathlib import Path
 
 import numpy as np
 
-from ..figures import pyplot, save
+from ..pictures.plots import pyplot, save
 
 DEM_STYLE = dict(color="tab:red", lw=1.2, label="DEM (LIGGGHTS)")
 MODEL_STYLE = dict(color="black", lw=1.0, ls="--", label="model")
 SURFACE_STYLE = dict(color="tab:blue", lw=0.8, alpha=0.7, label="surface")
+# Swept quantities that are not deck variables: their axis labels.
+DERIVED_AXES = {"gamma": "Gamma_n = amp_n w^2 / g [-]", "gamma_t": "Gamma_t = amp_t w^2 / g [-]"}
+
+
+def heading(case) -> str:
+    """The case a figure shows: its name (as `vibrofeed validate --case` takes it) and title."""
+    return f"{case.name}: {case.title}"
+
+
+def axis_label(case, name: str) -> str:
+    """``name [unit]`` of a swept quantity, the unit from the case's deck."""
+    if name in DERIVED_AXES:
+        return DERIVED_AXES[name]
+    from vibrofeed.decks import Deck
+    from vibrofeed.errors import VibrofeedError
+
+    try:
+        variable = Deck.find(case.deck).variables.get(name)
+    except VibrofeedError:
+        variable = None
+    unit = variable.unit if variable is not None else ""
+    return f"{name} [{unit}]" if unit else name
 
 
 def _column(n: int, width: float, height: float):
@@ -45,9 +67,10 @@ def plot_flights(case, panels: list[dict], path: Path) -> Path:
         ax.plot(p["surface_t"] / T, p["surface_z"] * um, **SURFACE_STYLE)
         ax.plot(p["dem_t"] / T, (p["dem_gap"] + surf) * um, **DEM_STYLE)
         ax.plot(p["model_t"] / T, (p["model_gap"] + p["surface_z"]) * um, **MODEL_STYLE)
-        ax.set_ylabel("height [um]")
+        ax.set_ylabel("height [µm]")
         ax.set_title(p["label"], fontsize=9, loc="left")
-    return _finish(fig, axes, "t / T", case.title, path, dict(fontsize=8, loc="upper right"))
+    return _finish(fig, axes, "t / T (vibration periods) [-]", heading(case), path,
+                   dict(fontsize=8, loc="upper right"))
 
 
 def plot_speed_curve(case, runs, points, axis: str, path: Path) -> Path:
@@ -82,9 +105,9 @@ def plot_speed_curve(case, runs, points, axis: str, path: Path) -> Path:
     ax.errorbar(xs, model, yerr=err, fmt="none", ecolor="gray", capsize=3, label="tolerance")
     ax.plot(xs, dem, "o", color=DEM_STYLE["color"], label=DEM_STYLE["label"])
     ax.axhline(0, color="gray", lw=0.5)
-    ax.set_xlabel(axis)
+    ax.set_xlabel(axis_label(case, axis))
     ax.set_ylabel("mean speed along the track [mm/s]")
-    ax.set_title(case.title, fontsize=10)
+    ax.set_title(heading(case), fontsize=10)
     ax.legend(fontsize=8)
     return save(fig, path)
 
@@ -99,9 +122,9 @@ def plot_bifurcation(case, grid, diagram, dem_points, path: Path) -> Path:
     for g, jumps in dem_points:
         ax.plot(np.full(len(jumps), g), jumps, "o", mfc="none", color=DEM_STYLE["color"], ms=5)
     ax.plot([], [], "o", mfc="none", color=DEM_STYLE["color"], label=DEM_STYLE["label"])
-    ax.set_xlabel("Gamma = amp_n w^2 / g")
+    ax.set_xlabel(DERIVED_AXES["gamma"])
     ax.set_ylabel("jump length [periods]")
-    ax.set_title(case.title, fontsize=10)
+    ax.set_title(heading(case), fontsize=10)
     ax.legend(fontsize=8)
     return save(fig, path)
 
@@ -116,7 +139,7 @@ def plot_vertical(case, panels: list[dict], path: Path) -> Path:
         ax.plot(p["model_t"] / T, p["model_x"] * 1e3, **MODEL_STYLE)
         ax.set_ylabel("up the wall [mm]")
         ax.set_title(p["label"], fontsize=9, loc="left")
-    return _finish(fig, axes, "t / T", case.title, path, dict(fontsize=8))
+    return _finish(fig, axes, "t / T (vibration periods) [-]", heading(case), path, dict(fontsize=8))
 
 
 def plot_replay(results, path, engine: str = "model") -> Path:
@@ -140,10 +163,10 @@ def plot_pulloff(case, panels: list[dict], path: Path) -> Path:
         ax.plot(p["t"], 1e6 * p["tension"], **DEM_STYLE)
         ax.axhline(1e6 * p["model"], **{**MODEL_STYLE, "label": "JKR 1.5 pi gamma R*"})
         ax.set_ylim(-0.5e6 * p["model"], 1.3e6 * p["model"])  # the pull-off, not the initial push
-        ax.set_ylabel("tension [uN]")
+        ax.set_ylabel("tension [µN]")
         ax.set_title(p["label"], fontsize=9, loc="left")
         ax.legend(fontsize=8)
-    return _finish(fig, axes, "time [s]", case.title, path)
+    return _finish(fig, axes, "time [s]", heading(case), path)
 
 
 def plot_reference(case, runs, figures: dict, ref, quantities: dict, path: Path) -> Path:
@@ -171,10 +194,10 @@ def plot_reference(case, runs, figures: dict, ref, quantities: dict, path: Path)
                     label="DEM ± 1 sigma (batch means)")
         if xs.min() > 0 and xs.max() / xs.min() > 10:
             ax.set_xscale("log")
-        ax.set_xlabel(axis)
+        ax.set_xlabel(axis_label(case, axis))
         ax.set_ylabel(f"{q.replace('_', ' ')} [{unit}]")
         ax.legend(fontsize=8)
-    fig.suptitle(case.title, fontsize=10)
+    fig.suptitle(heading(case), fontsize=10)
     return save(fig, path)
 
 
@@ -186,8 +209,8 @@ def plot_vdw_pulloff(case, panels: list[dict], path: Path) -> Path:
     ax.plot(x, [1e6 * q["model"] for q in panels], "s", mfc="none", **MODEL_STYLE)
     ax.plot(x, [1e6 * q["dem"] for q in panels], "o", **{**DEM_STYLE, "lw": 0})
     ax.set_xticks(x, [q["label"] for q in panels], rotation=20, fontsize=7)
-    ax.set_ylabel("pull-off [uN]")
-    return _finish(fig, [ax], None, case.title, path, dict(fontsize=8), title_size=9)
+    ax.set_ylabel("pull-off [µN]")
+    return _finish(fig, [ax], None, heading(case), path, dict(fontsize=8), title_size=9)
 
 
 def plot_sticking(case, points: list[dict], path: Path) -> Path:
@@ -202,7 +225,7 @@ def plot_sticking(case, points: list[dict], path: Path) -> Path:
         if sel:
             ax.plot([q["hamaker"] for q in sel], [q["gamma"] for q in sel], ls="none", **style)
     ax.set_ylabel("Gamma = a w^2 / g")
-    return _finish(fig, [ax], "Hamaker constant [J]", case.title, path, dict(fontsize=8), title_size=9)
+    return _finish(fig, [ax], "Hamaker constant [J]", heading(case), path, dict(fontsize=8), title_size=9)
 
 
 def plot_launch(case, panels: list[dict], path: Path) -> Path:
@@ -214,4 +237,4 @@ def plot_launch(case, panels: list[dict], path: Path) -> Path:
         ax.plot(q["model_t"] / T, 1e6 * q["model_gap"], **{**MODEL_STYLE, "label": "ODE of §3.2"})
         ax.set_ylabel("gap [um]")
         ax.set_title(q["label"], fontsize=9, loc="left")
-    return _finish(fig, axes, "(t - t_lift-off) / T", case.title, path, dict(fontsize=8), title_size=9)
+    return _finish(fig, axes, "(t - t_lift-off) / T", heading(case), path, dict(fontsize=8), title_size=9)

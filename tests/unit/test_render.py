@@ -35,8 +35,9 @@ def quat_about_x(angle):
     return np.array([np.cos(angle / 2), np.sin(angle / 2), 0.0, 0.0])
 
 
-def bulk_file(path, xs, shape="sphere", speeds=None, n_frames=3, orientation=None):
-    """Parts at x = xs on the track's centre line, resting on the floor, for n_frames frames."""
+def bulk_file(path, xs, shape="sphere", speeds=None, n_frames=3, orientation=None, outlet=None):
+    """Parts at x = xs on the track's centre line, resting on the floor, for n_frames frames
+    (0.01 s apart: one period of the 100 Hz vibration); ``outlet``: the outlet table's attributes."""
     n = len(xs)
     r = 3e-4
     z = r if shape == "sphere" else 5e-5
@@ -55,7 +56,8 @@ def bulk_file(path, xs, shape="sphere", speeds=None, n_frames=3, orientation=Non
                  "part_size": ("6e-4", "m", "part size", "6e-4"),
                  "part_thickness": ("1e-4", "m", "thickness", "1e-4")}
     surface = [(np.array([2e-5 * k, 0, 1e-5 * k]), np.zeros(3)) for k in range(n_frames)]
-    return write_bulk_result(path, frames, track=simple_track(), variables=variables, surface=surface)
+    return write_bulk_result(path, frames, track=simple_track(), variables=variables, surface=surface,
+                             outlet=outlet)
 
 
 def red_mask(image):
@@ -232,6 +234,7 @@ def test_movie_has_every_frame(tmp_path, render):
     with Result(bulk_file(tmp_path / "m.h5", [0.005, 0.01, 0.015], n_frames=4)) as r:
         done = render_file(r, out, size=(160, 96), fps=10)
     assert done.frames == 4 and done.size == (160, 96)
+    assert "stroboscopic" in done.note and "output_dt=0.00125" in done.note   # one period apart
     raw = subprocess.run([_ffmpeg(), "-loglevel", "error", "-i", str(out), "-f", "rawvideo",
                           "-pix_fmt", "rgb24", "-"], capture_output=True, check=True).stdout
     video = np.frombuffer(raw, np.uint8).reshape(-1, 96, 160, 3)
@@ -257,3 +260,121 @@ def test_command_line(tmp_path, capsys):
             code = exc.code
         err = capsys.readouterr().err
         assert code == 2 and fragment in err and err.count("\n") == 1, err
+
+
+# -- what a picture says: speed scale, length scale, run, vibration phase -------------------
+@pytest.fixture
+def painter():
+    """A painter over frames of a result, closed afterwards."""
+    pytest.importorskip("pyvista")
+    from vibrofeed.pictures.render import _Painter
+
+    made = []
+
+    def make(result, frames, color="speed", size=SIZE):
+        made.append(_Painter(result, color, size, np.asarray(frames), None))
+        return made[-1]
+
+    yield make
+    for p in made:
+        p.close()
+
+
+def test_speed_scale_spans_the_parts_on_the_track_and_counts_the_others(tmp_path, painter):
+    """Three parts on the track (x <= the outlet edge at LENGTH), two past the edge ten times
+    faster: the scale's top is the fastest part on the track, the bar counts the two."""
+    xs = [0.004, 0.01, 0.016, LENGTH + 5e-4, LENGTH + 1e-3]
+    speeds = [0.010, 0.025, 0.018, 0.25, 0.3]
+    outlet = {"outlet_x": LENGTH, "catch_z": -3e-4, "method": "synthetic"}
+    with Result(bulk_file(tmp_path / "clip.h5", xs, speeds=speeds, outlet=outlet)) as r:
+        p = painter(r, [2])
+        frame = scene.read_frame(r, 2)
+        p.draw(frame)
+        # independently: on the track is x - surface x <= the outlet edge (the surface moved 4e-5)
+        x_track = frame.position[:, 0] - frame.surface_position[0]
+        expected = frame.speed[x_track <= LENGTH].max()
+        assert expected == pytest.approx(0.025, rel=1e-9)
+        low, high = p.plotter.actors["parts"].mapper.scalar_range
+        assert (low, high) == pytest.approx((0.0, expected * 1e3), rel=1e-9)   # mm/s
+        titles = list(p.plotter.scalar_bars.keys())
+        assert len(titles) == 1 and "speed [mm/s]" in titles[0]
+        assert "clipped: 2 parts" in titles[0] and "off the track faster" in titles[0]
+
+
+def test_no_clipping_note_when_every_part_is_on_the_scale(tmp_path, painter):
+    with Result(bulk_file(tmp_path / "slow.h5", [0.005, 0.01], speeds=[0.01, 0.02])) as r:
+        p = painter(r, [0])
+        p.draw(scene.read_frame(r, 0))
+        assert list(p.plotter.scalar_bars.keys()) == ["speed [mm/s]"]
+
+
+def dark_columns(rows):
+    """Columns of an (H, W, 3) strip holding any clearly non-white pixel."""
+    return np.nonzero((rows.astype(int).sum(axis=-1) < 600).any(axis=0))[0]
+
+
+def test_scale_bar_has_the_length_it_says(tmp_path, render):
+    """Lengths along the track are true to scale: the bar's pixels over its length in mm equal
+    the track's pixels (measured on the picture) over the track's LENGTH."""
+    from vibrofeed.pictures.render import BAR_Y_PX, _Painter
+
+    w, h = 640, 360
+    with Result(bulk_file(tmp_path / "bar.h5", [0.01])) as r:
+        p = _Painter(r, "speed", (w, h), np.array([2]), "#ff0000")
+        try:
+            p.draw(scene.read_frame(r, 2))
+            image = p.image()
+            length, _ = p.scale_bar()
+        finally:
+            p.close()
+    scene_rows = image[int(0.3 * h):int(0.7 * h), : int(0.85 * w)]   # the track, no text
+    cols = dark_columns(scene_rows)
+    track_px = cols.max() - cols.min() + 1
+    bar_row = image[h - BAR_Y_PX - 2]
+    black = np.nonzero(bar_row.astype(int).sum(axis=-1) < 60)[0]
+    bar_px = black.max() - black.min() + 1
+    assert len(black) == bar_px   # one solid bar
+    assert bar_px == pytest.approx(length / LENGTH * track_px, abs=2)   # a pixel at each end
+    assert length in (1e-3, 2e-3, 5e-3, 1e-2)
+
+
+def test_picture_names_the_run_and_the_vibration_phase(tmp_path, painter):
+    with Result(bulk_file(tmp_path / "named.h5", [0.01])) as r:
+        p = painter(r, [1])
+        p.draw(scene.read_frame(r, 1))
+        footer = p.plotter.actors["footer"].GetInput()
+        title = p.plotter.actors["title"].GetText(2)   # the upper-left corner
+    assert footer.startswith("named.h5; deck synthetic_bulk; freq 100 Hz") and "shape sphere" in footer
+    assert "part_size 0.6 mm" in footer   # micro-scale lengths in mm
+    assert "t = 0.0100 s" in title and "phase 0.00 T" in title
+    assert "stroboscopic" not in title   # one picture: no movie to alias
+
+
+def test_stroboscopic_sampling_is_detected_and_said():
+    from vibrofeed.pictures.render import nice_length, stroboscopic
+
+    t = np.arange(5) * 0.01
+    assert stroboscopic(t, 100.0) == 1
+    assert stroboscopic(t[::2], 100.0) == 2
+    assert stroboscopic(t, 70.0) == 0          # 0.7 periods apart: the phase drifts
+    assert stroboscopic(t, 0.0) == 0
+    assert stroboscopic(t[:1], 100.0) == 0
+    assert [nice_length(x) for x in (0.0042, 0.0019, 0.01, 7e-4)] == pytest.approx(
+        [2e-3, 1e-3, 1e-2, 5e-4], rel=1e-12)
+
+
+def test_movie_frames_say_they_are_stroboscopic(tmp_path, painter):
+    with Result(bulk_file(tmp_path / "strobe.h5", [0.01], n_frames=4)) as r:
+        p = painter(r, np.arange(4))
+        p.draw(scene.read_frame(r, 3))
+        title = p.plotter.actors["title"].GetText(2)   # the upper-left corner
+    assert "stroboscopic: one frame every 1 vibration period" in title
+
+
+@pytest.mark.skipif(_ffmpeg() is None, reason="MP4 needs ffmpeg (pip install imageio-ffmpeg)")
+def test_command_line_says_a_movie_is_stroboscopic(tmp_path):
+    path = bulk_file(tmp_path / "run.h5", [0.005, 0.01], n_frames=3)
+    out = tmp_path / "m.mp4"
+    proc = vibrofeed("render", path, "-o", out, "--size", "160x96", "-q", check=True)
+    assert f"wrote {out}" in proc.stdout and out.stat().st_size > 0
+    assert proc.stderr.startswith("note: the frames drawn fall every 1 vibration period")

@@ -211,7 +211,7 @@ def feeding_figure(study: dict, path) -> Path:
     Bond number, one line per mode (Gamma_n), from the adhesion sweep; and
     against the frequency, one line per air-film setting, from the squeeze-film
     sweep (there the conveying speed over that without the film)."""
-    from vibrofeed.figures import pyplot, save
+    from vibrofeed.pictures.plots import pyplot, save
 
     plt = pyplot()
     fig, axes = plt.subplots(2, 3, figsize=(13, 6.4), layout="constrained")

@@ -3,7 +3,7 @@
 Runs the ``bulk_feeder`` deck at its defaults (hundreds of parts pre-filled
 on a vibrating track, so feeding is steady at once), then prints the
 feed-rate and singulation reports and writes the result, a picture of the
-last frame and the plots into one folder.
+last frame of the steady feeding window and the plots into one folder.
 """
 
 from __future__ import annotations
@@ -15,8 +15,8 @@ from pathlib import Path
 from ..errors import UsageError
 
 DESCRIPTION = ("Run the default bulk-feeder case (hundreds of micro-parts on a vibrating track), then "
-               "print its feed rate and singulation and write DIR/bulk_feeder.h5, a picture "
-               "(DIR/bulk_feeder.png) and the plots (DIR/plots/).")
+               "print its feed rate and singulation and write DIR/bulk_feeder.h5, a picture of the "
+               "last frame of the steady feeding window (DIR/bulk_feeder.png) and the plots (DIR/plots/).")
 DECK = "bulk_feeder"
 
 
@@ -75,15 +75,23 @@ def report(path, folder: Path | None = None) -> str:
         sg = Singulation(result).run()
         lines += ["", "Feed rate", F.table(summary), "", "Singulation", S.table(sg.summary())]
         if folder is not None:
+            from ..pictures.plots import feedrate_figures, singulation_figures
             from ..pictures.render import render
 
             plots = folder / "plots"
             plots.mkdir(parents=True, exist_ok=True)
-            figures += fr.plot(plots) + sg.plot(plots)
-            # The picture shows the middle of the steady window: the track full and feeding.
+            figures += feedrate_figures(fr, plots) + singulation_figures(sg, plots)
             picture = folder / f"{Path(path).stem}.png"
-            t_mid = 0.5 * (summary["steady_from"] + summary["steady_to"])
-            frame = int(abs(result.time - t_mid).argmin()) if t_mid == t_mid else -1
-            figures.append(render(result, picture, frame=frame).path)
+            figures.append(render(result, picture, frame=picture_frame(result.time,
+                                                                        summary["steady_to"])).path)
     lines += [f"figure: {f}" for f in figures]
     return "\n".join(lines)
+
+
+def picture_frame(times, steady_to: float) -> int:
+    """The frame the demo draws: the last one of the steady window (the track still
+    feeding, as late as the measured rate holds); the last frame without a window."""
+    import numpy as np
+
+    k = int(np.searchsorted(times, steady_to + 1e-12, side="right")) - 1
+    return k if np.isfinite(steady_to) and k >= 0 else -1

@@ -51,6 +51,7 @@ def table(s: dict) -> str:
 
 
 def run(args) -> int:
+    from ..pictures.plots import feedrate_figures
     from ..postproc.feedrate import FeedRate
     from ..results.reader import Result
 
@@ -59,6 +60,6 @@ def run(args) -> int:
         fr = FeedRate(result, start=args.start, end=args.end, batches=args.batches,
                       bins=args.bins, model=not args.no_model).run()
         summary = fr.summary()
-        figures = fr.plot(folder) if folder is not None else []
+        figures = feedrate_figures(fr, folder) if folder is not None else []
     print_figures(summary, figures, args.json, table)
     return 0

@@ -4,8 +4,11 @@ from __future__ import annotations
 
 DESCRIPTION = ("Draw a result off-screen (no display needed): the track at the frame's surface "
                "position and the parts with their real shapes (spheres; chips as boxes, discs as "
-               "cylinders, oriented), coloured by speed or by cluster of touching parts. "
-               "FILE.png draws one frame (default: the last), FILE.mp4 every frame.")
+               "cylinders, oriented), coloured by speed (the scale spans the parts on the track; "
+               "faster parts off it are counted on the bar) or by cluster of touching parts, "
+               "true to scale along the track with a scale bar, the run named in the footer. "
+               "FILE.png draws one frame (default: the last), FILE.mp4 every frame (frames a whole "
+               "number of vibration periods apart are stroboscopic: each frame says so).")
 
 
 def size(text: str) -> tuple[int, int]:
@@ -26,7 +29,7 @@ def add_arguments(p) -> None:
     p.add_argument("--frame", type=int, default=-1, metavar="K",
                    help="frame to draw in a PNG, from 0; negative counts from the end (default -1)")
     p.add_argument("--color", choices=("speed", "cluster"), default="speed",
-                   help="colour the parts by speed [m/s] or by the size of their cluster of "
+                   help="colour the parts by speed [mm/s] or by the size of their cluster of "
                         "touching parts (default speed)")
     p.add_argument("--size", type=size, default=(1280, 720), metavar="WxH",
                    help="picture size in pixels (default 1280x720)")
@@ -62,4 +65,6 @@ def run(args) -> int:
     w, h = done.size
     what = "1 frame" if done.frames == 1 else f"{done.frames} frames"
     print(f"wrote {done.path} ({what}, {w}x{h}, {done.seconds:.1f} s)")
+    if done.note:
+        print(f"note: {done.note}", file=sys.stderr)
     return 0

@@ -65,6 +65,7 @@ def table(s: dict) -> str:
 
 
 def run(args) -> int:
+    from ..pictures.plots import singulation_figures
     from ..postproc.singulation import Singulation
     from ..results.reader import Result
 
@@ -74,6 +75,6 @@ def run(args) -> int:
                          tolerance=args.tolerance, start=args.start, end=args.end,
                          cluster_frames=args.cluster_frames).run()
         summary = sg.summary()
-        figures = sg.plot(folder) if folder is not None else []
+        figures = singulation_figures(sg, folder) if folder is not None else []
     print_figures(summary, figures, args.json, table)
     return 0

@@ -1,9 +1,17 @@
 """Draw a result off-screen with pyvista: a PNG of one frame, an MP4 of many.
 
 The track is drawn at the frame's surface position, the parts with their real
-shapes (:mod:`.scene`), coloured by speed (a colour bar in m/s) or by the size
-of the cluster of touching parts they belong to (single parts grey), seen
-obliquely from the front, above the inlet end, with the time in the title.
+shapes (:mod:`.scene`), coloured by speed or by the size of the cluster of
+touching parts they belong to (single parts grey), seen from the front and
+above in parallel projection: lengths along the track are true to scale on the
+screen, and a scale bar in mm says how long. The speed scale spans the parts on
+the track: the few parts falling past the outlet edge, ten times faster, would
+otherwise give every conveyed part one colour; they take the colour above the
+scale, and the bar says how many they are. The title holds the time,
+the frame and the vibration phase; the footer names the run
+(:func:`.caption.run_caption`). A movie whose frames fall a whole number of
+vibration periods apart samples the vibration stroboscopically: every frame
+says so (the track's oscillation is not seen, the parts' drift is).
 
 No display is needed: without ``DISPLAY`` VTK is asked for its EGL window
 (Mesa's software renderer, Debian packages ``libegl1`` and
@@ -22,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import OutputError, UsageError
+from .caption import run_caption
 from .scene import FrameData, floor_patch, part_shape, read_frame, shape_mesh, track_mesh
 
 COLORINGS = ("speed", "cluster")
@@ -33,9 +42,17 @@ BACKGROUND = "white"
 # --color cluster: the default of the singulation analysis (postproc/singulation.py),
 # so that the picture shows the clusters it counts.
 TOUCH_DIAMETERS = 0.01
-# Direction from the track's centre to the camera: in front (-y), above (+z),
-# a little towards the inlet (-x), so the whole length is seen and the parts stand out.
-VIEW_DIRECTION = np.array([-0.3, -0.8, 1.0])
+# Direction from the track's centre to the camera: in front (-y) and above (+z), square
+# to the track (no x): in parallel projection x then maps to the screen's x at one scale.
+VIEW_DIRECTION = np.array([0.0, -0.8, 1.0])
+# Frames this close (in periods) to a whole number of vibration periods apart are stroboscopic.
+STROBE_TOLERANCE = 0.02
+# Fraction of the picture's width left to the scene (the colour bar takes the rest).
+SCENE_WIDTH = 0.86
+MARGIN_PX = 12
+# Room in view past the far end of the track, as a fraction of its length: parts falling off.
+FALL_ROOM = 0.12
+BAR_Y_PX = 30  # the scale bar's height above the picture's bottom edge (the footer below it)
 
 
 @dataclass(frozen=True)
@@ -46,6 +63,7 @@ class Rendered:
     frames: int
     size: tuple[int, int]
     seconds: float
+    note: str = ""  # what the viewer should know (a stroboscopic movie)
 
 
 def _offscreen_pyvista():
@@ -83,19 +101,54 @@ def _cluster_sizes(result, frame: FrameData) -> np.ndarray:
     return np.bincount(labels)[labels].astype(float)
 
 
-def _speed_limit(result, frames: np.ndarray) -> float:
-    """Top of the speed colour scale for a movie: the largest per-frame 99th percentile
-    (fixed over the movie so that colours compare between frames; a few fast falling
-    parts past the outlet do not wash out the rest)."""
+def on_track(result, position: np.ndarray, surface_position: np.ndarray) -> np.ndarray:
+    """(..., N) True for parts over the track: not past its outlet edge along x in the
+    track's frame (every part when the run has no outlet edge)."""
+    from ..postproc.feedrate import outlet_x
+
+    edge = outlet_x(result)
+    x = position[..., 0] - np.asarray(surface_position)[..., 0, None]
+    inside = np.isfinite(x)
+    return inside & (x <= edge) if np.isfinite(edge) else inside
+
+
+def speed_limit(result, frames: np.ndarray) -> float:
+    """Top of the speed colour scale [m/s]: the largest speed of a part on the track over
+    ``frames`` (fixed over a movie, so that colours compare between frames). Parts falling
+    past the outlet are left out: ten times faster than the conveyed ones, they would give
+    every conveyed part one colour."""
     top = 0.0
     for k in range(0, len(frames), 256):
-        v = result.read("velocity", frames=frames[k:k + 256])
-        speed = np.linalg.norm(v, axis=-1)
-        for row in speed:
-            row = row[np.isfinite(row)]
+        block = frames[k:k + 256]
+        speed = np.linalg.norm(result.read("velocity", frames=block), axis=-1)
+        track = on_track(result, result.read("position", frames=block),
+                         result.read("surface_position", frames=block))
+        for row, keep in zip(speed, track):
+            row = row[keep & np.isfinite(row)]
             if len(row):
-                top = max(top, float(np.percentile(row, 99)))
+                top = max(top, float(row.max()))
     return top if top > 0 else 1e-3
+
+
+def nice_length(span: float) -> float:
+    """The largest 1, 2 or 5 x 10^k not above ``span`` (> 0): a scale bar's length."""
+    k = np.floor(np.log10(span))
+    for m in (5.0, 2.0, 1.0):
+        if m * 10 ** k <= span:
+            return float(m * 10 ** k)
+    return float(10 ** k)
+
+
+def stroboscopic(times: np.ndarray, freq: float) -> int:
+    """Periods between successive frames when they fall a whole number (>= 1) of vibration
+    periods apart (within ``STROBE_TOLERANCE``), else 0."""
+    if len(times) < 2 or not freq > 0:
+        return 0
+    cycles = np.diff(np.asarray(times, dtype=float)) * freq
+    whole = np.round(cycles)
+    if (whole >= 1).all() and (np.abs(cycles - whole) <= STROBE_TOLERANCE).all() and len(set(whole)) == 1:
+        return int(whole[0])
+    return 0
 
 
 def _view_bounds(result, frames: np.ndarray) -> np.ndarray:
@@ -131,10 +184,15 @@ class _Painter:
         self.bounds = _view_bounds(result, frames)
         # A movie keeps one colour scale over its frames, so that colours compare.
         movie = len(frames) > 1
-        self.speed_top = _speed_limit(result, frames) if movie and color == "speed" else None
+        self.speed_top = speed_limit(result, frames) if color == "speed" else None
         self.cluster_top = (max(_cluster_sizes(result, read_frame(result, int(k))).max(initial=1)
                                 for k in frames) if movie and color == "cluster" else None)
         self.deck = result.deck_name or Path(result.path).stem
+        self.caption = run_caption(result)
+        self.freq = float(result.parameters.get("freq", 0.0) or 0.0)
+        self.strobe = stroboscopic(result.time[frames], self.freq) if movie else 0
+        self.size = tuple(int(v) for v in size)
+        self.px_per_m = None  # set with the camera
         self.plotter = pv.Plotter(off_screen=True, window_size=list(size))
         self.plotter.set_background(BACKGROUND)
         # No multisampling: with Mesa's software renderer pyvista's default 8x MSAA makes a
@@ -160,10 +218,17 @@ class _Painter:
         bar = {"color": "black", "vertical": True, "position_x": 0.9, "position_y": 0.2,
                "width": 0.05, "height": 0.6, "title_font_size": 16, "label_font_size": 14}
         if self.color == "speed":
-            mesh.point_data["speed"] = frame.speed[owner]
-            top = self.speed_top or (float(frame.speed.max()) if len(frame) else 0.0) or 1e-3
+            mesh.point_data["speed"] = frame.speed[owner] * 1e3
+            top = self.speed_top * 1e3
+            # Only parts off the track can be faster than the scale (speed_limit).
+            faster = int((frame.speed > self.speed_top).sum())
+            title = "speed [mm/s]"
+            if faster:
+                title += f"\nclipped: {faster} part{'s' if faster > 1 else ''}\noff the track faster"
             return mesh, {"scalars": "speed", "cmap": "viridis", "clim": (0.0, top),
-                          "scalar_bar_args": {**bar, "title": "speed [m/s]", "fmt": "%.3g"}}
+                          "above_color": "#ff00ff",
+                          "scalar_bar_args": {**bar, "title": title, "fmt": "%.3g",
+                                              "above_label": "faster"}}
         sizes = _cluster_sizes(self.result, frame)
         mesh.point_data["cluster size"] = sizes[owner]
         top = int(max(self.cluster_top or sizes.max(initial=1), 3))
@@ -179,15 +244,35 @@ class _Painter:
         return mesh, style
 
     def _set_camera(self) -> None:
-        lo, hi = self.bounds[0::2], self.bounds[1::2]
-        centre = (lo + hi) / 2
+        """Parallel projection square to x, the view bounds fitted into the scene's part of
+        the picture (left of the colour bar): ``px_per_m`` pixels per metre along x."""
+        lo, hi = self.bounds[0::2], self.bounds[1::2].copy()
+        hi[0] += FALL_ROOM * (hi[0] - lo[0])  # the parts falling past the outlet edge stay in view
+        w, h = self.size
         direction = VIEW_DIRECTION / np.linalg.norm(VIEW_DIRECTION)
-        extent = float(np.linalg.norm(hi - lo))
-        self.plotter.camera_position = [tuple(centre + direction * extent), tuple(centre), (0, 0, 1)]
-        self.plotter.reset_camera(bounds=tuple(self.bounds))
-        self.plotter.camera.zoom(1.5)  # reset_camera fits the bounding sphere: a long track is thin
-        self.plotter.camera.SetWindowCenter(0.08, 0.0)  # the scene a little left of the colour bar
+        up = np.array([0.0, 0.0, 1.0]) - direction[2] * direction
+        up /= np.linalg.norm(up)
+        corners = np.array(np.meshgrid(*zip(lo, hi), indexing="ij")).reshape(3, -1).T
+        tall = float(np.ptp(corners @ up))
+        # Half the view's height in metres: the taller of the bounds' height and their
+        # length scaled to the picture's shape, with room for the title, scale bar and footer.
+        scale = 0.5 * max(tall / 0.72, (hi[0] - lo[0]) * h / (SCENE_WIDTH * w * 0.96))
+        self.px_per_m = h / (2 * scale)
+        centre = (lo + hi) / 2
+        # Shift the view right by half the colour bar's share: the scene sits left of the bar.
+        centre[0] += 0.5 * (1 - SCENE_WIDTH) * w / self.px_per_m
+        camera = self.plotter.camera
+        self.plotter.camera_position = [tuple(centre + direction * float(np.linalg.norm(hi - lo))),
+                                        tuple(centre), tuple(up)]
+        camera.SetParallelProjection(True)
+        camera.SetParallelScale(scale)
+        self.plotter.reset_camera_clipping_range()
         self._camera_set = True
+
+    def scale_bar(self) -> tuple[float, int]:
+        """(length [m], length [px]) of the scale bar: a round length near a fifth of the view."""
+        length = nice_length(0.2 * SCENE_WIDTH * self.size[0] / self.px_per_m)
+        return length, int(round(length * self.px_per_m))
 
     def draw(self, frame: FrameData) -> None:
         p = self.plotter
@@ -195,22 +280,45 @@ class _Painter:
         # render=False everywhere: one render per picture, in image(), not one per actor.
         p.add_mesh(_polydata(self.pv, vertices, triangles), color=TRACK_COLOR, name="track",
                    smooth_shading=False, show_scalar_bar=False, render=False)
+        # The bar's title changes with the frame (the parts off the scale): one bar, redrawn.
+        for title in list(p.scalar_bars.keys()):
+            p.remove_scalar_bar(title, render=False)
         if len(frame):
             mesh, style = self._part_mesh(frame)
             # The mesh brings its normals: no smoothing pass over all the parts' points.
             p.add_mesh(mesh, name="parts", smooth_shading=False, render=False, **style)
         else:
             p.remove_actor("parts", render=False)
-        p.add_text(f"{self.deck}   t = {frame.time:.4f} s   frame {frame.index}/{frame.n_frames - 1}"
-                   f"   {len(frame)} parts", position="upper_left", font_size=12, color="black",
-                   name="title", render=False)
+        title = f"{self.deck}   t = {frame.time:.4f} s   frame {frame.index}/{frame.n_frames - 1}"
+        if self.freq > 0:
+            title += f"   phase {frame.time * self.freq % 1:.2f} T"
+        title += f"   {len(frame)} parts"
+        if self.strobe:
+            title += (f"\nstroboscopic: one frame every {self.strobe} vibration period"
+                      f"{'s' if self.strobe > 1 else ''} - the track's oscillation is not seen, "
+                      "the parts' drift is")
+        p.add_text(title, position="upper_left", font_size=11, color="black", name="title",
+                   render=False)
+        p.add_text(self.caption, position=(MARGIN_PX, 6), font_size=7, color="#404040",
+                   name="footer", render=False)
         if not self._camera_set:
             self._set_camera()
+            length, px = self.scale_bar()
+            p.add_text(f"{length * 1e3:g} mm", position=(MARGIN_PX, BAR_Y_PX + 6), font_size=9,
+                       color="black", name="scale", render=False)
+
+    def _paint_bar(self, image: np.ndarray) -> np.ndarray:
+        """The scale bar painted into the picture (rows from the top): black, 3 px thick."""
+        _, px = self.scale_bar()
+        h = image.shape[0]
+        row = h - BAR_Y_PX
+        image[row - 3:row, MARGIN_PX:MARGIN_PX + px] = 0
+        return image
 
     def image(self) -> np.ndarray:
         """(height, width, 3) uint8 of what is drawn."""
         self.plotter.render()  # screenshot() renders by itself only the first time
-        return self.plotter.screenshot(return_img=True)
+        return self._paint_bar(np.array(self.plotter.screenshot(return_img=True)))
 
     def close(self) -> None:
         self.plotter.close()
@@ -320,4 +428,10 @@ def render(result, output, frame: int = -1, color: str = "speed", size=DEFAULT_S
         _write_mp4(painter, frames, output, fps, (w, h), progress)
     finally:
         painter.close()
-    return Rendered(output, len(frames), (w, h), _time.perf_counter() - start)
+    note = ""
+    if painter.strobe:
+        note = (f"the frames drawn fall every {painter.strobe} vibration period"
+                f"{'s' if painter.strobe > 1 else ''}: the movie is stroboscopic (the track's "
+                "oscillation is not seen, the parts' drift is); to see the vibration, run with "
+                f"-p output_dt={1 / (8 * painter.freq):.3g} (8 frames per period)")
+    return Rendered(output, len(frames), (w, h), _time.perf_counter() - start, note)

@@ -136,8 +136,10 @@ def report(folder, plot_folder=None) -> dict:
            "varied": varied, "merit": merit, "settings": entries, "best": chosen, "figures": []}
     if plot_folder is not None and entries:
         groups = [[k for k in axis if k in varied] for axis in meta["axes"]]
+        title = (f"sweep {Path(folder).resolve().name}; deck {meta.get('deck')}; {len(entries)} "
+                 f"settings, {len(rows) - len(failed)} runs done")
         out["figures"] = plots(entries, [g for g in groups if g], merit, chosen, Path(plot_folder),
-                               units)
+                               units, title)
     return out
 
 
@@ -192,20 +194,20 @@ def plotted(entries, groups: list[list[str]], chosen) -> tuple[list[str], list[d
     return [g[0] for g in groups], _slice(entries, [k for g in groups for k in g], chosen)
 
 
-def plots(entries, groups: list[list[str]], merit: str, chosen, folder: Path, units=None) -> list[str]:
-    """The maps of the module docstring; ``groups``: the varied axes, each the list of
-    parameters that vary together (one for a grid axis, several for a zipped group)."""
-    from ..figures import pyplot, save
+def plots(entries, groups: list[list[str]], merit: str, chosen, folder: Path, units=None,
+          title: str = "") -> list[str]:
+    """The maps of the module docstring (drawn by :mod:`vibrofeed.pictures.sweep_maps`, headed
+    by ``title``); ``groups``: the varied axes, each the list of parameters that vary
+    together (one for a grid axis, several for a zipped group)."""
+    from ..pictures.sweep_maps import heat_map, trends
 
-    plt = pyplot()
     label, scale = heading(merit), FIGURES[merit][2]
     units = units or {}
-
     partners = {g[0]: g[1:] for g in groups}
 
     def axis_label(name):
-        unit = units.get(name, "")
-        text = f"{name} [{unit}]" if unit and unit != "-" else name
+        u = units.get(name, "")
+        text = f"{name} [{u}]" if u and u != "-" else name
         return text + (f" (= {', '.join(partners[name])})" if partners.get(name) else "")
 
     def n_values(name):
@@ -213,32 +215,14 @@ def plots(entries, groups: list[list[str]], merit: str, chosen, folder: Path, un
 
     out = []
     axes, part = plotted(entries, groups, chosen)
+    held = {k: v for k, v in (chosen or {}).get("parameters", {}).items()
+            if k not in [p for g in groups if g[0] in axes for p in g]}
+    if held:
+        title += "; other parameters at the best setting's: " + ", ".join(
+            f"{k} {v:g}" if isinstance(v, float) else f"{k} {v}" for k, v in held.items())
     if len(axes) >= 2:
-        a, b = axes[:2]
-        xs = sorted({e["parameters"][a] for e in part})
-        ys = sorted({e["parameters"][b] for e in part})
-        import numpy as np
-
-        grid = np.full((len(ys), len(xs)), np.nan)
-        for e in part:
-            if e["merit"] is not None:
-                grid[ys.index(e["parameters"][b]), xs.index(e["parameters"][a])] = e["merit"] * scale
-        fig, ax = plt.subplots(figsize=(6.5, 4.8), layout="constrained")
-        im = ax.imshow(grid, origin="lower", aspect="auto", cmap="viridis")
-        ax.set_xticks(range(len(xs)), [f"{x:g}" for x in xs])
-        ax.set_yticks(range(len(ys)), [f"{y:g}" for y in ys])
-        for (i, j), v in np.ndenumerate(grid):
-            if np.isfinite(v):
-                ax.text(j, i, f"{v:.3g}", ha="center", va="center", fontsize=8,
-                        color="w" if v < np.nanmean(grid) else "k")
-        ax.set_xlabel(axis_label(a))
-        ax.set_ylabel(axis_label(b))
-        fig.colorbar(im, ax=ax, label=label)
-        if chosen is not None and chosen in part:
-            ax.plot(xs.index(chosen["parameters"][a]), ys.index(chosen["parameters"][b]), "r*", ms=14,
-                    label="best")
-            ax.legend(loc="upper right", fontsize=8)
-        out.append(str(save(fig, folder / "sweep_map.png")))
+        out.append(str(heat_map(part, axes[0], axes[1], label, scale, axis_label, chosen,
+                                folder / "sweep_map.png", title)))
     if axes:
         a, series = axes[0], (axes[1] if len(axes) > 1 else None)
         if series is not None and n_values(series) > n_values(a):
@@ -249,20 +233,5 @@ def plots(entries, groups: list[list[str]], merit: str, chosen, folder: Path, un
         if merit == "parts_per_s":
             panels.append(("mean_velocity", heading("mean_velocity"), FIGURES["mean_velocity"][2]))
         panels.append(("singulated_fraction", "singulated fraction [%]", 100.0))
-        fig, row = plt.subplots(1, len(panels), figsize=(5.2 * len(panels), 4.2), layout="constrained")
-        for value in sorted({e["parameters"][series] for e in part}) if series else [None]:
-            line = sorted((e for e in part if series is None or e["parameters"][series] == value),
-                          key=lambda e: e["parameters"][a])
-            name = f"{series}={value:g}" if series else None
-            x = [e["parameters"][a] for e in line]
-            for ax, (key, _, k) in zip(row, panels):
-                y = [math.nan if e[key] is None else e[key] * k for e in line]
-                err = [0.0 if e[f"{key}_err"] is None else e[f"{key}_err"] * k for e in line]
-                ax.errorbar(x, y, yerr=err, marker="o", ms=4, capsize=3, label=name)
-        for ax, (_, ylabel, _) in zip(row, panels):
-            ax.set_xlabel(axis_label(a))
-            ax.set_ylabel(ylabel)
-            if series:
-                ax.legend(fontsize=8)
-        out.append(str(save(fig, folder / f"sweep_vs_{a}.png")))
+        out.append(str(trends(part, a, series, panels, axis_label, folder / f"sweep_vs_{a}.png", title)))
     return out
