@@ -12,14 +12,22 @@ then too). A build at first use would need a compiler and a writable cache
 on every node a job runs on, and the workers of a sweep would race to make it.
 """
 
+import atexit
 import os
 import shutil
+import tempfile
 
 from setuptools import Extension, setup
 from setuptools.command.build_ext import build_ext
 from setuptools.errors import CompileError
 
 SHIM = "vibrofeed.engine.libvibrofeed_abortflush"
+
+
+def _scratch() -> str:
+    folder = tempfile.mkdtemp(prefix="vibrofeed-build-")
+    atexit.register(shutil.rmtree, folder, ignore_errors=True)
+    return folder
 
 
 class BuildShim(build_ext):
@@ -41,5 +49,7 @@ class BuildShim(build_ext):
 
 setup(ext_modules=[Extension(SHIM, sources=["native/abort_flush.c"])],
       cmdclass={"build_ext": BuildShim},
-      # setuptools' scratch files in a folder of their own, not among CMake's in build/
-      options={"build": {"build_base": "build/setuptools"}})
+      # A fresh scratch folder for each build, removed after it: setuptools never empties its
+      # build/lib nor forgets the files an earlier build listed in its egg-info, so a file
+      # taken out of the package data would linger in the next wheel (and build/ is CMake's).
+      options={"build": {"build_base": _scratch()}, "egg_info": {"egg_base": _scratch()}})
