@@ -4,11 +4,13 @@
 #   bash bootstrap.sh demo       # install, then run the main job (the default)
 #   bash bootstrap.sh test       # install, then run the default test suite (CTest)
 #   bash bootstrap.sh validate   # install, then run the long validation cases
-#   bash bootstrap.sh setup      # install only
+#   bash bootstrap.sh setup      # install only (what demo needs)
 #
-# Installs: Debian packages (LIGGGHTS, Open MPI, Python, compilers, CMake),
-# a virtual environment at .venv with vibrofeed installed editable (mpi4py
-# built against the system Open MPI), and the CMake build directory build/.
+# Installs what the job needs and no more. Every job: Debian packages (LIGGGHTS,
+# Open MPI, Python, compilers, ffmpeg) and a virtual environment at .venv with
+# vibrofeed installed editable (mpi4py built against the system Open MPI, the
+# abort shim built into the package). `test` and `validate` add the test tools:
+# TEST_APT_PACKAGES, the Python extra `test`, and the CMake build directory build/.
 # Every step is skipped when already done, so a second call takes seconds.
 set -euo pipefail
 
@@ -20,8 +22,14 @@ case "$JOB" in demo|test|validate|setup) ;; *)
 esac
 
 APT_PACKAGES=(liggghts libliggghts-dev openmpi-bin libopenmpi-dev
-              python3 python3-venv python3-dev build-essential cmake ca-certificates
-              libegl1 libgl1-mesa-dri)  # off-screen pictures: VTK's EGL window, Mesa software GL
+              python3 python3-venv python3-dev build-essential ca-certificates
+              libegl1 libgl1-mesa-dri  # off-screen pictures: VTK's EGL window, Mesa software GL
+              ffmpeg)                  # movies: vibrofeed render -o RUN.mp4
+# Only for the test suite (jobs test and validate); append what a test needs.
+TEST_APT_PACKAGES=(cmake)
+WITH_TESTS=0
+[[ $JOB == test || $JOB == validate ]] && WITH_TESTS=1
+((WITH_TESTS)) && APT_PACKAGES+=("${TEST_APT_PACKAGES[@]}")
 
 say() { printf '\033[1m[bootstrap]\033[0m %s\n' "$*"; }
 
@@ -57,26 +65,35 @@ fi
 
 # ------------------------------------------------------------ Python venv
 PY=/usr/bin/python3   # Debian's Python: the one the system MPI and LIGGGHTS are built for
+# The stamp holds what was installed: a hash of the files the install reads or
+# builds, and the extras. A changed hash reinstalls with the extras already there;
+# a job that needs the test extra adds it once.
 STAMP=.venv/.vibrofeed-installed
-WANT=$(sha256sum pyproject.toml | cut -d' ' -f1)
+HASH=$(cat pyproject.toml setup.py native/abort_flush.c | sha256sum | cut -d' ' -f1)
+read -r had_hash had_extras 2>/dev/null < "$STAMP" || true
+EXTRAS=${had_extras:-}
+((WITH_TESTS)) && EXTRAS=test
 if [[ ! -x .venv/bin/python ]]; then
   say "creating .venv"
   quietly "$PY" -m venv .venv
 fi
-if [[ ! -f $STAMP || $(cat "$STAMP") != "$WANT" ]]; then
-  say "installing vibrofeed and its Python dependencies into .venv (mpi4py is compiled: a few minutes)"
+SHIM=vibrofeed/engine/libvibrofeed_abortflush.so  # the editable install builds it in place
+if [[ ${had_hash:-} != "$HASH" || ${had_extras:-} != "$EXTRAS" || ! -f $SHIM ]]; then
+  say "installing vibrofeed${EXTRAS:+ with its $EXTRAS tools} into .venv (mpi4py is compiled the first time: a few minutes)"
   quietly .venv/bin/python -m pip install --upgrade pip
   # mpi4py from source, against the system Open MPI that LIGGGHTS uses.
-  quietly .venv/bin/python -m pip install --no-binary mpi4py -e ".[test]"
-  echo "$WANT" > "$STAMP"
+  quietly .venv/bin/python -m pip install --no-binary mpi4py -e ".${EXTRAS:+[$EXTRAS]}"
+  echo "$HASH $EXTRAS" > "$STAMP"
 fi
 
-# ------------------------------------------------------------ CMake build dir
-if [[ ! -f build/CMakeCache.txt ]]; then
-  say "configuring build/"
-  quietly cmake -S . -B build -DPython3_EXECUTABLE="$ROOT/.venv/bin/python"
+# ------------------------------------------------------------ CMake build dir (tests only)
+if ((WITH_TESTS)); then
+  if [[ ! -f build/CMakeCache.txt ]]; then
+    say "configuring build/"
+    quietly cmake -S . -B build -DPython3_EXECUTABLE="$ROOT/.venv/bin/python"
+  fi
+  quietly cmake --build build
 fi
-quietly cmake --build build
 
 # ------------------------------------------------------------ the job
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
@@ -91,5 +108,5 @@ case "$JOB" in
     say "running the validation cases (ctest -L validation)"
     ctest --test-dir build -L validation --output-on-failure ;;
   setup)
-    say "ready: .venv/bin/vibrofeed --help" ;;
+    say "ready: .venv/bin/vibrofeed --help (bash bootstrap.sh test adds the test tools)" ;;
 esac

@@ -55,11 +55,18 @@ _GENERATED_DIR = "${mesh_dir}/"  # files a prepare hook writes for each run
 
 
 def decks_dir() -> Path:
-    """The folder holding the project's decks (``VIBROFEED_DECKS`` overrides)."""
+    """The folder holding the project's decks (``VIBROFEED_DECKS`` overrides).
+
+    An installed package holds the repository's ``decks/`` folder as
+    ``vibrofeed/_decks`` (package data, see pyproject.toml); in a source
+    checkout (an editable install) it is ``decks/`` itself.
+    """
     env = os.environ.get("VIBROFEED_DECKS")
     if env:
         return Path(env)
-    return Path(__file__).resolve().parent.parent / "decks"
+    here = Path(__file__).resolve().parent
+    installed = here / "_decks"
+    return installed if installed.is_dir() else here.parent / "decks"
 
 
 def available() -> list[str]:

@@ -75,14 +75,16 @@ def clean_environment(env: Mapping[str, str] | None = None) -> dict:
 
 
 def abort_shim() -> Path | None:
-    """The library that flushes LIGGGHTS' output before MPI_Abort (built by CMake).
+    """The library that flushes LIGGGHTS' output before MPI_Abort
+    (``VIBROFEED_ABORT_SHIM`` overrides).
 
-    Without it the message of an ``error->one`` (e.g. a mesh file that cannot
-    be opened) is lost in an unflushed buffer; runs still work.
+    The package's installer builds it next to this module from
+    ``native/abort_flush.c`` (setup.py). Without it the message of an
+    ``error->one`` (e.g. a mesh file that cannot be opened) is lost in an
+    unflushed buffer; runs still work.
     """
     env = os.environ.get("VIBROFEED_ABORT_SHIM")
-    default = Path(__file__).resolve().parents[2] / "build/native/libvibrofeed_abortflush.so"
-    path = Path(env) if env else default
+    path = Path(env) if env else Path(__file__).resolve().parent / "libvibrofeed_abortflush.so"
     return path if path.is_file() else None
 
 

@@ -16,7 +16,7 @@ says so (the track's oscillation is not seen, the parts' drift is).
 No display is needed: without ``DISPLAY`` VTK is asked for its EGL window
 (Mesa's software renderer, Debian packages ``libegl1`` and
 ``libgl1-mesa-dri``), which renders to memory. Movies are encoded by the
-ffmpeg that the ``imageio-ffmpeg`` package ships (or one on the PATH).
+ffmpeg on the PATH (Debian package ``ffmpeg``).
 """
 
 from __future__ import annotations
@@ -338,16 +338,10 @@ def render_frame(result, frame: int = -1, color: str = "speed", size=DEFAULT_SIZ
 
 
 def _ffmpeg() -> str:
-    try:
-        import imageio_ffmpeg
-
-        return imageio_ffmpeg.get_ffmpeg_exe()
-    except (ImportError, RuntimeError):
-        found = shutil.which("ffmpeg")
-        if found is None:
-            raise OutputError("writing MP4 needs ffmpeg: pip install imageio-ffmpeg "
-                              "(or put ffmpeg on the PATH)") from None
-        return found
+    found = shutil.which("ffmpeg")
+    if found is None:
+        raise OutputError("writing MP4 needs ffmpeg on the PATH: apt-get install ffmpeg")
+    return found
 
 
 def _write_png(image: np.ndarray, path: Path) -> None:
