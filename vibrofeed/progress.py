@@ -85,7 +85,7 @@ class RunProgress:
         rate = step / wall if wall > 0 else float("nan")
         eta = f", ETA {_duration((self.n_steps - step) / rate)}" if rate > 0 else ""
         print(f"{self.label}: t = {event['time']:.4g}/{self.t_end:.4g} s "
-              f"({100 * step / self.n_steps:.0f}%), {rate / 1e3:.3g}k steps/s{eta}",
+              f"({100 * step / self.n_steps:.3g}%), {rate / 1e3:.3g}k steps/s{eta}",
               file=self.stream, flush=True)
 
     def close(self) -> None:

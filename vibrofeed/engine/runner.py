@@ -240,6 +240,7 @@ def run_deck(deck: Deck, params: Mapping[str, str], output, *, ranks: int = 1,
     through :mod:`vibrofeed.interrupt`) stops the worker and marks the file
     ``interrupted``.
     """
+    interrupt.check()  # a process being stopped starts no run (queued runs of other threads)
     check_ranks(ranks)
     values = resolve(deck, params)
     rid = run_id(deck, values, before_run, schedule)
@@ -351,22 +352,21 @@ class _Run:
         while True:
             try:
                 line = lines.get(timeout=0.5)
-            except queue.Empty:
-                line = ""
+            except queue.Empty:  # judged only with every message read: if this process
+                self.hung = watch.stalled(time.monotonic())  # was suspended, it is behind
+                if self.hung is not None:
+                    _stop(self.proc)
+                    break
+                continue
             if line is None:
                 break
-            now = time.monotonic()
             if line.startswith(MARK):
                 event = json.loads(line[len(MARK):])
-                watch.saw(event, now)
+                watch.saw(event, time.monotonic())
                 if event["event"] != "alive":  # the heartbeat is the watchdog's only
                     self.events.append(event)
                     if self.on_event is not None:
                         self.on_event(event)
-            self.hung = watch.stalled(now)
-            if self.hung is not None:
-                _stop(self.proc)
-                break
         self.rc = self.proc.wait()
 
     def stop(self, why: str) -> None:
@@ -430,14 +430,15 @@ class _Run:
 
     def fail(self, error: RunError):
         """Record ``error`` in the file (kept if it holds frames, or after a full
-        disk whatever it holds) and raise it."""
+        disk whatever it holds) and raise it; ``error.partial`` names the file
+        if it holds frames and says ``failed``."""
         frames = _frames_in(self.part)[0] if self.part.exists() else 0
         full = isinstance(error, OutputError) and str(error).startswith("no space left")
         if frames:
             from ..results.writer import mark_file_status
 
-            mark_file_status(self.part, L.STATUS_FAILED, str(error))
-            error.partial = (self.part, frames)
+            if mark_file_status(self.part, L.STATUS_FAILED, str(error)):
+                error.partial = (self.part, frames)
         elif not full:
             self.part.unlink(missing_ok=True)
         raise error

@@ -37,20 +37,22 @@ class Watchdog:
         self.slowest = 0.0
 
     def saw(self, event: dict, now: float) -> None:
-        """Note a message of the worker, received at ``now``."""
+        """Note a message of the worker, received at ``now``. A heartbeat's own time
+        (``at``, the same monotonic clock) times the steps: messages read late, after
+        this process was suspended, still tell how the worker went."""
         self.last_seen = now
         kind = event.get("event")
         if kind == "run":
             self.running, self.last_advance = True, now
             return
-        advanced = kind == "progress"
-        if kind == "alive":
-            step = event.get("step")
-            advanced = step is not None and self.step is not None and step != self.step
-            self.step = step
-        if advanced and self.running:
-            self.slowest = max(self.slowest, now - self.last_advance)
-            self.last_advance = now
+        if kind != "alive":
+            return
+        step, at = event.get("step"), min(float(event.get("at", now)), now)
+        advanced = step is not None and self.step is not None and step != self.step
+        self.step = step
+        if advanced and self.running and at > self.last_advance:
+            self.slowest = max(self.slowest, at - self.last_advance)
+            self.last_advance = at
 
     def limit(self) -> float:
         """Seconds without a step that mean the run is hung, now."""

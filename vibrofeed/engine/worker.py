@@ -81,7 +81,7 @@ class Heartbeat:
         while not self._stop.wait(HEARTBEAT_SECONDS):
             with self._lock:
                 step = int(self._counter[0]) if self._counter is not None else None
-            self.report("alive", step=step)
+            self.report("alive", step=step, at=time.monotonic())
 
     def stop(self) -> None:
         self._stop.set()
