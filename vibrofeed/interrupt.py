@@ -1,13 +1,14 @@
-"""One way for a vibrofeed process to stop when told to: Ctrl-C (SIGINT) or SIGTERM.
+"""One way for a vibrofeed process to stop when told to: Ctrl-C (SIGINT), SIGTERM, SIGHUP.
 
 SIGTERM is what ``timeout``, Slurm at the end of a job's time and a cluster's
-preemption send. The command line turns it into :class:`Terminated`, a
-:class:`KeyboardInterrupt`, so both signals take one path: every run in flight
-is stopped, its file marked ``interrupted`` with its frames kept, its scratch
-folder removed. Runs waited for in other threads (sweeps, validation) cannot
-see the main thread's exception: the runner registers a stopper for each run
-here, and :func:`stop_all` calls them and waits until their threads have
-cleaned up. Once stopping has begun, no new run starts (:func:`check`).
+preemption send (SIGHUP: a closed terminal or ssh session). The command line
+turns them into :class:`Terminated`, a :class:`KeyboardInterrupt`, so every
+signal takes one path: every run in flight is stopped, its file marked
+``interrupted`` with its frames kept, its scratch folder removed. Runs waited
+for in other threads (sweeps, validation) cannot see the main thread's
+exception: the runner registers a stopper for each run here, and
+:func:`stop_all` calls them and waits until their threads have cleaned up.
+Once stopping has begun, no new run starts (:func:`check`).
 """
 
 from __future__ import annotations
@@ -21,9 +22,13 @@ from .errors import EXIT_INTERRUPTED
 
 
 class Terminated(KeyboardInterrupt):
-    """SIGTERM arrived: the process ends as after Ctrl-C, with exit status 143."""
+    """SIGTERM (or SIGHUP: the terminal or the ssh session closed) arrived: the
+    process ends as after Ctrl-C, with exit status 128 + the signal's number."""
 
-    exit_code = 128 + signal.SIGTERM
+    def __init__(self, signum: int = signal.SIGTERM):
+        super().__init__(signum)
+        self.signum = signal.Signals(signum)
+        self.exit_code = 128 + self.signum
 
 
 def exit_code(exc: KeyboardInterrupt) -> int:
@@ -32,21 +37,24 @@ def exit_code(exc: KeyboardInterrupt) -> int:
 
 def message(exc: KeyboardInterrupt) -> str:
     """The command line's one line about it."""
-    return "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"
+    return f"terminated ({exc.signum.name})" if isinstance(exc, Terminated) else "interrupted"
 
 
 def reason(exc: KeyboardInterrupt) -> str:
     """What stopped the run, as the result file records it."""
-    return "terminated by SIGTERM" if isinstance(exc, Terminated) else "interrupted by the user"
+    return f"terminated by {exc.signum.name}" if isinstance(exc, Terminated) else "interrupted by the user"
 
 
 def _raise_terminated(signum, frame):
-    raise Terminated()
+    raise Terminated(signum)
 
 
 def install() -> None:
-    """Turn SIGTERM into :class:`Terminated` (from the main thread of a command)."""
-    signal.signal(signal.SIGTERM, _raise_terminated)
+    """Turn SIGTERM and SIGHUP into :class:`Terminated` (from the main thread of a
+    command); a signal this process was started ignoring (``nohup``) stays ignored."""
+    for signum in (signal.SIGTERM, signal.SIGHUP):
+        if signal.getsignal(signum) is not signal.SIG_IGN:
+            signal.signal(signum, _raise_terminated)
 
 
 _cond = threading.Condition()
@@ -73,8 +81,10 @@ def unregister(key: int) -> None:
 
 def check() -> None:
     """Raise the interrupt that is stopping the process, if any: no new work starts."""
+    if isinstance(_stopping, Terminated):
+        raise Terminated(_stopping.signum)
     if _stopping is not None:
-        raise type(_stopping)()
+        raise KeyboardInterrupt()
 
 
 def stop_all(exc: KeyboardInterrupt, timeout: float = 30.0) -> None:
