@@ -186,6 +186,25 @@ def test_a_worker_that_stops_answering_is_stopped_and_its_frames_kept(tmp_path):
         assert r.n_frames >= 20
 
 
+def test_a_hung_mpi_rank_is_found_by_the_steps_that_stop(tmp_path):
+    """Rank 1 stopped: rank 0 still answers, waiting for it, but takes no step."""
+    proc = start(["run", "single_part", "-n", "2", "-q", "-o", "r.h5", *LONG], tmp_path,
+                 env={"VIBROFEED_STALL_SECONDS": "3"})
+    part = tmp_path / "r.h5.part"
+    wait_until(lambda: frames_now(part) >= 5, proc)
+    (mpirun,) = children(proc.pid)
+    ranks = children(mpirun)
+    (rank1,) = [r for r in ranks if b"OMPI_COMM_WORLD_RANK=1\0" in Path(f"/proc/{r}/environ").read_bytes()]
+    os.kill(rank1, signal.SIGSTOP)
+    _, err = proc.communicate(timeout=300)
+    assert proc.returncode == 1 and "the engine took no step for" in err and "hung MPI rank" in err
+    assert status(part)[0] == "failed"
+    end = time.monotonic() + 20  # no rank is left behind, stopped or running
+    while any(Path(f"/proc/{r}").exists() for r in ranks) and time.monotonic() < end:
+        time.sleep(0.1)
+    assert not any(Path(f"/proc/{r}").exists() for r in ranks)
+
+
 @pytest.fixture
 def small_disk(tmp_path):
     disk = tmp_path / "disk"
