@@ -285,6 +285,7 @@ class _Run:
         self.rc: int | None = None
         self.hung: str | None = None     # why the watchdog gave up on the worker
         self.stopped: str | None = None  # why another thread stopped the run
+        self._starting = threading.Lock()  # stop() and start() one after the other
         self.started = time.monotonic()
 
     def prepare(self, command: str, before_run, schedule) -> None:
@@ -331,7 +332,9 @@ class _Run:
     def start(self) -> None:
         self.started = time.monotonic()
         shim = abort_shim()
-        with open(self.stderr_path, "w") as stderr:
+        with self._starting, open(self.stderr_path, "w") as stderr:
+            if self.stopped is not None:
+                raise KeyboardInterrupt(self.stopped)
             self.proc = subprocess.Popen(
                 _with_parent_death_signal(worker_command(str(self.spec_path), self.ranks, shim)),
                 stdout=subprocess.PIPE, stderr=stderr, env=worker_environment(self.ranks, shim),
@@ -361,7 +364,10 @@ class _Run:
             if line is None:
                 break
             if line.startswith(MARK):
-                event = json.loads(line[len(MARK):])
+                try:
+                    event = json.loads(line[len(MARK):])
+                except ValueError:  # cut short by the worker's end
+                    continue
                 watch.saw(event, time.monotonic())
                 if event["event"] != "alive":  # the heartbeat is the watchdog's only
                     self.events.append(event)
@@ -371,9 +377,10 @@ class _Run:
 
     def stop(self, why: str) -> None:
         """Stop the worker from another thread; the run's own thread records the end."""
-        self.stopped = why
-        if self.proc is not None:
-            _signal_group(self.proc, signal.SIGTERM)
+        with self._starting:
+            self.stopped = why
+            if self.proc is not None:
+                _signal_group(self.proc, signal.SIGTERM)
 
     def interrupted(self, why: str) -> None:
         """Stop the worker; keep its frames marked ``interrupted`` (or nothing, before the first)."""

@@ -11,7 +11,11 @@ but neither dumps nor runs. It then reads the deck's contract variables
 rank 0, which appends a frame to the H5MD file and flushes it.
 
 Rank 0 reports to the parent on stdout, one JSON object per line prefixed
-with ``@vibrofeed``: phases (``deck``, ``setup``, ``run``), progress, the end.
+with ``@vibrofeed``: phases (``deck``, ``setup``, ``run``), progress, the end,
+and every second a heartbeat with the engine's step (:class:`Heartbeat`). The
+end is recorded in the file as ``running`` (the runner writes ``complete`` as it
+renames the file); SIGTERM flushes the frames and records ``interrupted``
+(:class:`OnTerminate`).
 
 A bulk feeder's deck (it defines ``outlet_x``, ``catch_z``, ``n_inserted``,
 ``body_spheres``: ``results.layout.BULK_CONTRACT``) also gets parts as bodies
