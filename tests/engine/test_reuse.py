@@ -24,6 +24,8 @@ def test_reuse_keeps_the_same_run_and_reruns_a_changed_one(tmp_path):
 
     proc = vibrofeed("run", "single_part", "-o", out, *SHORT, "--reuse", check=True)
     assert "kept" in proc.stderr and out.stat().st_mtime_ns == stamp
+    # Nothing ran: the summary says where the result is and its id, not a speed.
+    assert f"reused {out} (run id {first[:12]}..." in proc.stdout and "steps/s" not in proc.stdout
 
     # A changed parameter is another run: rerun, new id.
     vibrofeed("run", "single_part", "-o", out, *SHORT, "-p", "mu=0.4", "--reuse", check=True)

@@ -20,8 +20,8 @@ import importlib
 import os
 import sys
 
-from .. import __version__
-from ..errors import EXIT_INTERRUPTED, VibrofeedError
+from .. import __version__, interrupt
+from ..errors import VibrofeedError
 
 # name -> (module, one-line help), in the order `vibrofeed --help` lists them.
 COMMANDS: dict[str, tuple[str, str]] = {
@@ -87,10 +87,15 @@ def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     args = build_parser(argv).parse_args(argv)
     debug = bool(os.environ.get("VIBROFEED_DEBUG"))
+    interrupt.install()  # SIGTERM ends a command as Ctrl-C does
     try:
         return args.func(args)
-    except KeyboardInterrupt:
-        return fail("interrupted", EXIT_INTERRUPTED)
+    except KeyboardInterrupt as exc:
+        try:  # runs waited for in other threads (sweeps, validation) record their end too
+            interrupt.stop_all(exc)
+        except KeyboardInterrupt:  # a second signal: leave now
+            pass
+        return fail(interrupt.message(exc), interrupt.exit_code(exc))
     except VibrofeedError as exc:
         if debug:
             raise

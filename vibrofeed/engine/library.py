@@ -159,6 +159,12 @@ class Liggghts:
     def dt(self) -> float:
         return self._global("dt", ctypes.c_double)
 
+    def step_counter(self):
+        """A pointer to the engine's step counter (``update->ntimestep``, int64), for a
+        thread that watches the run go: reading it needs no collective call."""
+        ptr = self._lib.lammps_extract_global(self._ptr, b"ntimestep")
+        return ctypes.cast(ptr, ctypes.POINTER(ctypes.c_int64)) if ptr else None
+
     @property
     def nlocal(self) -> int:
         return self._global("nlocal", ctypes.c_int)

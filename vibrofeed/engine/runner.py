@@ -16,26 +16,30 @@ what happened; one that fails before its first frame leaves nothing.
 
 from __future__ import annotations
 
+import errno
 import hashlib
 import json
 import os
+import queue
 import shutil
 import signal
 import subprocess
 import sys
-import tempfile
+import threading
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .. import __version__
+from .. import __version__, interrupt
 from ..decks import Deck
 from ..errors import EngineError, OutputError, RunError, UsageError
 from ..parameters import resolve
 from ..results import layout as L
+from . import scratch
 from .log import failed_command, find_error
 from .protocol import MARK
+from .watchdog import Watchdog
 
 # SLURM_ too: under a Slurm allocation (a sweep started by srun or mpirun in a batch job) the
 # worker's own mpirun would spread its ranks over the allocation's nodes instead of the
@@ -231,9 +235,14 @@ def run_deck(deck: Deck, params: Mapping[str, str], output, *, ranks: int = 1,
     :func:`run_id`). Raises :class:`~vibrofeed.errors.ParameterError` or
     :class:`~vibrofeed.errors.UsageError` before starting anything if a
     parameter or the rank count is bad, :class:`OutputError` if the output
-    cannot be written, :class:`EngineError` if LIGGGHTS stops with an error,
-    :class:`RunError` for any other failure of the run.
+    cannot be written (a full disk included), :class:`EngineError` if
+    LIGGGHTS stops with an error, :class:`RunError` for any other failure of
+    the run: a worker that stops answering (:mod:`.watchdog`), parts lost or
+    a mass balance that does not close. KeyboardInterrupt (Ctrl-C, or SIGTERM
+    through :mod:`vibrofeed.interrupt`) stops the worker and marks the file
+    ``interrupted``.
     """
+    interrupt.check()  # a process being stopped starts no run (queued runs of other threads)
     check_ranks(ranks)
     values = resolve(deck, params)
     rid = run_id(deck, values, before_run, schedule)
@@ -244,91 +253,243 @@ def run_deck(deck: Deck, params: Mapping[str, str], output, *, ranks: int = 1,
             return kept
     for stale in (out, part):
         stale.unlink(missing_ok=True)
+    scratch.remove_abandoned(out.parent)
 
-    tmp = Path(tempfile.mkdtemp(prefix=".vibrofeed-", dir=out.parent))
-    try:  # the deck's own files for this run (meshes, templates), if it declares a hook
-        prepared = deck.prepare(values, tmp)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
-    screen = tmp / "screen.txt"
-    spec = {
-        "deck": str(deck.path), "deck_name": deck.name, "variables": values,
-        "var_meta": {n: [v.unit, v.description, v.default] for n, v in deck.tunables.items()},
-        "constants": deck.constants,
-        "output": str(part), "log": str(log), "screen": str(screen),
-        "seed": int(float(values["seed"])) if "seed" in values else None,
-        "command": command, "run_id": rid, "sources": deck.sources,
-        "before_run": list(before_run or ()),
-        "schedule": schedule,
-        # extra -var values, the track mesh and the clump template (vibrofeed.geometry.Prepared)
-        "prepared": prepared.to_spec() if prepared is not None else None,
-    }
-    spec_path = tmp / "spec.json"
-    spec_path.write_text(json.dumps(spec))
-    stderr_path = tmp / "stderr.txt"
-
-    result = RunResult(output=out, log=log, deck=deck.name, ranks=ranks, parameters=values,
-                       run_id=rid)
-    events: list[dict] = []
-    started = time.monotonic()
+    run = _Run(deck, values, rid, out, part, log, ranks, on_event)
+    key = interrupt.register(run.stop)
     try:
-        with open(stderr_path, "w") as stderr:
-            shim = abort_shim()
-            proc = subprocess.Popen(
-                _with_parent_death_signal(worker_command(str(spec_path), ranks, shim)),
-                stdout=subprocess.PIPE, stderr=stderr, env=worker_environment(ranks, shim),
-                cwd=str(out.parent), text=True, start_new_session=True)
-            try:
-                for line in proc.stdout:
-                    if not line.startswith(MARK):
-                        continue
-                    event = json.loads(line[len(MARK):])
-                    events.append(event)
-                    if on_event is not None:
-                        on_event(event)
-                rc = proc.wait()
-            except KeyboardInterrupt:
-                _stop(proc)
-                if part.exists() and _frames_in(part)[0]:
-                    from ..results.writer import mark_file_status  # h5py: only when needed
+        run.prepare(command, before_run, schedule)
+        run.start()
+        run.follow()
+        if run.stopped is not None:  # by interrupt.stop_all, from the main thread
+            raise KeyboardInterrupt(run.stopped)
+        return run.finish()
+    except KeyboardInterrupt as exc:
+        run.interrupted(run.stopped or interrupt.reason(exc))
+        raise
+    finally:
+        run.remove_scratch()
+        interrupt.unregister(key)
 
-                    mark_file_status(part, L.STATUS_INTERRUPTED, "interrupted by the user")
-                else:
-                    part.unlink(missing_ok=True)
+
+class _Run:
+    """One run of the worker, in steps: its scratch folder and spec, the process,
+    its messages, and how it ended (``OUT.h5``, or ``OUT.h5.part`` with a status)."""
+
+    def __init__(self, deck: Deck, values: dict, rid: str, out: Path, part: Path, log: Path,
+                 ranks: int, on_event):
+        self.deck, self.values, self.rid, self.ranks = deck, values, rid, ranks
+        self.out, self.part, self.log = out, part, log
+        self.on_event = on_event
+        self.tmp: Path | None = None
+        self.proc: subprocess.Popen | None = None
+        self.events: list[dict] = []
+        self.rc: int | None = None
+        self.hung: str | None = None     # why the watchdog gave up on the worker
+        self.stopped: str | None = None  # why another thread stopped the run
+        self._starting = threading.Lock()  # stop() and start() one after the other
+        self.started = time.monotonic()
+
+    def prepare(self, command: str, before_run, schedule) -> None:
+        """The scratch folder: the deck's own files for this run (meshes,
+        templates, if it declares a prepare hook) and the worker's spec."""
+        try:
+            self.tmp = scratch.make(self.out.parent)
+            self._write_spec(command, before_run, schedule)
+        except OSError as exc:
+            if exc.errno != errno.ENOSPC:
                 raise
-        result.wall = time.monotonic() - started
-        done = next((e for e in events if e["event"] == "done"), None)
-        if rc == 0 and done is not None:
-            os.replace(part, out)
-            start = next(e for e in events if e["event"] == "run")
-            result.n_steps, result.dt = start["n_steps"], start["dt"]
-            result.frames, result.natoms = done["frames"], done["natoms"]
-            result.sim_time = result.n_steps * result.dt
-            return result
-        frames, last_step, last_time = _frames_in(part) if part.exists() else (0, None, None)
-        error = _diagnose(rc, events, deck, log, screen, stderr_path, last_step, last_time)
+            raise OutputError(f"no space left on {_mount_point(self.out)} for the run's scratch "
+                              f"folder in {self.out.parent}") from None
+
+    def _write_spec(self, command: str, before_run, schedule) -> None:
+        deck, values = self.deck, self.values
+        prepared = deck.prepare(values, self.tmp)
+        spec = {
+            "deck": str(deck.path), "deck_name": deck.name, "variables": values,
+            "var_meta": {n: [v.unit, v.description, v.default] for n, v in deck.tunables.items()},
+            "constants": deck.constants,
+            "output": str(self.part), "log": str(self.log), "screen": str(self.screen),
+            "seed": int(float(values["seed"])) if "seed" in values else None,
+            "command": command, "run_id": self.rid, "sources": deck.sources,
+            "before_run": list(before_run or ()),
+            "schedule": schedule,
+            # extra -var values, the track mesh and the clump template (vibrofeed.geometry.Prepared)
+            "prepared": prepared.to_spec() if prepared is not None else None,
+        }
+        self.spec_path.write_text(json.dumps(spec))
+
+    @property
+    def screen(self) -> Path:
+        return self.tmp / "screen.txt"
+
+    @property
+    def spec_path(self) -> Path:
+        return self.tmp / "spec.json"
+
+    @property
+    def stderr_path(self) -> Path:
+        return self.tmp / "stderr.txt"
+
+    def start(self) -> None:
+        self.started = time.monotonic()
+        shim = abort_shim()
+        with self._starting, open(self.stderr_path, "w") as stderr:
+            if self.stopped is not None:
+                raise KeyboardInterrupt(self.stopped)
+            self.proc = subprocess.Popen(
+                _with_parent_death_signal(worker_command(str(self.spec_path), self.ranks, shim)),
+                stdout=subprocess.PIPE, stderr=stderr, env=worker_environment(self.ranks, shim),
+                cwd=str(self.out.parent), text=True, start_new_session=True)
+
+    def follow(self) -> None:
+        """Pass the worker's messages on until it ends, or until the watchdog
+        finds it hung (then it is stopped, and ``hung`` says why)."""
+        lines: queue.Queue = queue.Queue()
+
+        def read(stream):
+            for line in stream:
+                lines.put(line)
+            lines.put(None)
+
+        threading.Thread(target=read, args=(self.proc.stdout,), daemon=True).start()
+        watch = Watchdog(time.monotonic())
+        while True:
+            try:
+                line = lines.get(timeout=0.5)
+            except queue.Empty:  # judged only with every message read: if this process
+                self.hung = watch.stalled(time.monotonic())  # was suspended, it is behind
+                if self.hung is not None:
+                    _stop(self.proc)
+                    break
+                continue
+            if line is None:
+                break
+            if line.startswith(MARK):
+                try:
+                    event = json.loads(line[len(MARK):])
+                except ValueError:  # cut short by the worker's end
+                    continue
+                watch.saw(event, time.monotonic())
+                if event["event"] != "alive":  # the heartbeat is the watchdog's only
+                    self.events.append(event)
+                    if self.on_event is not None:
+                        self.on_event(event)
+        self.rc = self.proc.wait()
+
+    def stop(self, why: str) -> None:
+        """Stop the worker from another thread; the run's own thread records the end."""
+        with self._starting:
+            self.stopped = why
+            if self.proc is not None:
+                _signal_group(self.proc, signal.SIGTERM)
+
+    def interrupted(self, why: str) -> None:
+        """Stop the worker; keep its frames marked ``interrupted`` (or nothing, before the first)."""
+        if self.proc is not None:
+            _stop(self.proc)
+        if self.part.exists() and _frames_in(self.part)[0]:
+            from ..results.writer import mark_file_status  # h5py: only when needed
+
+            mark_file_status(self.part, L.STATUS_INTERRUPTED, why)
+        else:
+            self.part.unlink(missing_ok=True)
+
+    def event(self, kind: str) -> dict | None:
+        return next((e for e in self.events if e["event"] == kind), None)
+
+    def finish(self) -> RunResult:
+        """The result of a run that reached its end, else the error it ended with."""
+        done = self.event("done")
+        if self.hung is not None:
+            self.fail(RunError(f"deck {self.deck.name}: {self.hung}: stopped it"))
+        if self.rc != 0 or done is None:
+            self.fail(self.diagnose())
+        unbalanced = _mass_balance_problem(done.get("counts"))
+        if unbalanced:
+            self.fail(RunError(f"deck {self.deck.name}: {unbalanced}"))
+        self.complete()
+        start = self.event("run")
+        result = RunResult(output=self.out, log=self.log, deck=self.deck.name, ranks=self.ranks,
+                           parameters=self.values, run_id=self.rid)
+        result.wall = time.monotonic() - self.started
+        result.n_steps, result.dt = start["n_steps"], start["dt"]
+        result.frames, result.natoms = done["frames"], done["natoms"]
+        result.sim_time = result.n_steps * result.dt
+        return result
+
+    def complete(self) -> None:
+        """Mark the file ``complete`` and rename it to OUT.h5, one step after the
+        other: only a file that is about to be OUT.h5 says ``complete`` (a kill
+        between the two leaves a ``.part`` that ``vibrofeed check`` fails)."""
+        from ..results.writer import mark_file_status
+
+        if not mark_file_status(self.part, L.STATUS_COMPLETE):
+            self.fail(OutputError(f"cannot mark {self.part} complete"))
+        os.replace(self.part, self.out)
+
+    def diagnose(self) -> RunError:
+        frames, last_step, last_time = _frames_in(self.part) if self.part.exists() else (0, None, None)
+        own = self.event("error")
+        if own is not None and own.get("no_space"):
+            where = f"{self.part} ({frames} frames)" if frames else str(self.part)
+            return OutputError(f"no space left on {_mount_point(self.part)} while writing {where}")
+        return _diagnose(self.rc, self.events, self.deck, self.log, self.screen, self.stderr_path,
+                         last_step, last_time)
+
+    def fail(self, error: RunError):
+        """Record ``error`` in the file (kept if it holds frames, or after a full
+        disk whatever it holds) and raise it; ``error.partial`` names the file
+        if it holds frames and says ``failed``."""
+        frames = _frames_in(self.part)[0] if self.part.exists() else 0
+        full = isinstance(error, OutputError) and str(error).startswith("no space left")
         if frames:
             from ..results.writer import mark_file_status
 
-            mark_file_status(part, L.STATUS_FAILED, str(error))
-            error.partial = (part, frames)
-        else:
-            part.unlink(missing_ok=True)
+            if mark_file_status(self.part, L.STATUS_FAILED, str(error)):
+                error.partial = (self.part, frames)
+        elif not full:
+            self.part.unlink(missing_ok=True)
         raise error
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
+
+    def remove_scratch(self) -> None:
+        if self.tmp is not None:
+            shutil.rmtree(self.tmp, ignore_errors=True)
+
+
+def _mass_balance_problem(counts: dict | None) -> str | None:
+    """What is wrong with a bulk run's final mass balance, or None."""
+    if not counts or counts.get("lost", 0) == 0:
+        return None
+    inserted, lost = counts["inserted"], counts["lost"]
+    what = (f"{lost} of {inserted} parts were lost (they left without crossing the outlet)"
+            if lost > 0 else f"{-lost} part(s) counted twice")
+    return (f"{what}: the mass balance does not close (inserted {inserted}, on the track "
+            f"{counts['on_track']}, exited {counts['exited']})")
+
+
+def _mount_point(path: Path) -> str:
+    path = Path(path).resolve().parent
+    while not os.path.ismount(path):
+        path = path.parent
+    return str(path)
+
+
+def _signal_group(proc: subprocess.Popen, sig: int) -> None:
+    try:
+        os.killpg(proc.pid, sig)
+        os.killpg(proc.pid, signal.SIGCONT)  # a stopped worker acts on the signal only once woken
+    except ProcessLookupError:
+        pass
 
 
 def _stop(proc: subprocess.Popen) -> None:
+    """End the worker: SIGTERM (it flushes its frames and exits), SIGKILL after 10 s."""
+    _signal_group(proc, signal.SIGTERM)
     try:
-        os.killpg(proc.pid, signal.SIGTERM)
         proc.wait(timeout=10)
-    except (ProcessLookupError, subprocess.TimeoutExpired):
-        try:
-            os.killpg(proc.pid, signal.SIGKILL)
-        except ProcessLookupError:
-            pass
+    except subprocess.TimeoutExpired:
+        _signal_group(proc, signal.SIGKILL)
         proc.wait()
 
 

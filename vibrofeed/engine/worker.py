@@ -11,7 +11,11 @@ but neither dumps nor runs. It then reads the deck's contract variables
 rank 0, which appends a frame to the H5MD file and flushes it.
 
 Rank 0 reports to the parent on stdout, one JSON object per line prefixed
-with ``@vibrofeed``: phases (``deck``, ``setup``, ``run``), progress, the end.
+with ``@vibrofeed``: phases (``deck``, ``setup``, ``run``), progress, the end,
+and every second a heartbeat with the engine's step (:class:`Heartbeat`). The
+end is recorded in the file as ``running`` (the runner writes ``complete`` as it
+renames the file); SIGTERM flushes the frames and records ``interrupted``
+(:class:`OnTerminate`).
 
 A bulk feeder's deck (it defines ``outlet_x``, ``catch_z``, ``n_inserted``,
 ``body_spheres``: ``results.layout.BULK_CONTRACT``) also gets parts as bodies
@@ -22,31 +26,99 @@ template the runner's prepare hook made (``spec["prepared"]``) in the file.
 
 from __future__ import annotations
 
+import errno
 import json
 import os
+import signal
 import sys
+import threading
 import time
 from pathlib import Path
 
 import numpy as np
 
+from ..errors import DeckError  # the deck cannot be run as vibrofeed drives it
 from ..models.constants import G
+from ..results import layout as L
 from .bodies import aggregate, atom_parts, spheres
 from .protocol import MARK
 
 PER_ATOM = ("id", "type", "radius", "rmass", "x", "v", "omega", "f")
+HEARTBEAT_SECONDS = 1.0
 
 
 class Reporter:
-    """Rank 0's messages to the parent; silent on other ranks."""
+    """Rank 0's messages to the parent; silent on other ranks. Thread-safe: the
+    heartbeat reports from its own thread."""
 
     def __init__(self, rank: int):
         self.rank = rank
+        self._lock = threading.Lock()
 
     def __call__(self, event: str, **data) -> None:
         if self.rank == 0:
-            sys.stdout.write(MARK + json.dumps({"event": event, **data}) + "\n")
-            sys.stdout.flush()
+            text = MARK + json.dumps({"event": event, **data}) + "\n"
+            with self._lock:
+                sys.stdout.write(text)
+                sys.stdout.flush()
+
+
+class Heartbeat:
+    """Rank 0 says ``alive`` every HEARTBEAT_SECONDS with the engine's step, from a
+    thread (the engine releases the GIL while it runs), so the parent can tell a
+    worker that stopped answering (stopped, or waiting for a hung rank) from a
+    slow one."""
+
+    def __init__(self, report: Reporter):
+        self.report = report
+        self._counter = None  # the engine's step counter, while there is an engine
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        if report.rank == 0:
+            threading.Thread(target=self._beat, daemon=True).start()
+
+    def watch(self, counter) -> None:
+        """Report the step read from ``counter`` (None: stop reading it, before the engine closes)."""
+        with self._lock:
+            self._counter = counter
+
+    def _beat(self) -> None:
+        while not self._stop.wait(HEARTBEAT_SECONDS):
+            with self._lock:
+                step = int(self._counter[0]) if self._counter is not None else None
+            self.report("alive", step=step, at=time.monotonic())
+
+    def stop(self) -> None:
+        self._stop.set()
+
+
+class OnTerminate:
+    """SIGTERM (the runner stopping the run, or the parent's death) flushes the
+    frames written so far and records the end, then exits 143 at once.
+
+    A Python signal handler would wait for the engine's current ``run`` to
+    return; instead SIGTERM is blocked in every thread (call :meth:`block`
+    before MPI or any thread starts) and one thread waits for it."""
+
+    writer = None  # rank 0's ResultWriter, once open
+
+    @staticmethod
+    def block() -> None:
+        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGTERM})
+
+    def __init__(self):
+        threading.Thread(target=self._wait, daemon=True).start()
+
+    def _wait(self) -> None:
+        signal.sigwait({signal.SIGTERM})
+        writer = self.writer
+        if writer is not None:
+            try:
+                writer.finish(L.STATUS_INTERRUPTED, "the engine worker was sent SIGTERM")
+            except Exception:  # ending anyway: the runner reports what it can
+                pass
+        sys.stdout.flush()
+        os._exit(128 + signal.SIGTERM)
 
 
 def engine_version(log_path: str) -> str:
@@ -207,52 +279,49 @@ def _includes(spec: dict) -> dict[str, str]:
     return {path: text for path, text in spec.get("sources", {}).items() if path != main}
 
 
-def run(spec: dict) -> int:
-    from mpi4py import MPI
-
-    from ..results import layout as L
-    from ..results.writer import ResultWriter
-    from .library import Liggghts
-
-    comm = MPI.COMM_WORLD
-    report = Reporter(comm.rank)
+def engine_arguments(spec: dict) -> list[str]:
+    """LIGGGHTS' command line: log and screen files, the deck's variables, ``driver=1``."""
     args = ["-log", spec["log"], "-screen", spec["screen"], "-echo", "log", "-nocite"]
     for name, value in spec["variables"].items():
         args += ["-var", name, str(value)]
     for name, value in ((spec.get("prepared") or {}).get("variables") or {}).items():
         args += ["-var", name, str(value)]  # e.g. mesh_dir, from the deck's prepare hook
-    args += ["-var", "driver", "1", "-var", "deck_dir", str(Path(spec["deck"]).parent)]
+    return args + ["-var", "driver", "1", "-var", "deck_dir", str(Path(spec["deck"]).parent)]
 
-    report("deck")
-    lmp = Liggghts(args, comm=comm)
-    lmp.file(spec["deck"])
 
+def read_contract(lmp) -> tuple[int, int, float, bool]:
+    """(n_steps, output_every, dt, is a bulk deck) from the deck's contract variables."""
     missing = [name for name in L.DECK_CONTRACT if not lmp.has_variable(name)]
     bulk_names = [name for name in L.BULK_CONTRACT if lmp.has_variable(name)]
     if bulk_names and len(bulk_names) < len(L.BULK_CONTRACT):  # a bulk deck: all of them
         missing += [name for name in L.BULK_CONTRACT if name not in bulk_names]
     if missing:
-        report("error", message=f"the deck does not define the equal-style variable(s) "
-                                f"{', '.join(missing)} that vibrofeed reads (see docs/decks.md)")
-        return 3
+        raise DeckError(f"the deck does not define the equal-style variable(s) "
+                         f"{', '.join(missing)} that vibrofeed reads (see docs/decks.md)")
     n_steps = int(round(lmp.variable("n_steps")))
     every = int(round(lmp.variable("output_every")))
     dt = lmp.dt
     if every < 1:
-        report("error", message=f"output_dt is shorter than the timestep ({dt:g} s): "
-                                "no frame would ever be written")
-        return 3
+        raise DeckError(f"output_dt is shorter than the timestep ({dt:g} s): "
+                          "no frame would ever be written")
     if n_steps < 1:
-        report("error", message=f"t_end is shorter than the timestep ({dt:g} s): nothing to run")
-        return 3
+        raise DeckError(f"t_end is shorter than the timestep ({dt:g} s): nothing to run")
+    return n_steps, every, dt, bool(bulk_names)
+
+
+def derived_constants(lmp, names) -> dict:
+    """The deck's constants as evaluated now (time-dependent ones are recorded per frame, if at all)."""
     derived = {}
-    for name in spec["constants"]:  # time-dependent variables are recorded per frame, if at all
+    for name in names:
         try:
             derived[name] = lmp.variable(name)
         except KeyError:
             pass
+    return derived
 
-    report("setup")
+
+def set_up(lmp, spec: dict) -> None:
+    """The driver's commands after the deck, and the setup run."""
     lmp.commands(spec.get("before_run", ()))
     lmp.command("thermo_modify flush yes")
     lmp.command("run 0")
@@ -260,109 +329,185 @@ def run(spec: dict) -> int:
     lmp.command("variable vibrofeed_step equal step")
     lmp.command("variable vibrofeed_time equal time")
 
-    bulk = None
-    if bulk_names:
-        bulk = BulkFrames(lmp, spec)
-        bulk.template_from_first_body(lmp, comm)
 
-    writer = None
-    if comm.rank == 0:
-        variables = {name: (value, *spec["var_meta"][name]) for name, value in spec["variables"].items()}
-        writer = ResultWriter(
-            spec["output"], deck_name=spec["deck_name"], deck_path=spec["deck"],
-            deck_text=Path(spec["deck"]).read_text(), includes=_includes(spec), variables=variables,
-            derived=derived,
-            engine_version=engine_version(spec["log"]), seed=spec.get("seed"),
-            ranks=comm.size, command=spec.get("command", ""), run_id=spec.get("run_id", ""),
-            capacity_hint=max(lmp.natoms // (bulk.n_spheres if bulk else 1), 1),
-            **({} if bulk is None else {"track": bulk.track, "outlet": bulk.outlet.attributes(),
-                                        "body_template": bulk.template}))
-        flush_on_engine_exit(writer)
+def open_writer(spec: dict, derived: dict, ranks: int, natoms: int, bulk):
+    """Rank 0's result writer, flushed also when LIGGGHTS ends the process."""
+    from ..results.writer import ResultWriter
 
-    # The run, as (commands, steps) segments with a frame after each. A plain
-    # deck: output_every steps at a time, no commands, resuming without setup.
-    # A schedule (prescribed motion): each segment first redefines variables,
-    # then runs with setup, because LIGGGHTS re-creates a redefined variable at
-    # a new index and movers find it again only at setup.
+    variables = {name: (value, *spec["var_meta"][name]) for name, value in spec["variables"].items()}
+    writer = ResultWriter(
+        spec["output"], deck_name=spec["deck_name"], deck_path=spec["deck"],
+        deck_text=Path(spec["deck"]).read_text(), includes=_includes(spec), variables=variables,
+        derived=derived,
+        engine_version=engine_version(spec["log"]), seed=spec.get("seed"),
+        ranks=ranks, command=spec.get("command", ""), run_id=spec.get("run_id", ""),
+        capacity_hint=max(natoms // (bulk.n_spheres if bulk else 1), 1),
+        **({} if bulk is None else {"track": bulk.track, "outlet": bulk.outlet.attributes(),
+                                    "body_template": bulk.template}))
+    flush_on_engine_exit(writer)
+    return writer
+
+
+def segments(spec: dict, n_steps: int, every: int, dt: float) -> list[tuple]:
+    """The run, as (commands, steps, setup) segments with a frame after each.
+
+    A plain deck: output_every steps at a time, no commands, resuming without
+    setup. A schedule (prescribed motion): each segment first redefines
+    variables, then runs with setup, because LIGGGHTS re-creates a redefined
+    variable at a new index and movers find it again only at setup.
+    """
     schedule = spec.get("schedule")
-    if schedule:
-        segments, total = [], 0
-        for seg in schedule:  # a segment ends after "steps" steps, or at time "until"
-            steps = int(seg["steps"]) if "steps" in seg else int(round(float(seg["until"]) / dt)) - total
-            if steps < 1:
-                report("error", message=f"schedule segment {len(segments)} is shorter than "
-                                        f"the timestep ({dt:g} s)")
-                return 3
-            total += steps
-            segments.append((seg.get("commands", ()), steps, True))
-    else:
-        segments = [((), min(every, n_steps - k), False) for k in range(0, n_steps, every)]
-    n_steps = sum(steps for _, steps, _ in segments)
-    n_frames = 1 + len(segments)
-    started = time.monotonic()
-    report("run", n_steps=n_steps, dt=dt, output_every=every, n_frames=n_frames,
-           natoms=lmp.natoms)
-    done = 0
-    last_report = 0.0
-    lost_reported = False
-    for k in range(len(segments) + 1):
+    if not schedule:
+        return [((), min(every, n_steps - k), False) for k in range(0, n_steps, every)]
+    out, total = [], 0
+    for seg in schedule:  # a segment ends after "steps" steps, or at time "until"
+        steps = int(seg["steps"]) if "steps" in seg else int(round(float(seg["until"]) / dt)) - total
+        if steps < 1:
+            raise DeckError(f"schedule segment {len(out)} is shorter than the timestep ({dt:g} s)")
+        total += steps
+        out.append((seg.get("commands", ()), steps, True))
+    return out
+
+
+class Frames:
+    """Takes the frames: the particles (or a bulk deck's bodies, outlet events and
+    mass balance) to rank 0's writer; warns once when parts go missing."""
+
+    def __init__(self, lmp, comm, writer, bulk, report: Reporter):
+        self.lmp, self.comm, self.writer, self.bulk, self.report = lmp, comm, writer, bulk, report
+        self.counts = None  # the mass balance of the last frame (bulk decks, rank 0)
+        self._lost_reported = False
+
+    def take(self) -> float:
+        """Write a frame of the engine's state now; its time."""
+        lmp = self.lmp
         pos, vel = surface_state(lmp)
         step = int(round(lmp.variable("vibrofeed_step")))
         t = lmp.variable("vibrofeed_time")
-        if bulk is None:
-            parts = gather_parts(lmp, comm)
-            if writer is not None:
-                writer.write_frame(step, t, parts, pos, vel)
-        else:
-            got = bulk.frame(lmp, comm, t)
-            if writer is not None:
-                parts, events, counts = got
-                if events is not None:
-                    writer.write_events(events)
-                writer.write_frame(step, t, parts, pos, vel, counts=counts)
-                lost = counts["lost"]
-                if lost and not lost_reported:
-                    report("warning", message=f"{lost} part(s) disappeared without crossing "
-                                              f"the outlet by t = {t:g} s (mass balance)")
-                    lost_reported = True
+        if self.bulk is None:
+            parts = gather_parts(lmp, self.comm)
+            if self.writer is not None:
+                self.writer.write_frame(step, t, parts, pos, vel)
+            return t
+        got = self.bulk.frame(lmp, self.comm, t)
+        if self.writer is not None:
+            parts, events, counts = got
+            if events is not None:
+                self.writer.write_events(events)
+            self.writer.write_frame(step, t, parts, pos, vel, counts=counts)
+            self.counts = counts
+            lost = counts["lost"]
+            if lost and not self._lost_reported:
+                self.report("warning", message=f"{lost} part(s) disappeared without crossing "
+                                               f"the outlet by t = {t:g} s (mass balance)")
+                self._lost_reported = True
+        return t
+
+
+def run_segments(lmp, frames: Frames, segs: list[tuple], report: Reporter) -> tuple[int, float]:
+    """A frame, then each segment and a frame after it; (steps run, wall seconds)."""
+    started = time.monotonic()
+    done = 0
+    last_report = 0.0
+    for k in range(len(segs) + 1):
+        t = frames.take()
         now = time.monotonic()
-        if k == len(segments) or now - last_report > 0.2:
+        if k == len(segs) or now - last_report > 0.2:
+            writer = frames.writer
             report("progress", step=done, time=t, frames=writer.frames if writer else 0,
                    natoms=lmp.natoms, wall=now - started)
             last_report = now
-        if k == len(segments):
+        if k == len(segs):
             break
-        commands, steps, setup = segments[k]
+        commands, steps, setup = segs[k]
         lmp.commands(commands)
         lmp.command(f"run {steps} post no" if setup else f"run {steps} pre no post no")
         done += steps
+    return done, time.monotonic() - started
 
-    wall = time.monotonic() - started
-    if bulk is not None:
-        if bulk.outlet.not_ballistic:
-            bulk.warnings.append(f"{bulk.outlet.not_ballistic} outlet event(s) timed at their frame: "
-                                 "their free flight back never reached catch_z")
-        for message in bulk.warnings:
-            report("warning", message=message)
+
+def bulk_warnings(bulk) -> list[str]:
+    if bulk is None:
+        return []
+    if bulk.outlet.not_ballistic:
+        bulk.warnings.append(f"{bulk.outlet.not_ballistic} outlet event(s) timed at their frame: "
+                             "their free flight back never reached catch_z")
+    return bulk.warnings
+
+
+def run(spec: dict, heartbeat: Heartbeat | None = None, on_term: OnTerminate | None = None) -> int:
+    from mpi4py import MPI
+
+    from .library import Liggghts
+
+    comm = MPI.COMM_WORLD
+    report = heartbeat.report if heartbeat is not None else Reporter(comm.rank)
+    report("deck")
+    lmp = Liggghts(engine_arguments(spec), comm=comm)
+    if heartbeat is not None:
+        heartbeat.watch(lmp.step_counter())
+    lmp.file(spec["deck"])
+    n_steps, every, dt, is_bulk = read_contract(lmp)
+    derived = derived_constants(lmp, spec["constants"])
+
+    report("setup")
+    set_up(lmp, spec)
+    bulk = None
+    if is_bulk:
+        bulk = BulkFrames(lmp, spec)
+        bulk.template_from_first_body(lmp, comm)
+    writer = open_writer(spec, derived, comm.size, lmp.natoms, bulk) if comm.rank == 0 else None
+    if on_term is not None:
+        on_term.writer = writer
+
+    segs = segments(spec, n_steps, every, dt)
+    n_steps = sum(steps for _, steps, _ in segs)
+    n_frames = 1 + len(segs)
+    report("run", n_steps=n_steps, dt=dt, output_every=every, n_frames=n_frames,
+           natoms=lmp.natoms)
+    frames = Frames(lmp, comm, writer, bulk, report)
+    done, wall = run_segments(lmp, frames, segs, report)
+
+    for message in bulk_warnings(bulk):
+        report("warning", message=message)
     if writer is not None:
-        writer.finish(L.STATUS_COMPLETE, wall_seconds=wall)
-    report("done", step=done, frames=n_frames, wall=wall, natoms=lmp.natoms)
+        # "complete" is the runner's to write, as it renames OUT.h5.part to OUT.h5 (FORMAT.md)
+        writer.finish(L.STATUS_RUNNING, "the engine reached the end of the run", wall_seconds=wall)
+    report("done", step=done, frames=n_frames, wall=wall, natoms=lmp.natoms, counts=frames.counts)
+    if heartbeat is not None:
+        heartbeat.watch(None)
     lmp.close()
     return 0
 
 
+def no_space(exc: BaseException) -> bool:
+    """Whether ``exc`` is a full disk (h5py reports it in the text of its error)."""
+    return (isinstance(exc, OSError) and exc.errno == errno.ENOSPC) or \
+        "No space left on device" in str(exc) or f"errno = {errno.ENOSPC}," in str(exc)
+
+
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
+    OnTerminate.block()  # before MPI and any thread start: they inherit the mask
+    on_term = OnTerminate()
     spec = json.loads(Path(argv[0]).read_text())
-    try:
-        return run(spec)
-    except Exception as exc:  # a bug or an I/O failure: tell the parent, then stop all ranks
-        from mpi4py import MPI
+    from mpi4py import MPI
 
-        Reporter(MPI.COMM_WORLD.rank)("error", message=f"{type(exc).__name__}: {exc}")
+    report = Reporter(MPI.COMM_WORLD.rank)
+    heartbeat = Heartbeat(report)
+    try:
+        return run(spec, heartbeat, on_term)
+    except DeckError as exc:
+        report("error", message=str(exc))
+        return 3
+    except Exception as exc:  # a bug or an I/O failure: tell the parent, then stop all ranks
+        extra = {"no_space": True} if no_space(exc) else {}
+        report("error", message=f"{type(exc).__name__}: {exc}", **extra)
         if MPI.COMM_WORLD.size > 1:
             MPI.COMM_WORLD.Abort(1)
         return 4
+    finally:
+        heartbeat.stop()
 
 
 def _exit(code: int) -> None:

@@ -352,4 +352,6 @@ def check_file(path, allow_incomplete: bool = False) -> Report:
         events = c.outlet()
         c.mass_balance(events, status)
         c.track()
+        if str(path).endswith(".part") and status == L.STATUS_COMPLETE:  # FORMAT.md: never both
+            (c.warn if allow_incomplete else c.error)(L.RUN, "a .part file says 'complete': never renamed")
         return Report(str(path), c.problems, frames=c.frames, parts=parts, status=status)

@@ -539,5 +539,5 @@ def mark_file_status(path, status: str, message: str = "") -> bool:
                 return False
             mark_status(f, status, message)
         return True
-    except OSError:
+    except (OSError, RuntimeError):  # HDF5 reports a failed flush (a full disk) as RuntimeError
         return False
