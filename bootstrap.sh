@@ -22,6 +22,7 @@ esac
 APT_PACKAGES=(liggghts libliggghts-dev openmpi-bin libopenmpi-dev
               python3 python3-venv python3-dev build-essential cmake ca-certificates
               libegl1 libgl1-mesa-dri)  # off-screen pictures: VTK's EGL window, Mesa software GL
+TEST_APT_PACKAGES+=(paraview xvfb)  # test-only: pvpython under xvfb-run checks the ParaView export
 
 say() { printf '\033[1m[bootstrap]\033[0m %s\n' "$*"; }
 

@@ -55,19 +55,6 @@ ELEMENTS = {
 SURFACE_UNITS = {"position": (NM_PER_M, "nm"), "velocity": (1.0, "m s-1")}
 
 
-def _recorded(result, name: str, index) -> bool:
-    """Whether a float element holds values: judged at the first selected frame with parts
-    (the force of clumps is NaN at every frame, that of spheres at none)."""
-    if name in ("id", "species"):
-        return True
-    if name in L.OPTIONAL_PART_ELEMENTS and name not in result.file[L.PARTS]:
-        return False
-    for frame in result.iter_frames(index, fields=(name,)):
-        if len(frame):
-            return bool(np.isfinite(frame[name]).any())
-    return True
-
-
 def _time_series(group, name, frames_shape, dtype, fill, unit, step, time):
     g = group.create_group(name)
     value = g.create_dataset("value", shape=frames_shape, dtype=dtype, fillvalue=fill,
@@ -102,7 +89,7 @@ def export_md(result, path, every: int = 1) -> Path:
 def _write(result, path: Path, every: int) -> None:
     index = np.arange(0, result.n_frames, every)
     n_rows = int(result.present(index).max()) if len(index) else 0
-    names = [name for name in ELEMENTS if _recorded(result, ELEMENTS[name][0], index)]
+    names = [name for name in ELEMENTS if result.recorded(ELEMENTS[name][0], index)]
     with h5py.File(path, "w") as f:
         h5md = f.create_group("h5md")
         h5md.attrs["version"] = np.array(L.H5MD_VERSION, dtype="i4")

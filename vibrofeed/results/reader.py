@@ -294,6 +294,22 @@ class Result:
         out[np.asarray(ids) != L.ID_FILL] = L.IDENTITY_QUATERNION
         return out
 
+    def recorded(self, name: str, frames=None) -> bool:
+        """Whether per-part field ``name`` holds values, judged at the first (selected) frame
+        with parts: the force of clumps is NaN at every frame by design (FORMAT.md, "Bulk
+        feeders"), that of spheres at none. True for a file without parts."""
+        ds, per_part = self._dataset(name)
+        if not per_part:
+            raise KeyError(f"{name!r} is not a per-part field")
+        if ds is None:
+            return False
+        if ds.dtype.kind != "f":
+            return True
+        for f in self.iter_frames(frames, fields=(name,)):
+            if len(f):
+                return bool(np.isfinite(f[name]).any())
+        return True
+
     # -- bulk feeders ---------------------------------------------------------------
     @cached_property
     def outlet(self) -> dict[str, np.ndarray]:
