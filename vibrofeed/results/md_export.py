@@ -38,6 +38,7 @@ from . import layout as L
 from .writer import _ascii, _fixed, set_unit
 
 NM_PER_M = 1e9
+_BLOCK_VALUES = 1 << 21  # values per element packed in memory before a write (16 MB of float64)
 FORMAT_NAME = "h5md-md"
 GROUP = "particles/trajectory"
 # element -> (source field, scale, unit, fill) in the order they are written
@@ -122,12 +123,23 @@ def _write(result, path: Path, every: int) -> None:
             dtype, comps, _ = L.PART_ELEMENTS.get(source) or L.OPTIONAL_PART_ELEMENTS[source]
             shape = (len(index), n_rows, comps) if comps else (len(index), n_rows)
             values[name] = _time_series(parts, name, shape, dtype, fill, unit, step, time)[0]
-        for k, frame in enumerate(result.iter_frames(index, fields=[ELEMENTS[n][0] for n in names])):
-            order = np.argsort(frame.ids, kind="stable")
-            for name in names:
-                source, scale, _, _ = ELEMENTS[name]
-                rows = frame[source][order]
-                values[name][k, :len(order)] = rows if scale is None else rows * scale
+        # frames are packed in memory and written in blocks (one HDF5 write per element and
+        # block: a write per frame costs more than the packing)
+        per_block = max(1, _BLOCK_VALUES // max(3 * n_rows, 1))
+        frames = result.iter_frames(index, fields=[ELEMENTS[n][0] for n in names])
+        for k0 in range(0, len(index), per_block):
+            k1 = min(len(index), k0 + per_block)
+            blocks = {name: np.full((k1 - k0, *ds.shape[1:]), ds.fillvalue, dtype=ds.dtype)
+                      for name, ds in values.items()}
+            for k in range(k1 - k0):
+                frame = next(frames)
+                order = np.argsort(frame.ids, kind="stable")
+                for name in names:
+                    source, scale, _, _ = ELEMENTS[name]
+                    rows = frame[source][order]
+                    blocks[name][k, :len(order)] = rows if scale is None else rows * scale
+            for name, block in blocks.items():
+                values[name][k0:k1] = block
 
         obs = f.create_group("observables")
         surface = obs.create_group("surface")
