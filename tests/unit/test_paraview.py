@@ -37,11 +37,12 @@ PART_ARRAYS = {"id", "species", "radius", "diameter", "mass", "velocity", "speed
 def probe(*files):
     # xvfb-run -a takes the first free display from -n on; starting from one of our own keeps
     # concurrent runs (other test processes) from racing for the same display
-    for attempt in range(3):
+    for attempt in range(4):
         proc = subprocess.run([XVFB, "-a", "-n", str(100 + (os.getpid() + 7 * attempt) % 5000),
                                PVPYTHON, str(REPO / "tests" / "pvpython_probe.py"), *map(str, files)],
                               capture_output=True, text=True, timeout=300)
-        if "Xvfb failed to start" not in proc.stderr:
+        # on a loaded machine the X server may fail to start or to answer: that is not the export
+        if not any(x in proc.stderr for x in ("Xvfb failed to start", "bad X server connection")):
             break
     assert proc.returncode == 0, proc.stderr
     assert proc.stderr.strip() == "", proc.stderr  # ParaView reports read errors here
