@@ -26,7 +26,8 @@ APT_PACKAGES=(liggghts libliggghts-dev openmpi-bin libopenmpi-dev
               libegl1 libgl1-mesa-dri  # off-screen pictures: VTK's EGL window, Mesa software GL
               ffmpeg)                  # movies: vibrofeed render -o RUN.mp4
 # Only for the test suite (jobs test and validate); append what a test needs.
-TEST_APT_PACKAGES=(cmake)
+TEST_APT_PACKAGES=(cmake
+                   paraview xvfb)  # pvpython under xvfb-run checks the ParaView export
 WITH_TESTS=0
 [[ $JOB == test || $JOB == validate ]] && WITH_TESTS=1
 ((WITH_TESTS)) && APT_PACKAGES+=("${TEST_APT_PACKAGES[@]}")

@@ -58,7 +58,8 @@ def read_vtp(path):
     points = vtk_to_numpy(data.GetPoints().GetData()) if data.GetPoints() else np.empty((0, 3))
     pd = data.GetPointData()
     fields = {pd.GetArrayName(i): vtk_to_numpy(pd.GetArray(i)) for i in range(pd.GetNumberOfArrays())}
-    time = vtk_to_numpy(data.GetFieldData().GetArray("TimeValue"))[0]
+    stamp = data.GetFieldData().GetArray("TimeValue")
+    time = None if stamp is None else vtk_to_numpy(stamp)[0]
     return points, fields, time, data
 
 
@@ -131,11 +132,14 @@ def test_shapes_and_moving_track(exported):
             track, tf, _, _ = read_vtp(out / "chips" / f"track_{k:06d}.vtp")
             assert np.allclose(track, TRACK[0] + frame.surface_position)
             assert np.allclose(tf["velocity"], frame.surface_velocity)
+            np.testing.assert_allclose(tf["speed"], np.linalg.norm(frame.surface_velocity),
+                                       rtol=1e-12, atol=0)
 
 
 def test_outlet_events(exported):
     _, out, _ = exported
-    points, f, _, _ = read_vtp(out / "chips_outlet.vtp")
+    points, f, time, _ = read_vtp(out / "chips_outlet.vtp")
+    assert time is None  # every event in one file: no time step of its own in ParaView
     assert np.allclose(points, [[0.0201, 0, -3e-4]]) and list(f["id"]) == [1]
     assert np.allclose(f["time"], [0.012])
 

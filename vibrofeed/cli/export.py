@@ -1,4 +1,5 @@
-"""``vibrofeed export``: a result as a ParaView time series (.pvd of VTK files)."""
+"""``vibrofeed export``: a result as a ParaView time series (.pvd of VTK files), or as an H5MD
+trajectory for molecular-dynamics tools (MDAnalysis, znh5md/ASE)."""
 
 from __future__ import annotations
 
@@ -6,13 +7,18 @@ DESCRIPTION = ("Write a result as a ParaView time series: DIR/RUN.pvd referencin
                "parts as points with their fields (id, radius, velocity, speed, orientation "
                "quaternion, glyph-ready axes and shape tensor), the parts' real shapes as "
                "triangles and the track mesh at the frame's position (DIR/RUN/*.vtp); outlet "
-               "events, if any, in DIR/RUN_outlet.vtp. Open the .pvd in ParaView as it is.")
+               "events, if any, in DIR/RUN_outlet.vtp. Open the .pvd in ParaView as it is. "
+               "--format h5md-md writes DIR/RUN.h5md instead: H5MD that MDAnalysis, znh5md and "
+               "pyh5md read (lengths in nm, the parts present first at each frame; FORMAT.md).")
 
 
 def add_arguments(p) -> None:
     p.add_argument("result", metavar="RUN.h5", help="result file")
     p.add_argument("-o", "--output", metavar="DIR", default=".",
                    help="folder to write into (created if needed; default: here)")
+    p.add_argument("--format", choices=("paraview", "h5md-md"), default="paraview",
+                   help="paraview: DIR/RUN.pvd (default); h5md-md: DIR/RUN.h5md for MDAnalysis, "
+                        "znh5md, pyh5md")
     p.add_argument("--every", type=int, default=1, metavar="N", help="export every N-th frame (default 1)")
     p.add_argument("--no-shapes", action="store_true",
                    help="leave out the parts' triangle meshes (points with their fields only)")
@@ -24,8 +30,14 @@ def add_arguments(p) -> None:
 def run(args) -> int:
     import sys
 
-    from ..pictures.export import export
+    from ..errors import UsageError
     from ..results.reader import Result
+
+    if args.format == "h5md-md":
+        if args.no_shapes:
+            raise UsageError("--no-shapes is for --format paraview: an h5md-md export has no shapes")
+        return _h5md_md(args)
+    from ..pictures.export import export
 
     with Result(args.result, allow_incomplete=args.allow_incomplete) as result:
         bar = None
@@ -41,4 +53,28 @@ def run(args) -> int:
             if bar is not None:
                 bar.close()
     print(f"wrote {done.pvd} ({done.frames} frames, {done.files} files, {done.seconds:.1f} s)")
+    return 0
+
+
+def _h5md_md(args) -> int:
+    import time
+    from pathlib import Path
+
+    from ..errors import OutputError, UsageError
+    from ..results.md_export import export_md
+    from ..results.reader import Result
+
+    if args.every < 1:
+        raise UsageError(f"--every must be >= 1, got {args.every}")
+    start = time.perf_counter()
+    folder = Path(args.output)
+    path = folder / (Path(args.result).stem + ".h5md")
+    with Result(args.result, allow_incomplete=args.allow_incomplete) as result:
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+            export_md(result, path, every=args.every)
+        except OSError as exc:
+            raise OutputError(f"cannot write {path}: {exc}") from exc
+        frames = len(range(0, result.n_frames, args.every))
+    print(f"wrote {path} ({frames} frames, {time.perf_counter() - start:.1f} s)")
     return 0

@@ -6,7 +6,9 @@ gives a time series whose every step is a multiblock of
 - ``parts`` (``RUN/parts_NNNNNN.vtp``): one point per part with the fields
   ``id``, ``species``, ``radius``, ``diameter``, ``mass``, ``velocity``,
   ``speed``, ``velocity_rel`` (relative to the track), ``angular_velocity``,
-  ``force``, ``orientation`` (quaternion w, x, y, z) and glyph-ready arrays:
+  ``force`` (only where the result records it: not for clumps, whose force
+  is NaN by design; an all-NaN array gets NaN ranges that ParaView cannot
+  read back), ``orientation`` (quaternion w, x, y, z) and glyph-ready arrays:
   ``normal`` and ``axis_x`` (the body's face normal and first in-plane axis,
   for the Glyph filter's orientation), ``shape_tensor`` (R diag(extents):
   ParaView's Tensor Glyph filter with Glyph Type Box, "Extract Eigenvalues"
@@ -16,12 +18,19 @@ gives a time series whose every step is a multiblock of
   (spheres, chips as boxes, discs as cylinders), with ``id``, ``speed`` and
   ``velocity`` on their points, ready to colour;
 - ``track`` (``RUN/track_NNNNNN.vtp``): the track mesh at the frame's surface
-  position, with the surface velocity on its points (runs without a track mesh
+  position, with the surface velocity and speed on its points (runs without a track mesh
   have no track block).
+
+The active attributes are set so that ParaView colours and draws glyphs
+without picking arrays by hand: scalars ``speed`` in every block (ParaView
+colours the series by it only when all blocks share it), vectors ``velocity``,
+tensors ``shape_tensor`` (parts), normals ``Normals`` (shapes).
 
 The outlet events, when the run has them, go to ``RUN_outlet.vtp`` (one point
 per exit, at the crossing, with ``time``, ``id``, ``velocity``,
-``orientation``). Every VTK file carries its time as the field ``TimeValue``.
+``orientation``, active scalars ``time``). Every frame's VTK file carries its
+time as the field ``TimeValue``; the outlet file does not (it holds every
+event, and a time of its own would add a step to ParaView's animation).
 """
 
 from __future__ import annotations
@@ -87,11 +96,12 @@ def _add(data, name: str, values, field: bool = False) -> None:
     (data.GetFieldData() if field else data.GetPointData()).AddArray(array)
 
 
-def _write_vtp(mesh, path: Path, time: float) -> None:
-    """Binary, zlib-compressed VTK XML PolyData with the time as field ``TimeValue``."""
+def _write_vtp(mesh, path: Path, time: float | None) -> None:
+    """Binary, zlib-compressed VTK XML PolyData with the time (if any) as field ``TimeValue``."""
     from vtkmodules.vtkIOXML import vtkXMLPolyDataWriter
 
-    _add(mesh, "TimeValue", np.array([time]), field=True)
+    if time is not None:
+        _add(mesh, "TimeValue", np.array([time]), field=True)
     writer = vtkXMLPolyDataWriter()
     writer.SetFileName(str(path))
     writer.SetInputData(mesh)
@@ -101,8 +111,9 @@ def _write_vtp(mesh, path: Path, time: float) -> None:
         raise OutputError(f"VTK could not write {path}")
 
 
-def parts_points(frame: FrameData, shape):
-    """The parts of a frame as points with their fields (see the module's docstring)."""
+def parts_points(frame: FrameData, shape, force: bool = True):
+    """The parts of a frame as points with their fields (see the module's docstring);
+    ``force=False`` leaves out the force (a result that does not record it)."""
     mesh = _polydata(frame.position)
     normal, axis_x = body_axes(frame, shape)
     fields = {
@@ -113,8 +124,14 @@ def parts_points(frame: FrameData, shape):
         "angular_velocity": frame.angular_velocity, "force": frame.force,
         "orientation": frame.orientation, "normal": normal, "axis_x": axis_x,
         "shape_tensor": shape_tensors(frame, shape)}
+    if not force:
+        del fields["force"]
     for name, values in fields.items():
         _add(mesh, name, values)
+    point_data = mesh.GetPointData()
+    point_data.SetActiveScalars("speed")
+    point_data.SetActiveVectors("velocity")
+    point_data.SetActiveTensors("shape_tensor")
     return mesh
 
 
@@ -127,6 +144,8 @@ def parts_shapes(frame: FrameData, shape):
     _add(mesh, "velocity", frame.velocity[shapes.owner])
     _add(mesh, "Normals", shapes.normals)
     mesh.GetPointData().SetActiveNormals("Normals")  # ParaView shades the shapes with them
+    mesh.GetPointData().SetActiveScalars("speed")
+    mesh.GetPointData().SetActiveVectors("velocity")
     return mesh
 
 
@@ -142,7 +161,9 @@ def _write_outlet(result, path: Path) -> bool:
     mesh = _polydata(events["position"])
     for name in ("time", "id", "velocity", "orientation"):
         _add(mesh, name, events[name])
-    _write_vtp(mesh, path, float(events["time"][-1]))
+    mesh.GetPointData().SetActiveScalars("time")
+    mesh.GetPointData().SetActiveVectors("velocity")
+    _write_vtp(mesh, path, None)
     return True
 
 
@@ -165,16 +186,21 @@ def export(result, folder, every: int = 1, shapes: bool = True, progress=None) -
     root = ET.Element("VTKFile", type="Collection", version="0.1", byte_order="LittleEndian")
     collection = ET.SubElement(root, "Collection")
     frames = np.arange(0, result.n_frames, every)
+    force = result.recorded("force", frames)
     files = 0
     for k in frames:
         frame = read_frame(result, int(k))
-        blocks = [("parts", parts_points(frame, shape))]
+        blocks = [("parts", parts_points(frame, shape, force))]
         if shapes:
             blocks.append(("shapes", parts_shapes(frame, shape)))
         placed = track_mesh(result, frame)
         if placed is not None:
             track = _polydata(*placed)
             _add(track, "velocity", np.tile(frame.surface_velocity, (len(placed[0]), 1)))
+            _add(track, "speed", np.full(len(placed[0]), np.linalg.norm(frame.surface_velocity)))
+            # every block's active scalars are "speed": ParaView colours the whole series by it
+            track.GetPointData().SetActiveScalars("speed")
+            track.GetPointData().SetActiveVectors("velocity")
             blocks.append(("track", track))
         for part, (name, mesh) in enumerate(blocks):
             relative = f"{stem}/{name}_{int(k):06d}.vtp"

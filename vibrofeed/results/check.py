@@ -184,18 +184,17 @@ class _Checker:
             self.error(f"{path}/value", "an existing part's orientation is not a unit quaternion")
 
     def outlet(self):
-        if L.OUTLET not in self.f:
+        where = L.outlet_path(self.f)  # format 1.3, or observables/outlet before
+        if where is None or not self.need(where, h5py.Group):
             return 0
-        if not self.need(L.OUTLET, h5py.Group):
-            return 0
-        g = self.f[L.OUTLET]
+        g = self.f[where]
         for name in L.OUTLET_ATTRIBUTES:
             if name not in g.attrs:
-                self.error(L.OUTLET, f"attribute {name!r} missing")
+                self.error(where, f"attribute {name!r} missing")
         n = None
         table = {}
         for name, (_, comps, unit) in L.OUTLET_ELEMENTS.items():
-            path = f"{L.OUTLET}/{name}"
+            path = f"{where}/{name}"
             if not self.need(path, h5py.Dataset):
                 continue
             ds = g[name]
@@ -206,19 +205,19 @@ class _Checker:
             if unit and _text(ds.attrs.get("unit", "")) != unit:
                 self.error(path, f"unit attribute must be {unit!r}")
             if n is not None and ds.shape[0] != n:
-                self.error(L.OUTLET, "the event datasets differ in length")
+                self.error(where, "the event datasets differ in length")
                 return 0
             n = ds.shape[0]
             table[name] = ds[()]
         if "id" in table and len(np.unique(table["id"])) != len(table["id"]):
-            self.error(f"{L.OUTLET}/id", "a part left the track more than once")
+            self.error(f"{where}/id", "a part left the track more than once")
         for name, values in table.items():
             if values.dtype.kind == "f" and np.any(~np.isfinite(values)):
-                self.error(f"{L.OUTLET}/{name}", "non-finite values")
+                self.error(f"{where}/{name}", "non-finite values")
         if "orientation" in table and len(table["orientation"]):
             norm = np.linalg.norm(table["orientation"], axis=1)
             if np.any(np.abs(norm - 1) > 1e-6):
-                self.error(f"{L.OUTLET}/orientation", "not unit quaternions")
+                self.error(f"{where}/orientation", "not unit quaternions")
         return n or 0
 
     def mass_balance(self, events: int, status: str):

@@ -10,11 +10,16 @@ from __future__ import annotations
 H5MD_VERSION = (1, 1)
 UNITS_MODULE_VERSION = (1, 0)
 FORMAT_NAME = "vibrofeed-result"
-FORMAT_VERSION = (1, 2)  # 1.1: parameters/run@id, parameters/includes; 1.2: bulk feeder additions
+# 1.1: parameters/run@id, parameters/includes; 1.2: bulk feeder additions; 1.3: the outlet
+# table moves out of observables/ (H5MD observables are quantities sampled in time, the table is
+# one row per event), the box gets its edges, unit and system become variable-length strings
+# (H5MD units module). Files of 1.0 to 1.2 still read: READ_OUTLETS lists where they keep it.
+FORMAT_VERSION = (1, 3)
 
 PARTS = "particles/parts"
 SURFACE = "observables/surface"
-OUTLET = "observables/outlet"
+OUTLET = "vibrofeed/outlet"   # a non-H5MD group: H5MD allows unspecified groups at the root
+OUTLET_BEFORE_1_3 = "observables/outlet"
 MASS_BALANCE = "observables/mass_balance"
 PARAMETERS = "parameters"
 RUN = "parameters/run"
@@ -59,6 +64,21 @@ OUTLET_ELEMENTS = {
     "orientation": ("f8", 4, None),
 }
 OUTLET_ATTRIBUTES = ("outlet_x", "catch_z", "method")
+
+
+def outlet_path(f) -> str | None:
+    """Where an open result file keeps its outlet table (format 1.3 or earlier), or None."""
+    for path in (OUTLET, OUTLET_BEFORE_1_3):
+        if path in f:
+            return path
+    return None
+
+
+# The box is open along every axis (boundary "none"), so H5MD reads its edges
+# as placeholders; they are written (zeros, a time series hard-linked to the
+# positions' step and time) because readers such as znh5md and ASE expect them.
+BOX_BOUNDARY = ("none", "none", "none")
+BOX_EDGES_PLACEHOLDER = (0.0, 0.0, 0.0)
 
 # The mass balance, one H5MD time series of int64 per count: inserted = on_track
 # + exited + lost, where exited counts the outlet events so far (parts that left

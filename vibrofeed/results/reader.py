@@ -19,6 +19,8 @@ A bulk feeder's file adds (FORMAT.md, "Bulk feeders") the parts'
 quaternion for every present part), the outlet events (:attr:`Result.outlet`),
 the mass balance (:attr:`Result.mass_balance`), the track mesh
 (:attr:`Result.track_mesh`) and the clump template (:attr:`Result.body_template`).
+Files of format 1.2 and earlier, which kept the outlet table under
+``observables/``, read alike.
 """
 
 from __future__ import annotations
@@ -292,13 +294,30 @@ class Result:
         out[np.asarray(ids) != L.ID_FILL] = L.IDENTITY_QUATERNION
         return out
 
+    def recorded(self, name: str, frames=None) -> bool:
+        """Whether per-part field ``name`` holds values, judged at the first (selected) frame
+        with parts: the force of clumps is NaN at every frame by design (FORMAT.md, "Bulk
+        feeders"), that of spheres at none. True for a file without parts."""
+        ds, per_part = self._dataset(name)
+        if not per_part:
+            raise KeyError(f"{name!r} is not a per-part field")
+        if ds is None:
+            return False
+        if ds.dtype.kind != "f":
+            return True
+        for f in self.iter_frames(frames, fields=(name,)):
+            if len(f):
+                return bool(np.isfinite(f[name]).any())
+        return True
+
     # -- bulk feeders ---------------------------------------------------------------
     @cached_property
     def outlet(self) -> dict[str, np.ndarray]:
         """The outlet events, one row per part that left the track: ``time`` (E,) [s],
         ``id`` (E,), ``position`` (E, 3) [m], ``velocity`` (E, 3) [m s-1],
         ``orientation`` (E, 4); empty arrays when the file has no event table."""
-        group = self.file.get(L.OUTLET)
+        where = L.outlet_path(self.file)
+        group = None if where is None else self.file[where]
         out = {}
         for name, (dtype, comps, _) in L.OUTLET_ELEMENTS.items():
             if group is not None and name in group:
@@ -310,9 +329,10 @@ class Result:
     @property
     def outlet_plane(self) -> dict | None:
         """``{"outlet_x", "catch_z", "method"}`` of the outlet, or None without one."""
-        group = self.file.get(L.OUTLET)
-        if group is None:
+        where = L.outlet_path(self.file)
+        if where is None:
             return None
+        group = self.file[where]
         return {"outlet_x": float(group.attrs.get("outlet_x", np.nan)),
                 "catch_z": float(group.attrs.get("catch_z", np.nan)),
                 "method": _text(group.attrs.get("method", ""))}

@@ -40,8 +40,18 @@ _CHUNK_BYTES = 64 * 1024
 
 
 def _fixed(s: str) -> np.bytes_:
-    """A fixed-length string, as H5MD asks for its attributes."""
+    """A fixed-length string, as H5MD asks for the author, creator and boundary attributes."""
     return np.bytes_(str(s).encode("utf-8"))
+
+
+def _ascii(obj, name: str, text: str) -> None:
+    """A scalar variable-length ASCII string attribute, as the H5MD units module asks for."""
+    obj.attrs.create(name, str(text), dtype=h5py.string_dtype("ascii"))
+
+
+def set_unit(obj, unit: str) -> None:
+    """The units module's ``unit`` attribute of a dataset, in its notation (``m s-1``)."""
+    _ascii(obj, "unit", unit)
 
 
 def _now() -> str:
@@ -180,6 +190,7 @@ class ResultWriter:
         # Dataset handles, looked up once.
         self._values = {name: f[L.PARTS][name]["value"] for name in L.PART_ELEMENTS}
         self._surface = {name: f[L.SURFACE][name]["value"] for name in L.SURFACE_ELEMENTS}
+        self._edges = f[L.PARTS]["box/edges/value"]
         self._step = f[L.PARTS]["position/step"]
         self._time = f[L.PARTS]["position/time"]
         self._counts: dict = {}  # mass-balance value datasets, once created
@@ -190,7 +201,7 @@ class ResultWriter:
             template = np.asarray(body_template, dtype="f8")
             if template.ndim != 2 or template.shape[1] != 4:
                 raise ValueError(f"body_template must be (n, 4) x, y, z, r, got {template.shape}")
-            f.create_dataset(L.BODY_TEMPLATE, data=template).attrs["unit"] = _fixed("m")
+            set_unit(f.create_dataset(L.BODY_TEMPLATE, data=template), "m")
         if outlet is not None:
             self._create_outlet(outlet)
         f.flush()
@@ -224,7 +235,7 @@ class ResultWriter:
         creator.attrs["version"] = _fixed(__version__)
         units = h5md.create_group("modules/units")
         units.attrs["version"] = np.array(L.UNITS_MODULE_VERSION, dtype="i4")
-        units.attrs["system"] = _fixed("SI")
+        _ascii(units, "system", "SI")
 
     @staticmethod
     def _write_parameters(f, deck_name, deck_path, deck_text, includes, variables, derived,
@@ -264,7 +275,7 @@ class ResultWriter:
         parts = f.create_group(L.PARTS)
         box = parts.create_group("box")
         box.attrs["dimension"] = np.int32(3)
-        box.attrs["boundary"] = np.array([b"none"] * 3, dtype="S8")
+        box.attrs["boundary"] = np.array([_fixed(b) for b in L.BOX_BOUNDARY], dtype="S8")
 
         cf = self._chunk_frames
         step = time = None
@@ -277,15 +288,19 @@ class ResultWriter:
             value = g.create_dataset("value", shape=shape, maxshape=maxshape, dtype=dtype,
                                      chunks=chunks, fillvalue=fill)
             if unit:
-                value.attrs["unit"] = _fixed(unit)
+                set_unit(value, unit)
             step, time = self._step_time(g, step, time)
+        edges = box.create_group("edges")  # step and time as the positions', as H5MD requires
+        set_unit(edges.create_dataset("value", shape=(0, 3), maxshape=(None, 3), dtype="f8",
+                                      chunks=(max(cf, 256), 3)), "m")
+        self._step_time(edges, step, time)
 
         obs = f.create_group(L.SURFACE)
         for name, (dtype, comps, unit) in L.SURFACE_ELEMENTS.items():
             g = obs.create_group(name)
             value = g.create_dataset("value", shape=(0, comps), maxshape=(None, comps),
                                      dtype=dtype, chunks=(max(cf, 256), comps))
-            value.attrs["unit"] = _fixed(unit)
+            set_unit(value, unit)
             self._step_time(g, step, time)
 
     @staticmethod
@@ -298,7 +313,7 @@ class ResultWriter:
             raise ValueError(f"track triangles must be (T, 3) integers, got {triangles.shape} "
                              f"{triangles.dtype}")
         g = f.create_group(L.TRACK)
-        g.create_dataset("vertices", data=vertices).attrs["unit"] = _fixed("m")
+        set_unit(g.create_dataset("vertices", data=vertices), "m")
         g.create_dataset("triangles", data=triangles.astype("i4"))
 
     def _create_outlet(self, attrs: Mapping) -> None:
@@ -311,7 +326,7 @@ class ResultWriter:
             ds = g.create_dataset(name, shape=shape, maxshape=maxshape, dtype=dtype,
                                   chunks=(1024, comps) if comps else (1024,))
             if unit:
-                ds.attrs["unit"] = _fixed(unit)
+                set_unit(ds, unit)
             self._outlet[name] = ds
 
     def _create_counts(self) -> None:
@@ -332,7 +347,7 @@ class ResultWriter:
             maxshape=(None, None, comps), dtype=dtype,
             chunks=(self._chunk_frames, self._chunk_parts, comps), fillvalue=self._fill(name, dtype))
         if unit:
-            value.attrs["unit"] = _fixed(unit)
+            set_unit(value, unit)
         self._step_time(g, self._step, self._time)
         self._values[name] = value
 
@@ -343,7 +358,7 @@ class ResultWriter:
                                         chunks=(1024,))
             time = group.create_dataset("time", shape=(0,), maxshape=(None,), dtype="f8",
                                         chunks=(1024,))
-            time.attrs["unit"] = _fixed(L.TIME_UNIT)
+            set_unit(time, L.TIME_UNIT)
         else:
             group["step"] = step
             group["time"] = time
@@ -462,6 +477,7 @@ class ResultWriter:
                 self._append(self._counts[name], k0, counts[:, j])
         self._append(self._surface["position"], k0, np.array([f[3] for f in self._pending]))
         self._append(self._surface["velocity"], k0, np.array([f[4] for f in self._pending]))
+        self._append(self._edges, k0, np.tile(L.BOX_EDGES_PLACEHOLDER, (n, 1)))
         # step/time last: a frame counts once its step is there.
         self._append(self._time, k0, np.array([f[1] for f in self._pending], dtype="f8"))
         self._append(self._step, k0, np.array([f[0] for f in self._pending], dtype="i8"))

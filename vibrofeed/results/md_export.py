@@ -1,0 +1,165 @@
+"""A result as a plain H5MD trajectory for molecular-dynamics tools (``vibrofeed export --format h5md-md``).
+
+The result file itself follows H5MD 1.1 and opens in any H5MD reader that
+takes what the specification allows. Two things it allows are beyond some
+readers: lengths in metres (MDAnalysis knows no unit ``m``) and a particle
+axis with holes (a slot freed by a part that left and later reused: znh5md and
+ASE expect the particles present at a frame to come first). This export writes
+what they read, still to the letter of H5MD 1.1:
+
+- one particle group ``particles/trajectory`` (the name MDAnalysis looks for
+  when it builds its topology from the file alone);
+- at each frame, the parts present in ascending id, then padding up to the
+  most parts present at once: ``id = -1`` (the fill value: no particle),
+  ``species = 0`` (LIGGGHTS types start at 1; ASE reads 0 as a dummy atom) and
+  NaN in every float element. A row is not one part over time: ``id`` says
+  which part it holds;
+- lengths (``position``, ``radius``, the box edges, the surface's
+  displacement) in nanometres (``nm``), every other quantity in the SI units of
+  the result (``m s-1``, ``rad s-1``, ``N``, ``kg``, ``s``);
+- ``box/pbc``, the periodicity per axis as a time series (all false): not an
+  H5MD item, which H5MD allows, for znh5md;
+- the observables of the result (surface motion, mass balance) as time series,
+  and the result's run id and path as attributes of ``parameters``.
+
+A per-part element the result holds no value of (the force on clumps, NaN by
+design) is left out.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from .. import __version__
+from . import layout as L
+from .writer import _ascii, _fixed, set_unit
+
+NM_PER_M = 1e9
+_BLOCK_VALUES = 1 << 21  # values per element packed in memory before a write (16 MB of float64)
+FORMAT_NAME = "h5md-md"
+GROUP = "particles/trajectory"
+# element -> (source field, scale, unit, fill) in the order they are written
+ELEMENTS = {
+    "id": ("id", None, None, L.ID_FILL),
+    "species": ("species", None, None, 0),
+    "position": ("position", NM_PER_M, "nm", np.nan),
+    "velocity": ("velocity", 1.0, "m s-1", np.nan),
+    "force": ("force", 1.0, "N", np.nan),
+    "angular_velocity": ("angular_velocity", 1.0, "rad s-1", np.nan),
+    "orientation": ("orientation", 1.0, None, np.nan),
+    "radius": ("radius", NM_PER_M, "nm", np.nan),
+    "mass": ("mass", 1.0, "kg", np.nan),
+}
+SURFACE_UNITS = {"position": (NM_PER_M, "nm"), "velocity": (1.0, "m s-1")}
+
+
+def _time_series(group, name, frames_shape, dtype, fill, unit, step, time):
+    g = group.create_group(name)
+    value = g.create_dataset("value", shape=frames_shape, dtype=dtype, fillvalue=fill,
+                             chunks=True)
+    if unit:
+        set_unit(value, unit)
+    if step is None:
+        step = g.create_dataset("step", data=np.empty(0, dtype="i8"), maxshape=(None,))
+        time = g.create_dataset("time", data=np.empty(0, dtype="f8"), maxshape=(None,))
+        set_unit(time, L.TIME_UNIT)
+    else:
+        g["step"], g["time"] = step, time
+    return value, step, time
+
+
+def export_md(result, path, every: int = 1) -> Path:
+    """Write every ``every``-th frame of a Result to ``path`` (see the module's docstring).
+
+    The file is written as ``path.part`` and renamed when complete, so ``path`` is never a
+    partial export."""
+    path = Path(path)
+    part = path.with_name(path.name + ".part")
+    try:
+        _write(result, part, every)
+        part.replace(path)
+    except BaseException:
+        part.unlink(missing_ok=True)
+        raise
+    return path
+
+
+def _write(result, path: Path, every: int) -> None:
+    index = np.arange(0, result.n_frames, every)
+    n_rows = int(result.present(index).max()) if len(index) else 0
+    names = [name for name in ELEMENTS if result.recorded(ELEMENTS[name][0], index)]
+    with h5py.File(path, "w") as f:
+        h5md = f.create_group("h5md")
+        h5md.attrs["version"] = np.array(L.H5MD_VERSION, dtype="i4")
+        for group, attrs in (("author", {"name": _text_attr(result.file["h5md/author"], "name")}),
+                             ("creator", {"name": "vibrofeed", "version": __version__})):
+            g = h5md.create_group(group)
+            for key, value in attrs.items():
+                g.attrs[key] = _fixed(value)
+        units = h5md.create_group("modules/units")
+        units.attrs["version"] = np.array(L.UNITS_MODULE_VERSION, dtype="i4")
+        _ascii(units, "system", "SI")
+
+        parts = f.create_group(GROUP)
+        box = parts.create_group("box")
+        box.attrs["dimension"] = np.int32(3)
+        box.attrs["boundary"] = np.array([_fixed(b) for b in L.BOX_BOUNDARY], dtype="S8")
+        edges, step, time = _time_series(box, "edges", (len(index), 3), "f8", 0.0, "nm", None, None)
+        step.resize((len(index),))
+        time.resize((len(index),))
+        step[:] = result.read("step", frames=index)
+        time[:] = result.read("time", frames=index)
+        edges[:] = np.asarray(L.BOX_EDGES_PLACEHOLDER) * NM_PER_M
+        # Not an H5MD item (H5MD allows others): znh5md takes the periodicity from it, and
+        # misreads the fixed-length `boundary` strings H5MD prescribes as periodic.
+        pbc = _time_series(box, "pbc", (len(index), 3), "?", False, None, step, time)[0]
+        pbc[:] = np.array([b == "periodic" for b in L.BOX_BOUNDARY])
+        values = {}
+        for name in names:
+            source, _, unit, fill = ELEMENTS[name]
+            dtype, comps, _ = L.PART_ELEMENTS.get(source) or L.OPTIONAL_PART_ELEMENTS[source]
+            shape = (len(index), n_rows, comps) if comps else (len(index), n_rows)
+            values[name] = _time_series(parts, name, shape, dtype, fill, unit, step, time)[0]
+        # frames are packed in memory and written in blocks (one HDF5 write per element and
+        # block: a write per frame costs more than the packing)
+        per_block = max(1, _BLOCK_VALUES // max(3 * n_rows, 1))
+        frames = result.iter_frames(index, fields=[ELEMENTS[n][0] for n in names])
+        for k0 in range(0, len(index), per_block):
+            k1 = min(len(index), k0 + per_block)
+            blocks = {name: np.full((k1 - k0, *ds.shape[1:]), ds.fillvalue, dtype=ds.dtype)
+                      for name, ds in values.items()}
+            for k in range(k1 - k0):
+                frame = next(frames)
+                order = np.argsort(frame.ids, kind="stable")
+                for name in names:
+                    source, scale, _, _ = ELEMENTS[name]
+                    rows = frame[source][order]
+                    blocks[name][k, :len(order)] = rows if scale is None else rows * scale
+            for name, block in blocks.items():
+                values[name][k0:k1] = block
+
+        obs = f.create_group("observables")
+        surface = obs.create_group("surface")
+        for name, (scale, unit) in SURFACE_UNITS.items():
+            ds = _time_series(surface, name, (len(index), 3), "f8", np.nan, unit, step, time)[0]
+            ds[:] = result.read(f"surface_{name}", frames=index) * scale
+        counts = result.mass_balance
+        if counts is not None:
+            balance = obs.create_group("mass_balance")
+            for name, series in counts.items():
+                ds = _time_series(balance, name, (len(index),), "i8", -1, None, step, time)[0]
+                ds[:] = series[index]
+
+        p = f.create_group("parameters")
+        p.attrs["format"] = _fixed(FORMAT_NAME)
+        p.attrs["source"] = str(result.path)
+        p.attrs["source_run_id"] = result.run_id
+        p.attrs["every"] = int(every)
+
+
+def _text_attr(group, name: str) -> str:
+    value = group.attrs.get(name, "")
+    return value.decode("utf-8", "replace") if isinstance(value, bytes) else str(value)
