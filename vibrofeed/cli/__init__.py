@@ -60,7 +60,10 @@ class _Parser(argparse.ArgumentParser):
     """argparse, with its usage errors as the one line every error is."""
 
     def error(self, message: str):
-        self.exit(2, f"vibrofeed: error: {self.prog}: {message} (see {self.prog} --help)\n")
+        # prog is "vibrofeed" or "vibrofeed COMMAND": the error line names the command once.
+        command = self.prog.removeprefix("vibrofeed").strip()
+        where = f"{command}: " if command else ""
+        self.exit(2, f"vibrofeed: error: {where}{message} (see {self.prog} --help)\n")
 
 
 def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
@@ -91,6 +94,11 @@ def main(argv: list[str] | None = None) -> int:
         return args.func(args)
     except KeyboardInterrupt:
         return fail("interrupted", EXIT_INTERRUPTED)
+    except BrokenPipeError:
+        # The reader stopped (`vibrofeed ... | head`): no traceback, and none again when
+        # Python flushes stdout at exit (the recipe of the signal module's documentation).
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
     except VibrofeedError as exc:
         if debug:
             raise
