@@ -93,9 +93,9 @@ def test_unwritable_output(tmp_path):
     blocker = tmp_path / "file"
     blocker.write_text("")
     proc = vibrofeed("run", "single_part", "-o", blocker / "sub" / "r.h5")
-    assert proc.returncode == 1 and "cannot create folder" in proc.stderr
+    assert proc.returncode == 2 and f"folder {blocker} is not a folder" in proc.stderr
     proc = vibrofeed("run", "single_part", "-o", tmp_path)
-    assert proc.returncode == 1 and "is a directory" in proc.stderr
+    assert proc.returncode == 2 and "is a folder" in proc.stderr
 
 
 def test_check_exit_status_and_json(tmp_path):

@@ -4,6 +4,9 @@ and what they say instead of a traceback or a result that is not one."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
+
+import pytest
 
 from helpers import REPO, vibrofeed
 
@@ -45,3 +48,58 @@ def test_a_corrupt_sweep_summary_is_named_in_one_line(tmp_path):
 def test_json_listings_are_json():
     listed = json.loads(vibrofeed("validate", "--list", "--json", check=True).stdout)
     assert len(listed) == len(list((REPO / "validation" / "cases").glob("*.toml")))
+
+
+# Every command that writes, with a destination it cannot write: a file where a
+# folder is wanted, a folder where a file is, a folder that takes no file (/proc).
+def _writers(result, folder, trial):
+    return {
+        "render": (["render", result, "-o"], "x.png"),
+        "export": (["export", result, "-o"], "x"),
+        "feedrate": (["feedrate", result, "--plot"], "x"),
+        "singulation": (["singulation", result, "--plot"], "x"),
+        "sweep-report": (["sweep-report", folder, "--plot"], "x"),
+        "replay": (["replay", trial, "--mass", "1e-3", "--mu-s", "0.7", "--mu-k", "0.6",
+                    "--normal-force", "0.1", "--plot"], "x.png"),
+        "run": (["run", "single_part", "-o"], "x.h5"),
+        "demo": (["demo", "-o"], "x"),
+        "prepare": (["prepare", "bulk_feeder", "-o"], "x"),
+        "validate": (["validate", "hop_flights", "-o"], "x"),
+        "sweep": (["sweep", REPO / "sweeps" / "example.toml", "--dry-run", "-o"], "x"),
+    }
+
+
+def test_every_command_refuses_a_destination_it_cannot_write_before_any_work(tmp_path):
+    from helpers import parts, write_result, write_trial
+
+    result = write_result(tmp_path / "r.h5", [(0, 0.0, parts([1], [[0, 0, 0]]))])
+    trial = write_trial(tmp_path / "trial.csv")
+    a_file = tmp_path / "a_file"
+    a_file.write_text("x")
+    for name, (args, leaf) in _writers(result, tmp_path, trial).items():
+        folder_wanted = leaf.count(".") == 0
+        bad = [Path("/proc") / leaf, a_file / leaf]
+        if folder_wanted:
+            bad.append(a_file)
+        else:
+            (tmp_path / leaf).mkdir(exist_ok=True)  # a folder named like the file
+            bad.append(tmp_path / leaf)
+        for path in bad:
+            proc = vibrofeed(*args, path, timeout=60)
+            one_line_error(proc, 2, str(path))
+            assert not proc.stdout, (name, proc.stdout)
+
+
+def test_a_file_reported_is_a_file_that_holds_something(tmp_path):
+    from vibrofeed.cli.outputs import written
+    from vibrofeed.errors import OutputError
+
+    with pytest.raises(OutputError, match="was not written"):
+        written(tmp_path / "none.png")
+    with pytest.raises(OutputError, match="was not written"):
+        written(tmp_path)
+    (tmp_path / "empty.png").write_bytes(b"")
+    with pytest.raises(OutputError, match="written empty"):
+        written(tmp_path / "empty.png")
+    (tmp_path / "full.png").write_bytes(b"\x89PNG")
+    assert written(tmp_path / "full.png") == tmp_path / "full.png"

@@ -12,8 +12,6 @@ import shlex
 import sys
 from pathlib import Path
 
-from ..errors import UsageError
-
 DESCRIPTION = ("Run the default bulk-feeder case (hundreds of micro-parts on a vibrating track), then "
                "print its feed rate and singulation and write DIR/bulk_feeder.h5, a picture "
                "(DIR/bulk_feeder.png) and the plots (DIR/plots/).")
@@ -41,10 +39,9 @@ def run(args) -> int:
     from ..parameters import parse_assignments
     from ..progress import RunProgress
     from ..summary import run_summary
+    from .outputs import folder_destination, written
 
-    folder = Path(args.output)
-    if folder.exists() and not folder.is_dir():
-        raise UsageError(f"-o {args.output}: not a folder")
+    folder = folder_destination("-o", args.output, create=False, parents=True)
     deck = Deck.find(DECK)
     params = parse_assignments(args.param)
     output = folder / f"{DECK}.h5"
@@ -54,6 +51,7 @@ def run(args) -> int:
                           reuse=args.reuse, command=shlex.join(["vibrofeed"] + sys.argv[1:]))
     finally:
         progress.close()
+    written(result.output)
     print(run_summary(result))
     print(report(output, None if args.no_pictures else folder))
     return 0
@@ -67,6 +65,7 @@ def report(path, folder: Path | None = None) -> str:
     from ..results.reader import Result
     from . import feedrate as F
     from . import singulation as S
+    from .outputs import written
 
     lines, figures = [], []
     with Result(path) as result:
@@ -79,11 +78,11 @@ def report(path, folder: Path | None = None) -> str:
 
             plots = folder / "plots"
             plots.mkdir(parents=True, exist_ok=True)
-            figures += fr.plot(plots) + sg.plot(plots)
+            figures += F.figures_written(fr.plot(plots) + sg.plot(plots))
             # The picture shows the middle of the steady window: the track full and feeding.
             picture = folder / f"{Path(path).stem}.png"
             t_mid = 0.5 * (summary["steady_from"] + summary["steady_to"])
             frame = int(abs(result.time - t_mid).argmin()) if t_mid == t_mid else -1
-            figures.append(render(result, picture, frame=frame).path)
+            figures.append(written(render(result, picture, frame=frame).path))
     lines += [f"figure: {f}" for f in figures]
     return "\n".join(lines)

@@ -26,7 +26,9 @@ def run(args) -> int:
 
     from ..pictures.export import export
     from ..results.reader import Result
+    from .outputs import folder_destination, written
 
+    folder_destination("-o", args.output, create=False, parents=True)
     with Result(args.result, allow_incomplete=args.allow_incomplete) as result:
         bar = None
         if not args.quiet and sys.stderr.isatty():
@@ -40,5 +42,6 @@ def run(args) -> int:
         finally:
             if bar is not None:
                 bar.close()
+    written(done.pvd)
     print(f"wrote {done.pvd} ({done.frames} frames, {done.files} files, {done.seconds:.1f} s)")
     return 0

@@ -7,7 +7,7 @@ import json
 import math
 from pathlib import Path
 
-from ..errors import UsageError
+from .outputs import folder_destination, written
 
 DESCRIPTION = ("Feed rate of a bulk-feeder result: parts/s and mass/s leaving the track over the "
                "detected steady window (batch-means error), the mean conveying velocity over whole "
@@ -38,18 +38,14 @@ def add_output_arguments(p) -> None:
 
 
 def plot_folder(path: str | None) -> Path | None:
-    """The figures' folder, checked before any work: created if missing, but a
-    mistyped parent is refused rather than created silently."""
-    if path is None:
-        return None
-    folder = Path(path)
-    if folder.exists() and not folder.is_dir():
-        raise UsageError(f"--plot {path}: not a folder")
-    if not folder.exists():
-        if not folder.absolute().parent.is_dir():
-            raise UsageError(f"--plot {path}: folder {folder.absolute().parent} does not exist")
-        folder.mkdir()
-    return folder
+    """The figures' folder of --plot DIR, checked before any work (see
+    :func:`~vibrofeed.cli.outputs.folder_destination`); None without --plot."""
+    return None if path is None else folder_destination("--plot", path)
+
+
+def figures_written(paths) -> list:
+    """The figures a --plot wrote, each checked to exist and hold something."""
+    return [written(path) for path in paths]
 
 
 # Parameters the single-part model needs from the deck (the rest have defaults).
@@ -128,7 +124,7 @@ def run(args) -> int:
         summary = fr.summary()
         if not args.no_model:
             add_dilute_limit(summary, result.parameters)
-        figures = fr.plot(folder) if folder is not None else []
+        figures = figures_written(fr.plot(folder)) if folder is not None else []
     if args.json:
         print(json.dumps(summary, indent=2))
     else:

@@ -44,8 +44,10 @@ def run(args) -> int:
 
     from ..pictures.render import render
     from ..results.reader import Result
+    from .outputs import file_destination, written
 
-    output = args.output or f"{Path(args.result).stem}.png"
+    output = str(file_destination("-o", args.output or f"{Path(args.result).stem}.png",
+                                  (".png", ".mp4")))
     with Result(args.result, allow_incomplete=args.allow_incomplete) as result:
         bar = None
         if output.lower().endswith(".mp4") and not args.quiet and sys.stderr.isatty():
@@ -59,6 +61,7 @@ def run(args) -> int:
         finally:
             if bar is not None:
                 bar.close()
+    written(done.path)
     w, h = done.size
     what = "1 frame" if done.frames == 1 else f"{done.frames} frames"
     print(f"wrote {done.path} ({what}, {w}x{h}, {done.seconds:.1f} s)")

@@ -48,22 +48,17 @@ def _positive(name: str, value) -> float:
     return float(value)
 
 
-def _plot_path(path: str | None) -> Path | None:
-    """The figure's path, refused before any work if its folder does not exist:
-    a mistyped folder should not be created silently after minutes of work."""
-    if path is None:
-        return None
-    out = Path(path)
-    if not out.parent.is_dir():
-        raise UsageError(f"--plot {path}: folder {out.parent} does not exist")
-    return out
-
-
 def run(args) -> int:
     from ..validation.models.constants import G
     from ..validation.replay.trials import read_trial
+    from .outputs import file_destination, folder_destination
 
-    plot = _plot_path(args.plot)
+    if args.fit and args.plot:
+        raise UsageError("--plot draws a replay; --fit prints the fit only (replay with the fitted "
+                         "--mu-k and --normal-force to plot it)")
+    plot = None if args.plot is None else file_destination("--plot", args.plot, (".png",))
+    if args.engine == "dem":
+        folder_destination("-o", args.output, create=False, parents=True)
     trials = [read_trial(path) for path in args.trials]
     mass = _positive("--mass", args.mass)
     mu_s = _positive("--mu-s", args.mu_s)
@@ -102,8 +97,9 @@ def run(args) -> int:
                   f"stuck {r.stuck_fraction:.0%} of the time")
     if plot is not None:
         from ..validation.plots import plot_replay
+        from .outputs import written
 
-        path = plot_replay(results, plot, engine=args.engine)
+        path = written(plot_replay(results, plot, engine=args.engine))
         if not args.json:
             print(f"figure: {path}")
     return 0

@@ -68,7 +68,7 @@ def table(s: dict) -> str:
 def run(args) -> int:
     from ..postproc.singulation import Singulation
     from ..results.reader import Result
-    from .feedrate import plot_folder
+    from .feedrate import figures_written, plot_folder
 
     folder = plot_folder(args.plot)
     with Result(args.result) as result:
@@ -76,7 +76,7 @@ def run(args) -> int:
                          tolerance=args.tolerance, start=args.start, end=args.end,
                          cluster_frames=args.cluster_frames).run()
         summary = sg.summary()
-        figures = sg.plot(folder) if folder is not None else []
+        figures = figures_written(sg.plot(folder)) if folder is not None else []
     if args.json:
         print(json.dumps(summary, indent=2))
     else:

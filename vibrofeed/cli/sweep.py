@@ -42,6 +42,10 @@ def run(args) -> int:
     from ..sweep.execute import sweep
 
     comm = mpi.world()
+    if args.output is not None:
+        from .outputs import folder_destination
+
+        folder_destination("-o", args.output, create=False, parents=True)
     if comm is not None and comm.Get_rank() != 0:
         return mpi.serve(comm)
     try:

@@ -75,7 +75,10 @@ def run(args) -> int:
         for case in cases:
             print(f"{case.name:<{width}}  [{case.kind}] {case.title}")
         return 0
+    from .outputs import folder_destination, written
+
     selected = [C.find(n) for n in (args.cases or C.available())]
+    folder_destination("-o", args.output, create=False, parents=True)
     say = (lambda *a: None) if args.json else (lambda text: print(text, file=sys.stderr))
     rows, figures, failed, errors = [], [], [], []
     for case in selected:
@@ -90,7 +93,7 @@ def run(args) -> int:
             say(f"   {case.name}: error: {exc}")
             continue
         rows += outcome.rows
-        figures += outcome.figures
+        figures += [written(f) for f in outcome.figures]
         if not outcome.passed:
             failed.append(case.name)
         if not args.json and len(selected) > 1:
