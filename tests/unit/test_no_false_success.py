@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from helpers import REPO, vibrofeed
@@ -103,3 +104,49 @@ def test_a_file_reported_is_a_file_that_holds_something(tmp_path):
         written(tmp_path / "empty.png")
     (tmp_path / "full.png").write_bytes(b"\x89PNG")
     assert written(tmp_path / "full.png") == tmp_path / "full.png"
+
+
+def _feeder(tmp_path, exits, name="feed.h5"):
+    from bulk_synthetic import feeder
+
+    frames = np.arange(0, 0.2 + 1e-9, 0.01)
+    return feeder(tmp_path / name, frames, np.asarray(exits, dtype=float), freq=100.0)
+
+
+def test_too_few_exits_measure_no_rate(tmp_path):
+    few = _feeder(tmp_path, [0.05, 0.12, 0.15])  # 3 exits in a 0.2 s run
+    proc = vibrofeed("feedrate", few, "--no-model")
+    assert proc.returncode == 1 and "0 ± 0" not in proc.stdout
+    assert "too few exits to measure (3 in the window; need ≥ 10)" in proc.stdout
+    one_line_error(proc, 1, str(few), "too few exits")
+    figures = json.loads(vibrofeed("feedrate", few, "--no-model", "--json").stdout)
+    assert figures["parts_per_s"] is None and figures["mass_per_s"] is None
+    assert figures["reason"].startswith("too few exits") and figures["n_events"] == 3
+    proc = vibrofeed("singulation", few, "--json")
+    figures = json.loads(proc.stdout)
+    assert proc.returncode == 1 and figures["cv_interarrival"] is None and figures["n_arrivals"] == 3
+    # enough exits: a rate, exit 0, no reason
+    many = _feeder(tmp_path, 0.02 + 0.15 * np.arange(40) / 40, "many.h5")
+    figures = json.loads(vibrofeed("feedrate", many, "--no-model", "--json", check=True).stdout)
+    assert figures["reason"] is None and figures["parts_per_s"] > 0
+
+
+def test_analysis_windows_and_options_that_mean_nothing_are_refused(tmp_path):
+    run = _feeder(tmp_path, 0.02 + 0.15 * np.arange(40) / 40)
+    for command in ("feedrate", "singulation"):
+        for option, value, words in (("--end", "50", "window end 50 s is outside the run (0 .. 0.2 s)"),
+                                     ("--start", "-1", "window start -1 s is outside the run"),
+                                     ("--start", "nan", "--start: must be a finite number"),
+                                     ("--end", "inf", "--end: must be a finite number")):
+            one_line_error(vibrofeed(command, run, option, value), 2, words)
+    for command, option, value in (("feedrate", "--bins", "0"), ("feedrate", "--batches", "1"),
+                                   ("singulation", "--gap", "-1"), ("singulation", "--gap", "nan"),
+                                   ("singulation", "--gap-distance", "-1e-6"),
+                                   ("singulation", "--tolerance", "-1e-6"),
+                                   ("singulation", "--cluster-frames", "0"),
+                                   ("render", "--fps", "nan"), ("render", "--every", "0"),
+                                   ("export", "--every", "0"), ("render", "--frame", "21")):
+        proc = vibrofeed(command, run, option, value, "-o" if command in ("render", "export") else "--json",
+                         *((tmp_path / f"x{option}.png",) if command == "render" else
+                           (tmp_path / "x",) if command == "export" else ()))
+        one_line_error(proc, 2, option if command != "render" or option != "--frame" else "frame 21")

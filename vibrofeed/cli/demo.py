@@ -53,13 +53,17 @@ def run(args) -> int:
         progress.close()
     written(result.output)
     print(run_summary(result))
-    print(report(output, None if args.no_pictures else folder))
-    return 0
+    from .feedrate import refuse
+
+    text, reason = report(output, None if args.no_pictures else folder)
+    print(text)
+    return refuse(output, reason)
 
 
-def report(path, folder: Path | None = None) -> str:
-    """The feed-rate and singulation reports of a bulk result; with ``folder``,
-    also its picture (folder/<name>.png) and plots (folder/plots/)."""
+def report(path, folder: Path | None = None) -> tuple[str, str | None]:
+    """The feed-rate and singulation reports of a bulk result, and why they measure
+    nothing (too few exits; None when they measure); with ``folder``, also its
+    picture (folder/<name>.png) and plots (folder/plots/)."""
     from ..postproc.feedrate import FeedRate
     from ..postproc.singulation import Singulation
     from ..results.reader import Result
@@ -71,8 +75,11 @@ def report(path, folder: Path | None = None) -> str:
     with Result(path) as result:
         fr = FeedRate(result).run()
         summary = F.add_dilute_limit(fr.summary(), result.parameters)
+        reason = F.unmeasured(summary, F.RATE_KEYS)
         sg = Singulation(result).run()
-        lines += ["", "Feed rate", F.table(summary), "", "Singulation", S.table(sg.summary())]
+        singulation = sg.summary()
+        reason = reason or F.unmeasured(singulation, S.ARRIVAL_KEYS)
+        lines += ["", "Feed rate", F.table(summary), "", "Singulation", S.table(singulation)]
         if folder is not None:
             from ..pictures.render import render
 
@@ -85,4 +92,4 @@ def report(path, folder: Path | None = None) -> str:
             frame = int(abs(result.time - t_mid).argmin()) if t_mid == t_mid else -1
             figures.append(written(render(result, picture, frame=frame).path))
     lines += [f"figure: {f}" for f in figures]
-    return "\n".join(lines)
+    return "\n".join(lines), reason

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from .numbers import whole
+
 DESCRIPTION = ("Write a result as a ParaView time series: DIR/RUN.pvd referencing, per frame, the "
                "parts as points with their fields (id, radius, velocity, speed, orientation "
                "quaternion, glyph-ready axes and shape tensor), the parts' real shapes as "
@@ -13,7 +15,8 @@ def add_arguments(p) -> None:
     p.add_argument("result", metavar="RUN.h5", help="result file")
     p.add_argument("-o", "--output", metavar="DIR", default=".",
                    help="folder to write into (created if needed; default: here)")
-    p.add_argument("--every", type=int, default=1, metavar="N", help="export every N-th frame (default 1)")
+    p.add_argument("--every", type=whole(1), default=1, metavar="N",
+                   help="export every N-th frame (default 1)")
     p.add_argument("--no-shapes", action="store_true",
                    help="leave out the parts' triangle meshes (points with their fields only)")
     p.add_argument("--allow-incomplete", action="store_true",

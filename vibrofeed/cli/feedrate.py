@@ -7,6 +7,8 @@ import json
 import math
 from pathlib import Path
 
+from ..errors import EXIT_FAILED
+from .numbers import real, whole
 from .outputs import folder_destination, written
 
 DESCRIPTION = ("Feed rate of a bulk-feeder result: parts/s and mass/s leaving the track over the "
@@ -17,13 +19,13 @@ DESCRIPTION = ("Feed rate of a bulk-feeder result: parts/s and mass/s leaving th
 
 def add_arguments(p) -> None:
     p.add_argument("result", metavar="RUN.h5", help="result of a bulk-feeder deck")
-    p.add_argument("--start", type=float, metavar="S", help="start of the steady window [s] "
+    p.add_argument("--start", type=real(), metavar="S", help="start of the steady window [s] "
                    "(default: detected)")
-    p.add_argument("--end", type=float, metavar="S", help="end of the steady window [s] "
+    p.add_argument("--end", type=real(), metavar="S", help="end of the steady window [s] "
                    "(default: detected)")
-    p.add_argument("--batches", type=int, default=10, metavar="N",
+    p.add_argument("--batches", type=whole(2), default=10, metavar="N",
                    help="batches of the batch-means errors (default 10)")
-    p.add_argument("--bins", type=int, default=20, metavar="N",
+    p.add_argument("--bins", type=whole(1), default=20, metavar="N",
                    help="bins of the velocity profile along the track (default 20)")
     p.add_argument("--no-model", action="store_true",
                    help="skip the single-part model comparison")
@@ -84,6 +86,29 @@ def add_dilute_limit(summary: dict, parameters: dict) -> dict:
     return summary
 
 
+# The figures too few exits cannot measure: null in the JSON, "too few exits" in the table.
+RATE_KEYS = ("parts_per_s", "parts_per_s_err", "mass_per_s", "mass_per_s_err")
+
+
+def unmeasured(summary: dict, keys) -> str | None:
+    """The summary's reason for measuring nothing (too few exits), its ``keys`` set
+    to None then; None when it measured."""
+    reason = summary.get("reason")
+    if reason:
+        summary.update(dict.fromkeys(keys))
+    return reason
+
+
+def refuse(path, reason: str | None) -> int:
+    """The exit status of an analysis: 1, with the reason on stderr, when it measured nothing."""
+    if not reason:
+        return 0
+    import sys
+
+    print(f"vibrofeed: error: {path}: {reason}", file=sys.stderr)
+    return EXIT_FAILED
+
+
 def _fmt(value, scale: float = 1.0, spec: str = ".4g") -> str:
     if value is None or (isinstance(value, float) and not math.isfinite(value)):
         return "n/a"
@@ -92,9 +117,10 @@ def _fmt(value, scale: float = 1.0, spec: str = ".4g") -> str:
 
 def table(s: dict) -> str:
     """The figures as the command prints them."""
+    rate = (f"{_fmt(s['parts_per_s'])} ± {_fmt(s['parts_per_s_err'], spec='.2g')} parts/s, "
+            f"{_fmt(s['mass_per_s'], 1e6)} ± {_fmt(s['mass_per_s_err'], 1e6, '.2g')} mg/s")
     lines = [
-        f"feed rate      {_fmt(s['parts_per_s'])} ± {_fmt(s['parts_per_s_err'], spec='.2g')} parts/s, "
-        f"{_fmt(s['mass_per_s'], 1e6)} ± {_fmt(s['mass_per_s_err'], 1e6, '.2g')} mg/s",
+        f"feed rate      {s['reason'] if s.get('reason') else rate}",
         f"steady window  {_fmt(s['steady_from'])} .. {_fmt(s['steady_to'])} s "
         f"({s['n_events']} exits in the run analysed)",
         f"conveying      {_fmt(s['mean_velocity'], 1e3)} ± {_fmt(s['mean_velocity_err'], 1e3, '.2g')} "
@@ -125,10 +151,11 @@ def run(args) -> int:
         if not args.no_model:
             add_dilute_limit(summary, result.parameters)
         figures = figures_written(fr.plot(folder)) if folder is not None else []
+    reason = unmeasured(summary, RATE_KEYS)
     if args.json:
         print(json.dumps(summary, indent=2))
     else:
         print(table(summary))
         for path in figures:
             print(f"figure: {path}")
-    return 0
+    return refuse(args.result, reason)

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from ..errors import UsageError
+from .numbers import real
 
 DESCRIPTION = ("Drive the vertical-transport model (or a LIGGGHTS wall) with the measured platform "
                "motion of trial files and compare the predicted part position with the measured one; "
@@ -22,10 +23,10 @@ def add_arguments(p) -> None:
     from .run import ranks
 
     p.add_argument("trials", nargs="+", metavar="TRIAL.csv", help="measured trial files")
-    p.add_argument("--mass", type=float, metavar="KG", help="part mass [kg]")
-    p.add_argument("--normal-force", type=float, metavar="N", help="grasp (normal) force [N]")
-    p.add_argument("--mu-s", type=float, metavar="X", help="static friction coefficient")
-    p.add_argument("--mu-k", type=float, metavar="Y", help="kinetic friction coefficient")
+    p.add_argument("--mass", type=real(above=0), metavar="KG", help="part mass [kg]")
+    p.add_argument("--normal-force", type=real(above=0), metavar="N", help="grasp (normal) force [N]")
+    p.add_argument("--mu-s", type=real(above=0), metavar="X", help="static friction coefficient")
+    p.add_argument("--mu-k", type=real(above=0), metavar="Y", help="kinetic friction coefficient")
     p.add_argument("--engine", choices=("model", "dem"), default="model",
                    help="model (Coulomb stick/slip of Yako et al.) or dem (LIGGGHTS wall; needs "
                         "mu_s = mu_k)")
