@@ -124,6 +124,7 @@ RULES: dict[str, Callable[[float], str | None]] = {
     "air_viscosity": _between(0, 1e-3, lo_open=False, hi_open=False,
                               why="air is 1.81e-5 Pa s"),
     "face_radius": _non_negative,
+    "dt_unchecked": _integer(choices=(0, 1)),
 }
 
 # Parameters that also take names; a name is replaced by the deck's number.
@@ -219,6 +220,7 @@ def _check_relations(p: Mapping[str, float]) -> None:
                 f"output_dt={p['output_dt']:g} s is shorter than the timestep dt={dt:g} s")
         if "t_end" in p and p["t_end"] < dt:
             raise ParameterError(f"t_end={p['t_end']:g} s is shorter than the timestep dt={dt:g} s")
+    _check_contact_step(p)
 
 
 # Random loose packing of a settled pre-fill, to tell whether it stays between the walls.
@@ -374,3 +376,90 @@ def _check_surface_forces(p: Mapping[str, float]) -> None:
     if dt > limit:
         raise ParameterError(f"dt={dt:g} s is longer than the {limit:.3g} s the surface forces need "
                              "(hamaker, air_viscosity); lower dt or set dt=0 (automatic)")
+
+
+# A step beyond these fractions of the contact's times is one LIGGGHTS warns about
+# (fix check/timestep/gran): a contact then lasts a few steps, overlaps jump and parts
+# gain energy from nothing. The automatic dt is 2 % of the Hertz time.
+MAX_HERTZ_FRACTION = 0.1
+MAX_RAYLEIGH_FRACTION = 0.2
+# The decks' Hertz time is taken at the surface's peak speed, at least this [m/s].
+MIN_CONTACT_SPEED = 0.01
+
+
+def _hertz_time(mass: float, radius: float, e_star: float, speed: float) -> float:
+    """Hertz contact time [s] of an effective ``mass`` and ``radius`` at impact ``speed``."""
+    return 2.87 * (mass ** 2 / (radius * e_star ** 2 * speed)) ** 0.2
+
+
+def _rayleigh_time(radius: float, density: float, youngs: float, poisson: float) -> float:
+    """Rayleigh time [s] of a sphere of ``radius`` (the time a surface wave crosses it)."""
+    shear = youngs / (2 * (1 + poisson))
+    return math.pi * radius * math.sqrt(density / shear) / (0.1631 * poisson + 0.8766)
+
+
+def contact_times(p: Mapping[str, float]) -> dict[str, float] | None:
+    """``{"hertz": s, "rayleigh": s}``: the shortest contact times of a deck's parts,
+    as the decks derive their automatic dt (decks/*.liggghts, "derived"); None
+    without a contact vocabulary. single_part: a sphere of ``radius`` on a plate
+    of its material. bulk_feeder and pulloff: the smallest contact sphere with its
+    share of the part's mass, part-part (half of it, R* = r/2) and part-track
+    (E* with the track's modulus, R* = r); the shorter time counts."""
+    if not {"density", "youngs", "poisson"} <= set(p):
+        return None
+    rho, youngs, nu = p["density"], p["youngs"], p["poisson"]
+    v_peak = 2 * math.pi * p.get("freq", 0.0) * math.hypot(p.get("amp_t", 0.0), p.get("amp_n", 0.0))
+    speed = max(v_peak, MIN_CONTACT_SPEED)
+    if "radius" in p:  # single_part
+        r = p["radius"]
+        mass = 4 / 3 * math.pi * r ** 3 * rho
+        hertz = _hertz_time(mass, r, youngs / (2 * (1 - nu ** 2)), speed)
+        return {"hertz": hertz, "rayleigh": _rayleigh_time(r, rho, youngs, nu)}
+    if "part_size" not in p:
+        return None
+    size, shape = p["part_size"], int(p.get("shape", 0))
+    thickness = p.get("part_thickness", size)
+    r_sph = size / 2 if shape == 0 else thickness / 2
+    r_min = r_sph * (1 - p.get("size_spread", 0.0))
+    mass = {0: 4 / 3 * math.pi * r_sph ** 3, 1: size ** 2 * thickness,
+            2: math.pi / 4 * size ** 2 * thickness}[shape] * rho
+    spheres = 1
+    if shape != 0:  # a clump: its spheres share the mass (vibrofeed.geometry builds them)
+        from .geometry import chip_template, disc_template
+
+        spheres = len((chip_template if shape == 1 else disc_template)(size, thickness))
+    m = mass * (r_min / r_sph) ** 3 / spheres
+    youngs_track = p.get("youngs_track", 0.0) or youngs * 70 / 130
+    e_pp = youngs / (2 * (1 - nu ** 2))
+    e_pw = 1 / ((1 - nu ** 2) / youngs + (1 - p.get("poisson_track", nu) ** 2) / youngs_track)
+    if "pair" in p:  # pulloff: nothing vibrates, the deck takes 1 cm/s
+        speed = MIN_CONTACT_SPEED
+    hertz = min(_hertz_time(m / 2, r_min / 2, e_pp, speed), _hertz_time(m, r_min, e_pw, speed))
+    return {"hertz": hertz, "rayleigh": _rayleigh_time(r_min, rho, youngs, nu)}
+
+
+def step_beyond_contact(p: Mapping[str, float]) -> str | None:
+    """What is wrong with the fixed ``dt`` of ``p`` if it exceeds the contact's limits
+    (:data:`MAX_HERTZ_FRACTION`, :data:`MAX_RAYLEIGH_FRACTION`, the fractions the
+    decks' check/timestep/gran warns at); None for the automatic dt (dt = 0), without
+    a contact vocabulary, or for a dt no longer than the automatic one (1/50 of the
+    Hertz time, which a stiff material may put past the Rayleigh fraction)."""
+    dt = p.get("dt", 0.0)
+    times = contact_times(p) if dt > 0 else None
+    if times is None or dt <= times["hertz"] / 50:
+        return None
+    limits = {"rayleigh": MAX_RAYLEIGH_FRACTION, "hertz": MAX_HERTZ_FRACTION}
+    over = [f"{dt / times[k]:.0%} of the {k.capitalize()} time (limit {limit:.0%})"
+            for k, limit in limits.items() if dt > limit * times[k]]
+    return f"dt={dt:g} s is " + " and ".join(over) if over else None
+
+
+def _check_contact_step(p: Mapping[str, float]) -> None:
+    """A fixed dt beyond the contact's limits, unless the user insists (dt_unchecked=1:
+    the run is recorded with it and ``vibrofeed check`` fails the result)."""
+    problem = step_beyond_contact(p)
+    if problem and not p.get("dt_unchecked", 0):
+        raise ParameterError(
+            f"{problem}: contacts would last a few steps and parts gain energy; lower dt or set "
+            "dt=0 (automatic); to run it anyway add -p dt_unchecked=1 (vibrofeed check then "
+            "fails the result)")

@@ -150,3 +150,128 @@ def test_analysis_windows_and_options_that_mean_nothing_are_refused(tmp_path):
                          *((tmp_path / f"x{option}.png",) if command == "render" else
                            (tmp_path / "x",) if command == "export" else ()))
         one_line_error(proc, 2, option if command != "render" or option != "--frame" else "frame 21")
+
+
+# ----------------------------------------------------------------- steps beyond the contact
+@pytest.mark.parametrize("deck", ["single_part", "bulk_feeder", "pulloff"])
+def test_a_step_beyond_the_contact_is_refused_unless_insisted(deck):
+    from vibrofeed.decks import Deck
+    from vibrofeed.errors import ParameterError
+    from vibrofeed.parameters import MAX_HERTZ_FRACTION, MAX_RAYLEIGH_FRACTION, contact_times, resolve
+
+    d = Deck.find(deck)
+    p = {k: float(v.default) for k, v in d.tunables.items() if v.is_numeric}
+    times = contact_times(p)
+    # the decks' own derivation of the Rayleigh time, written out: pi r sqrt(rho / G) / (...)
+    r = p["radius"] if deck == "single_part" else p["part_size"] / 2
+    shear = p["youngs"] / (2 * (1 + p["poisson"]))
+    rayleigh = np.pi * r * np.sqrt(p["density"] / shear) / (0.1631 * p["poisson"] + 0.8766)
+    assert times["rayleigh"] == pytest.approx(rayleigh, rel=1e-12)
+    limit = min(MAX_RAYLEIGH_FRACTION * times["rayleigh"], MAX_HERTZ_FRACTION * times["hertz"])
+    limit = max(limit, times["hertz"] / 50)
+    run = {"t_end": "0.01", "output_dt": "0.01"}
+    resolve(d, {**run, "dt": repr(limit)})  # at the limit: accepted
+    too_long = repr(limit * 1.01)
+    with pytest.raises(ParameterError, match=r"dt=.* s is \d+% of the (Rayleigh|Hertz) time"):
+        resolve(d, {**run, "dt": too_long})
+    assert resolve(d, {**run, "dt": too_long, "dt_unchecked": "1"})["dt"] == too_long
+
+
+def test_the_bulk_feeders_step_of_issue_19_is_refused_in_one_line():
+    proc = vibrofeed("run", "bulk_feeder", "-p", "dt=1e-4")
+    one_line_error(proc, 2, "dt=0.0001 s is 1792% of the Rayleigh time (limit 20%)", "dt_unchecked=1")
+
+
+# ----------------------------------------------------------------- check: what cannot be physical
+def _problems(path):
+    from vibrofeed.results.check import check_file
+
+    return [str(p) for p in check_file(path).problems if p.level == "error"]
+
+
+def _conveyed(tmp_path, name="ok.h5", speed=0.02, **kw):
+    from bulk_synthetic import feeder
+
+    frames = np.arange(0, 0.2 + 1e-9, 0.01)
+    variables = {"amp_t": ("5e-5", "m", "amplitude", "5e-5"), "amp_n": ("5e-5", "m", "amplitude", "5e-5")}
+    return feeder(tmp_path / name, frames, 0.05 + 0.1 * np.arange(20) / 20, speed=speed,
+                  amp=5e-5, variables=variables, **kw)
+
+
+def _rewrite(path, element, change):
+    """Change one particle element of a written result in place: change(values) -> values."""
+    import h5py
+
+    with h5py.File(path, "r+") as f:
+        ds = f[f"particles/parts/{element}/value"]
+        ds[...] = change(ds[()])
+
+
+def test_check_passes_a_physical_bulk_result(tmp_path):
+    assert _problems(_conveyed(tmp_path)) == []
+
+
+def test_check_fails_a_part_faster_than_the_drive_can_make_it(tmp_path):
+    # surface peak speed 2 pi 100 Hz 7.07e-5 m = 0.0444 m/s: the limit is 100 x that + free fall
+    path = _conveyed(tmp_path)
+
+    def fling(v):
+        v[5, 0] = [30.0, 0.0, 0.0]
+        return v
+
+    _rewrite(path, "velocity", fling)
+    v_surface = 2 * np.pi * 100 * np.hypot(5e-5, 5e-5)
+    height = 1.5e-4  # the first frame's parts (centres at their radius) above the track (z = 0)
+    limit = 100 * v_surface + np.sqrt(2 * 9.81 * height)
+    problems = _problems(path)
+    assert any(f"moves at 30 m/s at frame 5 (t = 0.05 s), beyond the {limit:.3g} m/s" in p
+               for p in problems), problems
+
+
+def test_check_fails_kinetic_energy_beyond_what_the_drive_gives(tmp_path):
+    path = _conveyed(tmp_path)
+
+    def everyone_fast(v):  # every part just under the speed limit in x and y: energy beyond
+        live = np.isfinite(v[..., 0])
+        v[7][live[7]] = [4.0, 4.0, 0.0]  # 5.66 m/s: above the limit too (the speed rule says so)
+        return v
+
+    _rewrite(path, "velocity", everyone_fast)
+    problems = _problems(path)
+    assert any("kinetic energy is 16 J/kg at frame 7" in p for p in problems), problems
+
+
+def test_check_fails_a_part_a_metre_away(tmp_path):
+    track = (np.array([[0, -1e-3, 0], [0.02, -1e-3, 0], [0.02, 1e-3, 0]], float),
+             np.array([[0, 1, 2]], np.int32))
+    path = _conveyed(tmp_path, track=track)
+    assert _problems(path) == []
+
+    import h5py
+
+    with h5py.File(path, "r+") as f:  # a part on the track at frames 9 and 10 jumps a metre up
+        ids, x = f["particles/parts/id/value"][()], f["particles/parts/position/value"]
+        slot = int(np.nonzero((ids[9] == ids[10]) & (ids[9] != -1))[0][0])
+        moved = x[10]
+        moved[slot, 2] += 1.0
+        x[10] = moved
+    problems = _problems(path)
+    assert any("far outside the track" in p and "frame 10" in p for p in problems), problems
+    assert any("moves 1 m between frames 9 and 10" in p for p in problems), problems
+
+
+def test_check_fails_a_step_beyond_the_contact(tmp_path):
+    from helpers import parts, write_result
+
+    single = {"radius": ("5e-4", "m", "", "5e-4"), "density": ("2330", "kg/m^3", "", "2330"),
+              "youngs": ("5e7", "Pa", "", "5e7"), "poisson": ("0.3", "-", "", "0.3"),
+              "freq": ("50", "Hz", "", "50"), "dt": ("1e-4", "s", "", "0")}
+    frames = [(k, k * 1e-3, parts([1], [[0, 0, 5e-4]])) for k in range(3)]
+    bad = write_result(tmp_path / "dt.h5", frames, variables=single)
+    assert any("/parameters/variables/dt" in p and "535% of the Rayleigh time" in p
+               for p in _problems(bad)), _problems(bad)
+    insisted = write_result(tmp_path / "insisted.h5", frames,
+                            variables={**single, "dt_unchecked": ("1", "-", "", "0")})
+    assert any("(run with dt_unchecked=1)" in p for p in _problems(insisted))
+    fine = write_result(tmp_path / "fine.h5", frames, variables={**single, "dt": ("1e-6", "s", "", "0")})
+    assert _problems(fine) == []

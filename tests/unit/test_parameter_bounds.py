@@ -48,6 +48,7 @@ BOUNDS = {
     "roughness": (0, True, 1e-4, True, None),
     "air_viscosity": (0, True, 1e-3, True, None),
     "face_radius": (0, True, INF, False, None),
+    "dt_unchecked": (0, True, 1, True, (0, 1)),
 }
 
 # The bulk feeder's own parameters (decks/bulk_feeder.liggghts); their relations
@@ -95,8 +96,8 @@ def context(name: str, x: float) -> dict[str, str]:
         other = "output_dt" if name == "t_end" else "t_end"
         return {other: repr(x) if x > 0 else "1", "dt": "0"}  # one frame
     if name == "dt":
-        span = repr(max(x, 1e-3))
-        return {"t_end": span, "output_dt": span}
+        span = repr(max(x, 1e-3))  # (the contact's limits on dt: test_no_false_success.py)
+        return {"t_end": span, "output_dt": span, "dt_unchecked": "1"}
     return {}
 
 
@@ -199,11 +200,11 @@ def test_frame_limit_at_and_past_its_edge():
 
 
 def test_output_interval_and_run_length_against_the_timestep():
-    resolve(DECK, {"dt": "1e-5", "output_dt": "1e-5", "t_end": "1e-5"})  # equal: allowed
+    resolve(DECK, {"dt": "1e-6", "output_dt": "1e-6", "t_end": "1e-6"})  # equal: allowed
     with pytest.raises(ParameterError, match="output_dt=.* shorter than the timestep"):
-        resolve(DECK, {"dt": "1e-5", "output_dt": "9.99e-6", "t_end": "1"})
+        resolve(DECK, {"dt": "1e-6", "output_dt": "9.99e-7", "t_end": "0.1"})
     with pytest.raises(ParameterError, match="longer than the run"):
-        resolve(DECK, {"dt": "1e-5", "output_dt": "1e-5", "t_end": "9.99e-6"})
+        resolve(DECK, {"dt": "1e-6", "output_dt": "1e-6", "t_end": "9.99e-7"})
     resolve(DECK, {"t_end": "0.2", "output_dt": "0.2"})  # one frame: allowed
     with pytest.raises(ParameterError, match="longer than the run"):
         resolve(DECK, {"t_end": "0.2", "output_dt": repr(math.nextafter(0.2, 1))})
