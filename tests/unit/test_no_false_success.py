@@ -275,3 +275,25 @@ def test_check_fails_a_step_beyond_the_contact(tmp_path):
     assert any("(run with dt_unchecked=1)" in p for p in _problems(insisted))
     fine = write_result(tmp_path / "fine.h5", frames, variables={**single, "dt": ("1e-6", "s", "", "0")})
     assert _problems(fine) == []
+
+
+def test_check_fails_a_nan_position_a_lost_part_and_a_balance_that_does_not_close(tmp_path):
+    import h5py
+
+    nan = _conveyed(tmp_path, "nan.h5")
+    with h5py.File(nan, "r+") as f:
+        ids, x = f["particles/parts/id/value"][()], f["particles/parts/position/value"]
+        row = x[4]
+        row[int(np.nonzero(ids[4] != -1)[0][0])] = np.nan
+        x[4] = row
+    assert any("non-finite position" in p for p in _problems(nan)), _problems(nan)
+    for name, change, words in (("lost.h5", {"lost": 1}, "part(s) lost at frame 6"),
+                                ("open.h5", {"inserted": 1}, "inserted differs from on_track + exited")):
+        path = _conveyed(tmp_path, name)
+        with h5py.File(path, "r+") as f:
+            for count, extra in change.items():
+                ds = f[f"observables/mass_balance/{count}/value"]
+                values = ds[()]
+                values[6:] += extra
+                ds[...] = values
+        assert any(words in p for p in _problems(path)), _problems(path)
