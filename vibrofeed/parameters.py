@@ -9,10 +9,16 @@ from __future__ import annotations
 
 import difflib
 import math
+import warnings
 from collections.abc import Callable, Mapping
 
 from .decks import RESERVED, Deck
 from .errors import ParameterError
+from .plausibility import advice, impossible
+
+
+class ParameterWarning(UserWarning):
+    """A value that runs but is almost certainly a slip (:mod:`vibrofeed.plausibility`)."""
 
 # A feeder's stroke is micrometres (piezo micro-feeders) to a few millimetres
 # (bowl feeders); a larger amplitude is almost always a unit slip (metres).
@@ -145,8 +151,17 @@ def parse_assignments(items) -> dict[str, str]:
     return out
 
 
+# Hints for a refused value that is a unit slip: name -> (test, hint).
+UNIT_SLIPS: dict[str, tuple[Callable[[float], bool], str]] = {
+    "youngs": (lambda x: 0 < x < 1e4, "a modulus in GPa? (moduli are in Pa: silicon 1.3e11)"),
+    "youngs_track": (lambda x: 0 < x < 1e4, "a modulus in GPa? (moduli are in Pa: aluminium 7e10)"),
+}
+
+
 def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
-    """Deck defaults overridden by ``given``, checked; values as strings."""
+    """Deck defaults overridden by ``given``, checked; values as strings. A value
+    that runs but looks like a slip (:func:`vibrofeed.plausibility.advice`) is a
+    :class:`ParameterWarning` naming it."""
     tunables = deck.tunables
     for name in given:
         if name in RESERVED:
@@ -181,8 +196,19 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
         problem = rule(x) if rule else None
         if problem:
             unit = f" {var.unit}" if var.unit and var.unit != "-" else ""
-            raise ParameterError(f"parameter {name}={value}{unit} {problem}")
+            slip = UNIT_SLIPS.get(name)
+            hint = f"; {slip[1]}" if slip and slip[0](x) else ""
+            raise ParameterError(f"parameter {name}={value}{unit} {problem}{hint}")
+    bad = impossible(numbers)
+    if bad:
+        raise ParameterError(f"parameter {bad[0]}={values[bad[0]]} {bad[1]}")
     _check_relations(numbers)
+    # An idle parameter is worth a word only when the user moved it from the deck's default
+    # (callers such as the validation cases pass every value).
+    moved = [n for n in given if n in numbers and (not tunables[n].is_numeric
+                                                  or numbers[n] != float(tunables[n].default))]
+    for line in advice(numbers, moved):
+        warnings.warn(line, ParameterWarning, stacklevel=2)
     return values
 
 

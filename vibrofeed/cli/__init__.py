@@ -19,6 +19,7 @@ import argparse
 import importlib
 import os
 import sys
+import warnings
 
 from .. import __version__
 from ..errors import EXIT_INTERRUPTED, VibrofeedError
@@ -86,7 +87,19 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
     return parser
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """vibrofeed's own warnings (a parameter that looks like a unit slip) as one line."""
+    if category.__module__.startswith("vibrofeed"):
+        print(f"vibrofeed: warning: {message}", file=sys.stderr)
+    else:
+        _python_show_warning(message, category, filename, lineno, file, line)
+
+
+_python_show_warning = warnings.showwarning
+
+
 def main(argv: list[str] | None = None) -> int:
+    warnings.showwarning = _show_warning
     argv = sys.argv[1:] if argv is None else list(argv)
     args = build_parser(argv).parse_args(argv)
     debug = bool(os.environ.get("VIBROFEED_DEBUG"))
