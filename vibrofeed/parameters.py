@@ -14,7 +14,9 @@ from collections.abc import Callable, Mapping
 
 from .decks import RESERVED, Deck
 from .errors import ParameterError
-from .plausibility import advice, impossible
+from .plausibility import DENSITY_MAX, PART_MAX, YOUNGS_MAX, advice
+
+NO_MICRO_PART = "a metre is no micro-part; lengths are in metres"
 
 
 class ParameterWarning(UserWarning):
@@ -52,10 +54,20 @@ def _between(lo, hi, lo_open=True, hi_open=True, why=""):
     return check
 
 
+def _positive_up_to(hi, why, zero=False):
+    """> 0 (>= 0 with ``zero``) and <= ``hi``, the upper limit explained by ``why``."""
+    def check(x):
+        if not (x >= 0 if zero else x > 0):
+            return "must be >= 0" if zero else "must be > 0"
+        return None if x <= hi else f"must be <= {hi:g} ({why})"
+    return check
+
+
 def _youngs_or_zero(x):
-    return None if x == 0 or x > 5e6 else (
-        "must be 0 (the parts' softening applied to aluminium) or > 5e+06 (LIGGGHTS' Hertz "
-        "model needs youngsModulus > 5e6 Pa)")
+    if x == 0 or 5e6 < x <= YOUNGS_MAX:
+        return None
+    return ("must be 0 (the parts' softening applied to aluminium) or in (5e+06, 1.2e+12] (LIGGGHTS' "
+            "Hertz model needs youngsModulus > 5e6 Pa; nothing is stiffer than diamond)")
 
 
 def _integer(lo=None, choices=None):
@@ -79,9 +91,12 @@ RULES: dict[str, Callable[[float], str | None]] = {
                       why="a feeder's stroke is um to mm; amplitudes are in metres"),
     "phase": _finite,
     "incline": _between(-90, 90, lo_open=False, hi_open=False),
-    "radius": _positive,
-    "density": _positive,
-    "youngs": _between(5e6, math.inf, why="LIGGGHTS' Hertz model needs youngsModulus > 5e6 Pa"),
+    "radius": _positive_up_to(PART_MAX, NO_MICRO_PART),
+    "density": _positive_up_to(DENSITY_MAX, "no material is denser (osmium: 22590 kg/m³); densities "
+                                            "are in kg/m³"),
+    "youngs": _between(5e6, YOUNGS_MAX, hi_open=False,
+                       why="LIGGGHTS' Hertz model needs youngsModulus > 5e6 Pa; nothing is stiffer "
+                           "than diamond"),
     "poisson": _between(-1, 0.5, hi_open=False),
     "restitution": _between(0.05, 1, hi_open=False,
                             why="LIGGGHTS needs coefficientRestitution > 0.05"),
@@ -101,8 +116,8 @@ RULES: dict[str, Callable[[float], str | None]] = {
     "pair": _integer(choices=(0, 1)),
     "pull_speed": _positive,
     "overlap0": _positive,
-    "part_size": _positive,
-    "part_thickness": _positive,
+    "part_size": _positive_up_to(PART_MAX, NO_MICRO_PART),
+    "part_thickness": _positive_up_to(PART_MAX, NO_MICRO_PART),
     "size_spread": _between(0, 1, lo_open=False),
     "n_parts": _integer(lo=0),
     "fill_from": _between(0, 1, lo_open=False, hi_open=False),
@@ -129,7 +144,7 @@ RULES: dict[str, Callable[[float], str | None]] = {
                           why="asperity heights are nm to um; lengths are in metres"),
     "air_viscosity": _between(0, 1e-3, lo_open=False, hi_open=False,
                               why="air is 1.81e-5 Pa s"),
-    "face_radius": _non_negative,
+    "face_radius": _positive_up_to(PART_MAX, NO_MICRO_PART, zero=True),
     "dt_unchecked": _integer(choices=(0, 1)),
 }
 
@@ -199,9 +214,6 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
             slip = UNIT_SLIPS.get(name)
             hint = f"; {slip[1]}" if slip and slip[0](x) else ""
             raise ParameterError(f"parameter {name}={value}{unit} {problem}{hint}")
-    bad = impossible(numbers)
-    if bad:
-        raise ParameterError(f"parameter {bad[0]}={values[bad[0]]} {bad[1]}")
     _check_relations(numbers)
     # An idle parameter is worth a word only when the user moved it from the deck's default
     # (callers such as the validation cases pass every value).

@@ -5,8 +5,9 @@ almost certainly not what the user meant: a density in g/cm³ (2.33 for
 silicon's 2330 kg/m³), a modulus in GPa, a length in mm or µm where the decks
 take metres, a frequency in rad/s, an angle in radians; and a parameter the
 chosen setting ignores (a duty cycle with a sine, a gate position without a
-gate, a chip thickness for spheres). :func:`impossible` names values no
-material or feeder has (refused); :func:`advice` the rest, one line each,
+gate, a chip thickness for spheres). The limits of values no material
+or micro-feeder has are here too (:data:`vibrofeed.parameters.RULES` refuses
+beyond them); :func:`advice` names the rest, one line each,
 naming the parameter (:func:`vibrofeed.parameters.resolve` issues them as
 :class:`ParameterWarning`, which the command line prints as
 ``vibrofeed: warning: ...``).
@@ -38,20 +39,6 @@ SURFACE_ENERGY_PLAUSIBLE_MAX = 10.0  # J/m²
 PART_LENGTHS = ("radius", "part_size", "part_thickness", "face_radius")
 TRACK_LENGTHS = ("track_length", "track_width", "wall_height", "gate_width")
 ANGLES = ("phase", "incline")
-
-
-def impossible(p: Mapping[str, float]) -> tuple[str, str] | None:
-    """(name, why) of the first value no material or micro-feeder has; None if none."""
-    if p.get("density", 0.0) > DENSITY_MAX:
-        return "density", (f"is denser than any material (osmium: 22590 kg/m³; limit {DENSITY_MAX:g} "
-                           "kg/m³): densities are in kg/m³")
-    for name in ("youngs", "youngs_track"):
-        if p.get(name, 0.0) > YOUNGS_MAX:
-            return name, f"is stiffer than diamond ({YOUNGS_MAX:g} Pa): moduli are in Pa"
-    for name in PART_LENGTHS:
-        if p.get(name, 0.0) > PART_MAX:
-            return name, f"is no micro-part (limit {PART_MAX:g} m): lengths are in metres"
-    return None
 
 
 def _round_multiple(x: float, step: float, rel: float = 1e-3) -> bool:

@@ -27,9 +27,9 @@ BOUNDS = {
     "amp_n": (0, True, 0.01, True, None),
     "phase": (-INF, False, INF, False, None),
     "incline": (-90, True, 90, True, None),
-    "radius": (0, False, INF, False, None),
-    "density": (0, False, INF, False, None),
-    "youngs": (5e6, False, INF, False, None),
+    "radius": (0, False, 1, True, None),
+    "density": (0, False, 1e5, True, None),
+    "youngs": (5e6, False, 1.2e12, True, None),
     "poisson": (-1, False, 0.5, True, None),
     "restitution": (0.05, False, 1, True, None),
     "mu": (0, True, INF, False, None),
@@ -47,7 +47,7 @@ BOUNDS = {
     "hamaker": (0, True, 1e-17, True, None),
     "roughness": (0, True, 1e-4, True, None),
     "air_viscosity": (0, True, 1e-3, True, None),
-    "face_radius": (0, True, INF, False, None),
+    "face_radius": (0, True, 1, True, None),
     "dt_unchecked": (0, True, 1, True, (0, 1)),
 }
 
@@ -55,8 +55,8 @@ BOUNDS = {
 # (_check_bulk_feeder) bind at most edges, so these bounds are checked on the rule itself.
 BULK = {
     "shape": (0, True, 2, True, (0, 1, 2)),
-    "part_size": (0, False, INF, False, None),
-    "part_thickness": (0, False, INF, False, None),
+    "part_size": (0, False, 1, True, None),
+    "part_thickness": (0, False, 1, True, None),
     "size_spread": (0, True, 1, False, None),
     "n_parts": (0, True, INF, False, "integers"),
     "fill_from": (0, True, 1, True, None),
@@ -67,7 +67,7 @@ BULK = {
     "wall_height": (0, False, INF, False, None),
     "gate_width": (0, True, INF, False, None),
     "gate_at": (0, True, 1, False, None),
-    "youngs_track": (5e6, False, INF, False, "or zero"),  # 0: the track takes the parts' value
+    "youngs_track": (5e6, False, 1.2e12, True, "or zero"),  # 0: the track takes the parts' value
     "poisson_track": (-1, False, 0.5, True, None),
     "restitution_pp": (0.05, False, 1, True, None),
     "mu_pp": (0, True, INF, False, None),
@@ -140,7 +140,7 @@ def test_each_edge_and_just_past_it(name, edge, included):
     outward = -INF if edge == lo else INF
     past = math.nextafter(edge, outward)
     assert accepted(name, edge) is included, f"{name}={edge!r}"
-    if ALL[name][4] == "or zero":
+    if ALL[name][4] == "or zero" and edge == lo:
         assert accepted(name, 0.0) and not accepted(name, 5e-324) and not accepted(name, -5e-324)
         assert accepted(name, math.nextafter(edge, INF))
         return
