@@ -21,9 +21,6 @@ from collections.abc import Collection, Mapping
 # Solids span about 500 (polymer foams excepted) to 22 590 kg/m³ (osmium).
 DENSITY_PLAUSIBLE = (100.0, 25_000.0)  # kg/m³
 DENSITY_MAX = 1e5  # kg/m³: four times osmium; no material
-# Young's moduli: the decks soften solids down to 5e6 Pa (their lower limit); nothing
-# is stiffer than diamond, 1.2e12 Pa.
-YOUNGS_MAX = 1.2e12  # Pa
 # A micro-part: microns to a centimetre; a metre is no micro-part.
 PART_PLAUSIBLE = (1e-6, 0.01)  # m
 PART_MAX = 1.0  # m

@@ -29,7 +29,7 @@ BOUNDS = {
     "incline": (-90, True, 90, True, None),
     "radius": (0, False, 1, True, None),
     "density": (0, False, 1e5, True, None),
-    "youngs": (5e6, False, 1.2e12, True, None),
+    "youngs": (5e6, False, INF, False, None),
     "poisson": (-1, False, 0.5, True, None),
     "restitution": (0.05, False, 1, True, None),
     "mu": (0, True, INF, False, None),
@@ -67,7 +67,7 @@ BULK = {
     "wall_height": (0, False, INF, False, None),
     "gate_width": (0, True, INF, False, None),
     "gate_at": (0, True, 1, False, None),
-    "youngs_track": (5e6, False, 1.2e12, True, "or zero"),  # 0: the track takes the parts' value
+    "youngs_track": (5e6, False, INF, False, "or zero"),  # 0: the track takes the parts' value
     "poisson_track": (-1, False, 0.5, True, None),
     "restitution_pp": (0.05, False, 1, True, None),
     "mu_pp": (0, True, INF, False, None),

@@ -65,8 +65,6 @@ def test_plausible_values_and_options_in_effect_say_nothing(deck, given):
 
 @pytest.mark.parametrize("deck, given, words", [
     (SINGLE, {"density": "1e30"}, r"density=1e30 kg/m\^3 must be <= 100000 .no material is denser"),
-    (SINGLE, {"youngs": "2e12"}, "youngs=2e12 Pa must be in .* nothing is stiffer than diamond"),
-    (BULK, {"youngs_track": "5e12"}, "youngs_track=5e12 Pa must be 0 .* nothing is stiffer than diamond"),
     (SINGLE, {"radius": "2"}, "radius=2 m must be <= 1 .a metre is no micro-part"),
     (SINGLE, {"youngs": "130"}, "a modulus in GPa?"),
     (BULK, {"youngs_track": "70"}, "a modulus in GPa?"),
