@@ -495,7 +495,10 @@ def _check_contact_step(p: Mapping[str, float]) -> None:
     """A fixed dt beyond the contact's limits, unless the user insists (dt_unchecked=1:
     the run is recorded with it and ``vibrofeed check`` fails the result)."""
     problem = step_beyond_contact(p)
-    if problem and not p.get("dt_unchecked", 0):
+    if problem and p.get("dt_unchecked", 0):
+        warnings.warn(f"{problem}, run as dt_unchecked=1 asks: vibrofeed check will fail the result",
+                      ParameterWarning, stacklevel=3)
+    elif problem:
         raise ParameterError(
             f"{problem}: contacts would last a few steps and parts gain energy; lower dt or set "
             "dt=0 (automatic); to run it anyway add -p dt_unchecked=1 (vibrofeed check then "

@@ -157,7 +157,13 @@ def test_analysis_windows_and_options_that_mean_nothing_are_refused(tmp_path):
 def test_a_step_beyond_the_contact_is_refused_unless_insisted(deck):
     from vibrofeed.decks import Deck
     from vibrofeed.errors import ParameterError
-    from vibrofeed.parameters import MAX_HERTZ_FRACTION, MAX_RAYLEIGH_FRACTION, contact_times, resolve
+    from vibrofeed.parameters import (
+        MAX_HERTZ_FRACTION,
+        MAX_RAYLEIGH_FRACTION,
+        ParameterWarning,
+        contact_times,
+        resolve,
+    )
 
     d = Deck.find(deck)
     p = {k: float(v.default) for k, v in d.tunables.items() if v.is_numeric}
@@ -174,7 +180,8 @@ def test_a_step_beyond_the_contact_is_refused_unless_insisted(deck):
     too_long = repr(limit * 1.01)
     with pytest.raises(ParameterError, match=r"dt=.* s is \d+% of the (Rayleigh|Hertz) time"):
         resolve(d, {**run, "dt": too_long})
-    assert resolve(d, {**run, "dt": too_long, "dt_unchecked": "1"})["dt"] == too_long
+    with pytest.warns(ParameterWarning, match="vibrofeed check will fail the result"):
+        assert resolve(d, {**run, "dt": too_long, "dt_unchecked": "1"})["dt"] == too_long
 
 
 def test_the_bulk_feeders_step_of_issue_19_is_refused_in_one_line():
