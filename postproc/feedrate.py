@@ -75,7 +75,7 @@ _MAX_LAG = 1000
 SUMMARY_KEYS = ("parts_per_s", "parts_per_s_err", "mass_per_s", "mass_per_s_err", "mean_velocity",
                 "mean_velocity_err", "steady_from", "steady_to", "n_events", "inserted", "exited",
                 "on_track", "lost", "bin_width", "velocity_lag", "profile_x", "profile_velocity",
-                "profile_count", "model_velocity", "model_note", "velocity_ratio")
+                "profile_count", "model_velocity", "model_note", "velocity_ratio", "reason")
 # Parameters the single-part model needs from the deck (the rest have defaults).
 MODEL_NEEDS = ("freq", "mu", "restitution")
 
@@ -182,13 +182,38 @@ def bin_width(t_lo: float, t_hi: float, freq: float, n_events: int = 0) -> float
     return span / n_bins
 
 
+# Fewer exits than this in the window measure no rate: their Poisson noise alone is
+# 1/sqrt(N), above 30 %, and a batch-means error needs exits in every batch.
+MIN_EXITS = 10
+
+
+def too_few_exits(n: int, need: int = MIN_EXITS) -> str | None:
+    """Why ``n`` exits in the window measure nothing; None when they do."""
+    return None if n >= need else f"too few exits to measure ({n} in the window; need ≥ {need})"
+
+
+def check_window(start: float | None, end: float | None, t_lo: float, t_hi: float) -> None:
+    """Refuse a window that is not a time of the run [t_lo, t_hi]: past its end it
+    would dilute the rate with time in which nothing could exit."""
+    slack = 1e-9 * max(t_hi - t_lo, 1e-12)
+    for name, t in (("start", start), ("end", end)):
+        if t is None:
+            continue
+        if not math.isfinite(t):
+            raise InputError(f"window {name} {t} is not a time")
+        if not t_lo - slack <= t <= t_hi + slack:
+            raise InputError(f"window {name} {t:g} s is outside the run ({t_lo:g} .. {t_hi:g} s)")
+
+
 def steady_window(times, t_lo: float, t_hi: float, freq: float, start: float | None = None,
                   end: float | None = None) -> tuple[float, float, float, np.ndarray]:
     """(t_a, t_b, width, counts) of the steady feeding window (module docstring).
 
     ``counts`` are the events per bin over the whole span, bins of ``width``
-    from ``t_lo``; t_a and t_b fall on bin edges unless ``start``/``end`` are given.
+    from ``t_lo``; t_a and t_b fall on bin edges unless ``start``/``end`` are given
+    (within the span: see :func:`check_window`).
     """
+    check_window(start, end, t_lo, t_hi)
     times = np.asarray(times, dtype=float)
     width = bin_width(t_lo, t_hi, freq, len(times))
     n = max(1, int(math.floor((t_hi - t_lo) / width + 1e-9)))
@@ -422,6 +447,8 @@ class FeedRate(AnalysisBase):
         r.steady_from, r.steady_to, r.bin_width, r.counts = t_a, t_b, width, counts
         r.parts_per_s, r.parts_per_s_err = batch_rate(times, np.ones(len(times)), t_a, t_b, freq,
                                                       self.batches)
+        r.reason = too_few_exits(int(((times >= t_a) & (times < t_b)).sum()),
+                                 max(MIN_EXITS, self.batches))
         # Each event's mass: the part at the first frame at or after its crossing
         # (the frame that reported it), else the frame before.
         after = np.minimum(np.searchsorted(result.time, times, side="left"), result.n_frames - 1)

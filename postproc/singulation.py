@@ -51,6 +51,7 @@ from .feedrate import (
     period_velocities,
     require_outlet,
     steady_window,
+    too_few_exits,
     values_at,
 )
 
@@ -58,7 +59,7 @@ SUMMARY_KEYS = ("cv_interarrival", "doubles_rate", "singulated_fraction", "mean_
                 "n_arrivals", "n_doubles", "doubles_per_s", "mean_interarrival", "edge_velocity",
                 "track_singulated_fraction", "steady_from", "steady_to", "gap", "gap_distance",
                 "tolerance", "face_up_fraction", "face_down_fraction", "on_edge_fraction",
-                "aligned_fraction")
+                "aligned_fraction", "reason")
 # Faces: up/down when the thin axis is within this angle of +z/-z, else on edge.
 FACE_ANGLE = 45.0
 # In-plane alignment with the track counted within this angle [deg].
@@ -194,6 +195,7 @@ class Singulation(AnalysisBase):
         alone[1:] &= ~doubles
         r.singulated_fraction = float(alone.mean()) if len(times) else math.nan
 
+        r.reason = too_few_exits(len(times))  # the arrivals' statistics are noise (see the command)
         self._clusters(frames, t_a, t_b, tol)
         self._faces(ev, before)
 

@@ -26,14 +26,15 @@ G = 9.81
 
 def feeder(path, frame_times, exit_times, speed=0.02, amp=0.0, freq=100.0, radius=RADIUS,
            mass=1e-7, lanes=None, orientations=None, body_template=None, variables=None,
-           outlet_x=OUTLET_X, seed=0, tipped=None):
+           outlet_x=OUTLET_X, seed=0, tipped=None, track=None):
     """Write the result file (module docstring); returns ``path``.
 
     ``speed``, ``mass``, ``radius``: scalars or one value per part; ``lanes``:
     each part's y [m] (default 0); ``orientations``: (parts, 4) quaternions
     (written only when given); ``tipped``: (parts, 4) orientations once past the
-    edge, in the event and the falling frame (default: ``orientations``). The
-    parts are shuffled at every frame.
+    edge, in the event and the falling frame (default: ``orientations``);
+    ``track``: the track mesh (vertices, triangles), if any. The parts are
+    shuffled at every frame.
     """
     rng = np.random.default_rng(seed)
     frame_times = np.asarray(frame_times, dtype=float)
@@ -88,7 +89,7 @@ def feeder(path, frame_times, exit_times, speed=0.02, amp=0.0, freq=100.0, radiu
             "part_size": (repr(2 * float(radius.mean())), "m", "part diameter", "3e-4")}
     base.update(variables or {})
     return write_bulk_result(path, frames, events=events, counts=counts, variables=base,
-                             body_template=body_template, surface=surface,
+                             body_template=body_template, surface=surface, track=track,
                              outlet={"outlet_x": outlet_x, "catch_z": CATCH_Z, "method": "synthetic"})
 
 

@@ -9,10 +9,18 @@ from __future__ import annotations
 
 import difflib
 import math
+import warnings
 from collections.abc import Callable, Mapping
 
 from .decks import RESERVED, Deck
 from .errors import ParameterError
+from .plausibility import DENSITY_MAX, PART_MAX, advice
+
+NO_MICRO_PART = "a metre is no micro-part; lengths are in metres"
+
+
+class ParameterWarning(UserWarning):
+    """A value that runs but is almost certainly a slip (:mod:`vibrofeed.plausibility`)."""
 
 # A feeder's stroke is micrometres (piezo micro-feeders) to a few millimetres
 # (bowl feeders); a larger amplitude is almost always a unit slip (metres).
@@ -46,6 +54,15 @@ def _between(lo, hi, lo_open=True, hi_open=True, why=""):
     return check
 
 
+def _positive_up_to(hi, why, zero=False):
+    """> 0 (>= 0 with ``zero``) and <= ``hi``, the upper limit explained by ``why``."""
+    def check(x):
+        if not (x >= 0 if zero else x > 0):
+            return "must be >= 0" if zero else "must be > 0"
+        return None if x <= hi else f"must be <= {hi:g} ({why})"
+    return check
+
+
 def _youngs_or_zero(x):
     return None if x == 0 or x > 5e6 else (
         "must be 0 (the parts' softening applied to aluminium) or > 5e+06 (LIGGGHTS' Hertz "
@@ -73,8 +90,11 @@ RULES: dict[str, Callable[[float], str | None]] = {
                       why="a feeder's stroke is um to mm; amplitudes are in metres"),
     "phase": _finite,
     "incline": _between(-90, 90, lo_open=False, hi_open=False),
-    "radius": _positive,
-    "density": _positive,
+    "radius": _positive_up_to(PART_MAX, NO_MICRO_PART),
+    "density": _positive_up_to(DENSITY_MAX, "no material is denser (osmium: 22590 kg/m³); densities "
+                                            "are in kg/m³"),
+    # (no upper limit: a modulus beyond any solid's is how a contact is made rigid, as
+    # the replay's DEM wall does)
     "youngs": _between(5e6, math.inf, why="LIGGGHTS' Hertz model needs youngsModulus > 5e6 Pa"),
     "poisson": _between(-1, 0.5, hi_open=False),
     "restitution": _between(0.05, 1, hi_open=False,
@@ -95,8 +115,8 @@ RULES: dict[str, Callable[[float], str | None]] = {
     "pair": _integer(choices=(0, 1)),
     "pull_speed": _positive,
     "overlap0": _positive,
-    "part_size": _positive,
-    "part_thickness": _positive,
+    "part_size": _positive_up_to(PART_MAX, NO_MICRO_PART),
+    "part_thickness": _positive_up_to(PART_MAX, NO_MICRO_PART),
     "size_spread": _between(0, 1, lo_open=False),
     "n_parts": _integer(lo=0),
     "fill_from": _between(0, 1, lo_open=False, hi_open=False),
@@ -123,7 +143,8 @@ RULES: dict[str, Callable[[float], str | None]] = {
                           why="asperity heights are nm to um; lengths are in metres"),
     "air_viscosity": _between(0, 1e-3, lo_open=False, hi_open=False,
                               why="air is 1.81e-5 Pa s"),
-    "face_radius": _non_negative,
+    "face_radius": _positive_up_to(PART_MAX, NO_MICRO_PART, zero=True),
+    "dt_unchecked": _integer(choices=(0, 1)),
 }
 
 # Parameters that also take names; a name is replaced by the deck's number.
@@ -144,8 +165,17 @@ def parse_assignments(items) -> dict[str, str]:
     return out
 
 
+# Hints for a refused value that is a unit slip: name -> (test, hint).
+UNIT_SLIPS: dict[str, tuple[Callable[[float], bool], str]] = {
+    "youngs": (lambda x: 0 < x < 1e4, "a modulus in GPa? (moduli are in Pa: silicon 1.3e11)"),
+    "youngs_track": (lambda x: 0 < x < 1e4, "a modulus in GPa? (moduli are in Pa: aluminium 7e10)"),
+}
+
+
 def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
-    """Deck defaults overridden by ``given``, checked; values as strings."""
+    """Deck defaults overridden by ``given``, checked; values as strings. A value
+    that runs but looks like a slip (:func:`vibrofeed.plausibility.advice`) is a
+    :class:`ParameterWarning` naming it."""
     tunables = deck.tunables
     for name in given:
         if name in RESERVED:
@@ -180,8 +210,16 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
         problem = rule(x) if rule else None
         if problem:
             unit = f" {var.unit}" if var.unit and var.unit != "-" else ""
-            raise ParameterError(f"parameter {name}={value}{unit} {problem}")
+            slip = UNIT_SLIPS.get(name)
+            hint = f"; {slip[1]}" if slip and slip[0](x) else ""
+            raise ParameterError(f"parameter {name}={value}{unit} {problem}{hint}")
     _check_relations(numbers)
+    # An idle parameter is worth a word only when the user moved it from the deck's default
+    # (callers such as the validation cases pass every value).
+    moved = [n for n in given if n in numbers and (not tunables[n].is_numeric
+                                                  or numbers[n] != float(tunables[n].default))]
+    for line in advice(numbers, moved):
+        warnings.warn(line, ParameterWarning, stacklevel=2)
     return values
 
 
@@ -219,6 +257,7 @@ def _check_relations(p: Mapping[str, float]) -> None:
                 f"output_dt={p['output_dt']:g} s is shorter than the timestep dt={dt:g} s")
         if "t_end" in p and p["t_end"] < dt:
             raise ParameterError(f"t_end={p['t_end']:g} s is shorter than the timestep dt={dt:g} s")
+    _check_contact_step(p)
 
 
 # Random loose packing of a settled pre-fill, to tell whether it stays between the walls.
@@ -374,3 +413,93 @@ def _check_surface_forces(p: Mapping[str, float]) -> None:
     if dt > limit:
         raise ParameterError(f"dt={dt:g} s is longer than the {limit:.3g} s the surface forces need "
                              "(hamaker, air_viscosity); lower dt or set dt=0 (automatic)")
+
+
+# A step beyond these fractions of the contact's times is one LIGGGHTS warns about
+# (fix check/timestep/gran): a contact then lasts a few steps, overlaps jump and parts
+# gain energy from nothing. The automatic dt is 2 % of the Hertz time.
+MAX_HERTZ_FRACTION = 0.1
+MAX_RAYLEIGH_FRACTION = 0.2
+# The decks' Hertz time is taken at the surface's peak speed, at least this [m/s].
+MIN_CONTACT_SPEED = 0.01
+
+
+def _hertz_time(mass: float, radius: float, e_star: float, speed: float) -> float:
+    """Hertz contact time [s] of an effective ``mass`` and ``radius`` at impact ``speed``."""
+    return 2.87 * (mass ** 2 / (radius * e_star ** 2 * speed)) ** 0.2
+
+
+def _rayleigh_time(radius: float, density: float, youngs: float, poisson: float) -> float:
+    """Rayleigh time [s] of a sphere of ``radius`` (the time a surface wave crosses it)."""
+    shear = youngs / (2 * (1 + poisson))
+    return math.pi * radius * math.sqrt(density / shear) / (0.1631 * poisson + 0.8766)
+
+
+def contact_times(p: Mapping[str, float]) -> dict[str, float] | None:
+    """``{"hertz": s, "rayleigh": s}``: the shortest contact times of a deck's parts,
+    as the decks derive their automatic dt (decks/*.liggghts, "derived"); None
+    without a contact vocabulary. single_part: a sphere of ``radius`` on a plate
+    of its material. bulk_feeder and pulloff: the smallest contact sphere with its
+    share of the part's mass, part-part (half of it, R* = r/2) and part-track
+    (E* with the track's modulus, R* = r); the shorter time counts."""
+    if not {"density", "youngs", "poisson"} <= set(p):
+        return None
+    rho, youngs, nu = p["density"], p["youngs"], p["poisson"]
+    v_peak = 2 * math.pi * p.get("freq", 0.0) * math.hypot(p.get("amp_t", 0.0), p.get("amp_n", 0.0))
+    speed = max(v_peak, MIN_CONTACT_SPEED)
+    if "radius" in p:  # single_part
+        r = p["radius"]
+        mass = 4 / 3 * math.pi * r ** 3 * rho
+        hertz = _hertz_time(mass, r, youngs / (2 * (1 - nu ** 2)), speed)
+        return {"hertz": hertz, "rayleigh": _rayleigh_time(r, rho, youngs, nu)}
+    if "part_size" not in p:
+        return None
+    size, shape = p["part_size"], int(p.get("shape", 0))
+    thickness = p.get("part_thickness", size)
+    r_sph = size / 2 if shape == 0 else thickness / 2
+    r_min = r_sph * (1 - p.get("size_spread", 0.0))
+    mass = {0: 4 / 3 * math.pi * r_sph ** 3, 1: size ** 2 * thickness,
+            2: math.pi / 4 * size ** 2 * thickness}[shape] * rho
+    spheres = 1
+    if shape != 0:  # a clump: its spheres share the mass (vibrofeed.geometry builds them)
+        from .geometry import chip_template, disc_template
+
+        spheres = len((chip_template if shape == 1 else disc_template)(size, thickness))
+    m = mass * (r_min / r_sph) ** 3 / spheres
+    youngs_track = p.get("youngs_track", 0.0) or youngs * 70 / 130
+    e_pp = youngs / (2 * (1 - nu ** 2))
+    e_pw = 1 / ((1 - nu ** 2) / youngs + (1 - p.get("poisson_track", nu) ** 2) / youngs_track)
+    if "pair" in p:  # pulloff: nothing vibrates, the deck takes 1 cm/s
+        speed = MIN_CONTACT_SPEED
+    hertz = min(_hertz_time(m / 2, r_min / 2, e_pp, speed), _hertz_time(m, r_min, e_pw, speed))
+    return {"hertz": hertz, "rayleigh": _rayleigh_time(r_min, rho, youngs, nu)}
+
+
+def step_beyond_contact(p: Mapping[str, float]) -> str | None:
+    """What is wrong with the fixed ``dt`` of ``p`` if it exceeds the contact's limits
+    (:data:`MAX_HERTZ_FRACTION`, :data:`MAX_RAYLEIGH_FRACTION`, the fractions the
+    decks' check/timestep/gran warns at); None for the automatic dt (dt = 0), without
+    a contact vocabulary, or for a dt no longer than the automatic one (1/50 of the
+    Hertz time, which a stiff material may put past the Rayleigh fraction)."""
+    dt = p.get("dt", 0.0)
+    times = contact_times(p) if dt > 0 else None
+    if times is None or dt <= times["hertz"] / 50:
+        return None
+    limits = {"rayleigh": MAX_RAYLEIGH_FRACTION, "hertz": MAX_HERTZ_FRACTION}
+    over = [f"{dt / times[k]:.0%} of the {k.capitalize()} time (limit {limit:.0%})"
+            for k, limit in limits.items() if dt > limit * times[k]]
+    return f"dt={dt:g} s is " + " and ".join(over) if over else None
+
+
+def _check_contact_step(p: Mapping[str, float]) -> None:
+    """A fixed dt beyond the contact's limits, unless the user insists (dt_unchecked=1:
+    the run is recorded with it and ``vibrofeed check`` fails the result)."""
+    problem = step_beyond_contact(p)
+    if problem and p.get("dt_unchecked", 0):
+        warnings.warn(f"{problem}, run as dt_unchecked=1 asks: vibrofeed check will fail the result",
+                      ParameterWarning, stacklevel=3)
+    elif problem:
+        raise ParameterError(
+            f"{problem}: contacts would last a few steps and parts gain energy; lower dt or set "
+            "dt=0 (automatic); to run it anyway add -p dt_unchecked=1 (vibrofeed check then "
+            "fails the result)")

@@ -93,9 +93,9 @@ def test_unwritable_output(tmp_path):
     blocker = tmp_path / "file"
     blocker.write_text("")
     proc = vibrofeed("run", "single_part", "-o", blocker / "sub" / "r.h5")
-    assert proc.returncode == 1 and "cannot create folder" in proc.stderr
+    assert proc.returncode == 2 and f"folder {blocker} is not a folder" in proc.stderr
     proc = vibrofeed("run", "single_part", "-o", tmp_path)
-    assert proc.returncode == 1 and "is a directory" in proc.stderr
+    assert proc.returncode == 2 and "is a folder" in proc.stderr
 
 
 def test_check_exit_status_and_json(tmp_path):
@@ -123,15 +123,19 @@ def test_params_of_an_unknown_deck():
 
 def test_usage_errors_are_one_line():
     proc = vibrofeed("run")
-    assert proc.returncode == 2 and proc.stderr.startswith("vibrofeed: error: vibrofeed run: ")
+    assert proc.returncode == 2 and proc.stderr.startswith("vibrofeed: error: run: ")
     assert proc.stderr.count("\n") == 1
     proc = vibrofeed("no_such_command")
     assert proc.returncode == 2 and proc.stderr.count("\n") == 1
+    assert proc.stderr.startswith("vibrofeed: error: argument COMMAND: ")
 
 
 def test_validate_list_and_unknown_case():
     out = vibrofeed("validate", "--list", check=True).stdout
     for name in ("hop_flights", "subhop_speed", "vertical_two_level"):
         assert name in out
+    listed = json.loads(vibrofeed("validate", "--list", "--json", check=True).stdout)
+    assert {"hop_flights", "subhop_speed", "vertical_two_level"} <= {c["case"] for c in listed}
+    assert all(c["kind"] and c["title"] for c in listed)
     proc = vibrofeed("validate", "no_such_case")
     assert proc.returncode == 2 and "no validation case 'no_such_case'" in proc.stderr

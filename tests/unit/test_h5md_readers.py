@@ -118,9 +118,9 @@ def test_files_of_format_1_2_still_read(bulk, tmp_path):
         assert len(r.outlet["id"]) == int((EXITS <= FRAMES[-1]).sum())
     report = check_file(old)
     assert report.ok, [str(p) for p in report.problems]
-    a = vibrofeed("feedrate", bulk, "--json", check=True).stdout
-    b = vibrofeed("feedrate", old, "--json", check=True).stdout
-    assert a.replace(str(bulk), "") == b.replace(str(old), "")
+    a, b = vibrofeed("feedrate", bulk, "--json"), vibrofeed("feedrate", old, "--json")
+    assert a.returncode == b.returncode and a.stdout  # the synthetic run may have too few exits (exit 1)
+    assert a.stdout.replace(str(bulk), "") == b.stdout.replace(str(old), "")
 
 
 def test_pyh5md_reads_the_result_file(bulk):

@@ -29,7 +29,7 @@ def test_warnings_are_printed_beside_a_bar():
 def test_without_a_terminal_progress_comes_as_lines(monkeypatch):
     """Piped or in a batch job: a line at each further tenth of the run, not more
     often than every 5 s, at least every 60 s; none at the start or the end."""
-    import vibrofeed.progress as P
+    import vibrofeed.run_progress as P
 
     clock = [0.0]
     monkeypatch.setattr(P.time, "monotonic", lambda: clock[0])
@@ -49,7 +49,7 @@ def test_without_a_terminal_progress_comes_as_lines(monkeypatch):
 
 
 def test_without_a_terminal_slow_progress_still_shows_every_minute(monkeypatch):
-    import vibrofeed.progress as P
+    import vibrofeed.run_progress as P
 
     clock = [0.0]
     monkeypatch.setattr(P.time, "monotonic", lambda: clock[0])

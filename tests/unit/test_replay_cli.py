@@ -55,7 +55,7 @@ def test_fit_finds_forces_that_keep_the_part_stuck(trial, tmp_path):
 @pytest.mark.parametrize("args, fragment", [
     (["--normal-force", "1", "--mu-s", "0.5", "--mu-k", "0.5"], "--mass is required"),
     (["--mass", "0.009", "--mu-s", "0.5", "--mu-k", "0.5"], "--normal-force is required"),
-    (["--mass", "-1", "--normal-force", "1", "--mu-s", "0.5", "--mu-k", "0.5"], "--mass must be > 0"),
+    (["--mass", "-1", "--normal-force", "1", "--mu-s", "0.5", "--mu-k", "0.5"], "--mass: must be > 0"),
     (["--mass", "0.009", "--normal-force", "1", "--mu-s", "0.5", "--mu-k", "0.6"], "cannot exceed"),
     (["--mass", "0.009", "--normal-force", "1", "--mu-s", "0.7", "--mu-k", "0.5", "--engine", "dem"],
      "one friction coefficient"),

@@ -14,11 +14,12 @@ from vibrofeed.results.writer import SlotMap
 
 
 def three_frames(tmp_path, **kw):
-    """Particle 1 throughout; 2 leaves after frame 0; 3 arrives at frame 2 and reuses 2's slot."""
+    """Particle 1 throughout (at 0.1 m/s: a physical result, see check's speed limit); 2
+    leaves after frame 0; 3 arrives at frame 2 and reuses 2's slot."""
     frames = [
         (0, 0.0, parts([1, 2], [[0, 0, 1], [1, 0, 1]])),
-        (10, 1e-5, parts([1], [[0.1, 0, 1]])),
-        (20, 2e-5, parts([3, 1], [[5, 0, 1], [0.2, 0, 1]])),
+        (10, 1.0, parts([1], [[0.1, 0, 1]])),
+        (20, 2.0, parts([3, 1], [[5, 0, 1], [0.2, 0, 1]])),
     ]
     surface = [([0, 0, k * 1e-6], [0, 0, 1e-3]) for k in range(3)]
     return write_result(tmp_path / "r.h5", frames, surface, **kw)
@@ -28,13 +29,13 @@ def test_roundtrip_with_varying_particle_number(tmp_path):
     path = three_frames(tmp_path)
     with Result(path) as r:
         assert r.n_frames == 3
-        assert list(r.step) == [0, 10, 20] and np.allclose(r.time, [0, 1e-5, 2e-5])
+        assert list(r.step) == [0, 10, 20] and r.time.tolist() == [0.0, 1.0, 2.0]
         # slot 0 is particle 1, slot 1 held 2, was empty, then holds 3
         assert r.ids.tolist() == [[1, 2], [1, -1], [1, 3]]
         assert np.isnan(r.position[1, 1]).all()
         assert np.isnan(r.radius[1, 1]) and r.species[1, 1] == -1  # FORMAT.md: species fill -1
         t, x = r.track(3)
-        assert t.tolist() == [2e-5] and x.tolist() == [[5, 0, 1]]
+        assert t.tolist() == [2.0] and x.tolist() == [[5, 0, 1]]
         t, x = r.track(1)
         assert np.allclose(x[:, 0], [0, 0.1, 0.2])
         assert r.part_ids.tolist() == [1, 2, 3]

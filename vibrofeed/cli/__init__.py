@@ -19,6 +19,7 @@ import argparse
 import importlib
 import os
 import sys
+import warnings
 
 from .. import __version__, interrupt
 from ..errors import VibrofeedError
@@ -60,7 +61,10 @@ class _Parser(argparse.ArgumentParser):
     """argparse, with its usage errors as the one line every error is."""
 
     def error(self, message: str):
-        self.exit(2, f"vibrofeed: error: {self.prog}: {message} (see {self.prog} --help)\n")
+        # prog is "vibrofeed" or "vibrofeed COMMAND": the error line names the command once.
+        command = self.prog.removeprefix("vibrofeed").strip()
+        where = f"{command}: " if command else ""
+        self.exit(2, f"vibrofeed: error: {where}{message} (see {self.prog} --help)\n")
 
 
 def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
@@ -83,7 +87,19 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
     return parser
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """vibrofeed's own warnings (a parameter that looks like a unit slip) as one line."""
+    if category.__module__.startswith("vibrofeed"):
+        print(f"vibrofeed: warning: {message}", file=sys.stderr)
+    else:
+        _python_show_warning(message, category, filename, lineno, file, line)
+
+
+_python_show_warning = warnings.showwarning
+
+
 def main(argv: list[str] | None = None) -> int:
+    warnings.showwarning = _show_warning
     argv = sys.argv[1:] if argv is None else list(argv)
     args = build_parser(argv).parse_args(argv)
     debug = bool(os.environ.get("VIBROFEED_DEBUG"))
@@ -96,6 +112,11 @@ def main(argv: list[str] | None = None) -> int:
         except KeyboardInterrupt:  # a second signal: leave now
             pass
         return fail(interrupt.message(exc), interrupt.exit_code(exc))
+    except BrokenPipeError:
+        # The reader stopped (`vibrofeed ... | head`): no traceback, and none again when
+        # Python flushes stdout at exit (the recipe of the signal module's documentation).
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
     except VibrofeedError as exc:
         if debug:
             raise

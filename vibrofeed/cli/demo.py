@@ -12,8 +12,6 @@ import shlex
 import sys
 from pathlib import Path
 
-from ..errors import UsageError
-
 DESCRIPTION = ("Run the default bulk-feeder case (hundreds of micro-parts on a vibrating track), then "
                "print its feed rate and singulation and write DIR/bulk_feeder.h5, a picture of the "
                "last frame of the steady feeding window (DIR/bulk_feeder.png) and the plots (DIR/plots/).")
@@ -41,10 +39,9 @@ def run(args) -> int:
     from ..parameters import parse_assignments
     from ..run_progress import RunProgress
     from ..run_summary import run_summary
+    from .outputs import folder_destination, written
 
-    folder = Path(args.output)
-    if folder.exists() and not folder.is_dir():
-        raise UsageError(f"-o {args.output}: not a folder")
+    folder = folder_destination("-o", args.output, create=False, parents=True)
     deck = Deck.find(DECK)
     params = parse_assignments(args.param)
     output = folder / f"{DECK}.h5"
@@ -54,38 +51,48 @@ def run(args) -> int:
                           reuse=args.reuse, command=shlex.join(["vibrofeed"] + sys.argv[1:]))
     finally:
         progress.close()
+    written(result.output)
     print(run_summary(result))
-    print(report(output, None if args.no_pictures else folder))
-    return 0
+    from .options import refuse
+
+    text, reason = report(output, None if args.no_pictures else folder)
+    print(text)
+    return refuse(output, reason)
 
 
-def report(path, folder: Path | None = None) -> str:
-    """The feed-rate and singulation reports of a bulk result; with ``folder``,
-    also its picture (folder/<name>.png) and plots (folder/plots/)."""
+def report(path, folder: Path | None = None) -> tuple[str, str | None]:
+    """The feed-rate and singulation reports of a bulk result, and why they measure
+    nothing (too few exits; None when they measure); with ``folder``, also its
+    picture (folder/<name>.png) and plots (folder/plots/)."""
     from ..postproc.feedrate import FeedRate
     from ..postproc.singulation import Singulation
     from ..results.reader import Result
     from . import feedrate as F
     from . import singulation as S
+    from .options import figures_written, unmeasured
+    from .outputs import written
 
     lines, figures = [], []
     with Result(path) as result:
         fr = FeedRate(result).run()
         summary = fr.summary()
+        reason = unmeasured(summary, F.RATE_KEYS)
         sg = Singulation(result).run()
-        lines += ["", "Feed rate", F.table(summary), "", "Singulation", S.table(sg.summary())]
+        singulation = sg.summary()
+        reason = reason or unmeasured(singulation, S.ARRIVAL_KEYS)
+        lines += ["", "Feed rate", F.table(summary), "", "Singulation", S.table(singulation)]
         if folder is not None:
             from ..pictures.plots import feedrate_figures, singulation_figures
             from ..pictures.render import render
 
             plots = folder / "plots"
             plots.mkdir(parents=True, exist_ok=True)
-            figures += feedrate_figures(fr, plots) + singulation_figures(sg, plots)
+            figures += figures_written(feedrate_figures(fr, plots) + singulation_figures(sg, plots))
             picture = folder / f"{Path(path).stem}.png"
-            figures.append(render(result, picture, frame=picture_frame(result.time,
-                                                                        summary["steady_to"])).path)
+            frame = picture_frame(result.time, summary["steady_to"])
+            figures.append(written(render(result, picture, frame=frame).path))
     lines += [f"figure: {f}" for f in figures]
-    return "\n".join(lines)
+    return "\n".join(lines), reason
 
 
 def picture_frame(times, steady_to: float) -> int:

@@ -3,6 +3,8 @@ trajectory for molecular-dynamics tools (MDAnalysis, znh5md/ASE)."""
 
 from __future__ import annotations
 
+from .numbers import whole
+
 DESCRIPTION = ("Write a result as a ParaView time series: DIR/RUN.pvd referencing, per frame, the "
                "parts as points with their fields (id, radius, velocity, speed, orientation "
                "quaternion, glyph-ready axes and shape tensor), the parts' real shapes as "
@@ -19,7 +21,8 @@ def add_arguments(p) -> None:
     p.add_argument("--format", choices=("paraview", "h5md-md"), default="paraview",
                    help="paraview: DIR/RUN.pvd (default); h5md-md: DIR/RUN.h5md for MDAnalysis, "
                         "znh5md, pyh5md")
-    p.add_argument("--every", type=int, default=1, metavar="N", help="export every N-th frame (default 1)")
+    p.add_argument("--every", type=whole(1), default=1, metavar="N",
+                   help="export every N-th frame (default 1)")
     p.add_argument("--no-shapes", action="store_true",
                    help="leave out the parts' triangle meshes (points with their fields only)")
     p.add_argument("--allow-incomplete", action="store_true",
@@ -32,7 +35,9 @@ def run(args) -> int:
 
     from ..errors import UsageError
     from ..results.reader import Result
+    from .outputs import folder_destination, written
 
+    folder_destination("-o", args.output, create=False, parents=True)
     if args.format == "h5md-md":
         if args.no_shapes:
             raise UsageError("--no-shapes is for --format paraview: an h5md-md export has no shapes")
@@ -52,6 +57,7 @@ def run(args) -> int:
         finally:
             if bar is not None:
                 bar.close()
+    written(done.pvd)
     print(f"wrote {done.pvd} ({done.frames} frames, {done.files} files, {done.seconds:.1f} s)")
     return 0
 

@@ -4,7 +4,8 @@ the conveying speed along the track and its dilute-limit model."""
 from __future__ import annotations
 
 from ..values import fmt
-from .options import add_output_arguments, plot_folder, print_figures
+from .numbers import real, whole
+from .options import add_output_arguments, figures_written, plot_folder, print_figures, refuse, unmeasured
 
 DESCRIPTION = ("Feed rate of a bulk-feeder result: parts/s and mass/s leaving the track over the "
                "detected steady window (batch-means error), the mean conveying velocity over whole "
@@ -14,24 +15,29 @@ DESCRIPTION = ("Feed rate of a bulk-feeder result: parts/s and mass/s leaving th
 
 def add_arguments(p) -> None:
     p.add_argument("result", metavar="RUN.h5", help="result of a bulk-feeder deck")
-    p.add_argument("--start", type=float, metavar="S", help="start of the steady window [s] "
+    p.add_argument("--start", type=real(), metavar="S", help="start of the steady window [s] "
                    "(default: detected)")
-    p.add_argument("--end", type=float, metavar="S", help="end of the steady window [s] "
+    p.add_argument("--end", type=real(), metavar="S", help="end of the steady window [s] "
                    "(default: detected)")
-    p.add_argument("--batches", type=int, default=10, metavar="N",
+    p.add_argument("--batches", type=whole(2), default=10, metavar="N",
                    help="batches of the batch-means errors (default 10)")
-    p.add_argument("--bins", type=int, default=20, metavar="N",
+    p.add_argument("--bins", type=whole(1), default=20, metavar="N",
                    help="bins of the velocity profile along the track (default 20)")
     p.add_argument("--no-model", action="store_true",
                    help="skip the single-part model comparison")
     add_output_arguments(p)
 
 
+# The figures too few exits cannot measure: null in the JSON, "too few exits" in the table.
+RATE_KEYS = ("parts_per_s", "parts_per_s_err", "mass_per_s", "mass_per_s_err")
+
+
 def table(s: dict) -> str:
     """The figures as the command prints them."""
+    rate = (f"{fmt(s['parts_per_s'])} ± {fmt(s['parts_per_s_err'], spec='.2g')} parts/s, "
+            f"{fmt(s['mass_per_s'], 1e6)} ± {fmt(s['mass_per_s_err'], 1e6, '.2g')} mg/s")
     lines = [
-        f"feed rate      {fmt(s['parts_per_s'])} ± {fmt(s['parts_per_s_err'], spec='.2g')} parts/s, "
-        f"{fmt(s['mass_per_s'], 1e6)} ± {fmt(s['mass_per_s_err'], 1e6, '.2g')} mg/s",
+        f"feed rate      {s['reason'] if s.get('reason') else rate}",
         f"steady window  {fmt(s['steady_from'])} .. {fmt(s['steady_to'])} s "
         f"({s['n_events']} exits in the run analysed)",
         f"conveying      {fmt(s['mean_velocity'], 1e3)} ± {fmt(s['mean_velocity_err'], 1e3, '.2g')} "
@@ -60,6 +66,7 @@ def run(args) -> int:
         fr = FeedRate(result, start=args.start, end=args.end, batches=args.batches,
                       bins=args.bins, model=not args.no_model).run()
         summary = fr.summary()
-        figures = feedrate_figures(fr, folder) if folder is not None else []
+        figures = figures_written(feedrate_figures(fr, folder)) if folder is not None else []
+    reason = unmeasured(summary, RATE_KEYS)
     print_figures(summary, figures, args.json, table)
-    return 0
+    return refuse(args.result, reason)

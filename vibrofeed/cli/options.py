@@ -7,8 +7,6 @@ import json
 from collections.abc import Callable
 from pathlib import Path
 
-from ..errors import UsageError
-
 
 def count(what: str) -> Callable[[str], int]:
     """argparse type of a positive whole number of ``what`` (MPI ranks, jobs)."""
@@ -46,18 +44,39 @@ def add_output_arguments(p) -> None:
 
 
 def plot_folder(path: str | None) -> Path | None:
-    """The figures' folder, checked before any work: created if missing, but a
-    mistyped parent is refused rather than created silently."""
-    if path is None:
-        return None
-    folder = Path(path)
-    if folder.exists() and not folder.is_dir():
-        raise UsageError(f"--plot {path}: not a folder")
-    if not folder.exists():
-        if not folder.absolute().parent.is_dir():
-            raise UsageError(f"--plot {path}: folder {folder.absolute().parent} does not exist")
-        folder.mkdir()
-    return folder
+    """The figures' folder of --plot DIR, checked before any work (see
+    :func:`~vibrofeed.cli.outputs.folder_destination`); None without --plot."""
+    from .outputs import folder_destination
+
+    return None if path is None else folder_destination("--plot", path)
+
+
+def figures_written(paths) -> list:
+    """The figures a --plot wrote, each checked to exist and hold something."""
+    from .outputs import written
+
+    return [written(path) for path in paths]
+
+
+def unmeasured(summary: dict, keys) -> str | None:
+    """The summary's reason for measuring nothing (too few exits or arrivals), its
+    ``keys`` set to None then; None when it measured."""
+    reason = summary.get("reason")
+    if reason:
+        summary.update(dict.fromkeys(keys))
+    return reason
+
+
+def refuse(path, reason: str | None) -> int:
+    """The exit status of an analysis: 1, with the reason on stderr, when it measured nothing."""
+    if not reason:
+        return 0
+    import sys
+
+    from ..errors import EXIT_FAILED
+
+    print(f"vibrofeed: error: {path}: {reason}", file=sys.stderr)
+    return EXIT_FAILED
 
 
 def print_figures(summary: dict, figures: list, as_json: bool, table: Callable[[dict], str]) -> None:

@@ -28,29 +28,30 @@ def liggghts_line(deck, given: dict[str, str], values: dict[str, str], extra: di
     return shlex.join(words)
 
 
-def run(args) -> int:
-    from pathlib import Path
+def _stamps(folder) -> dict:
+    """name -> (inode, mtime) of the files in ``folder``: what a hook wrote or replaced."""
+    return {p.name: (p.stat().st_ino, p.stat().st_mtime_ns) for p in folder.iterdir() if p.is_file()}
 
+
+def run(args) -> int:
     from ..decks import Deck
-    from ..errors import OutputError
     from ..parameters import parse_assignments, resolve
+    from .outputs import folder_destination, written
 
     deck = Deck.find(args.deck)
     given = parse_assignments(args.param)
     values = resolve(deck, given)
-    folder = Path(args.output).expanduser()
-    if folder.exists() and not folder.is_dir():
-        raise OutputError(f"{args.output} exists and is not a folder")
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise OutputError(f"cannot create folder {args.output}: {exc.strerror}") from None
+    folder = folder_destination("-o", args.output, parents=True)
+    before = _stamps(folder)
     prepared = deck.prepare(values, folder.resolve())
     extra = dict(prepared.variables) if prepared is not None else {}
     if prepared is None:
         print(f"vibrofeed: deck {deck.name} needs no prepared files; run it as it is:")
     else:
-        written = ", ".join(sorted(p.name for p in folder.iterdir()))
-        print(f"vibrofeed: wrote {written} in {folder}")
+        after = _stamps(folder)
+        new = sorted(name for name, stamp in after.items() if before.get(name) != stamp)
+        for name in new:
+            written(folder / name)
+        print(f"vibrofeed: wrote {', '.join(new)} in {folder}")
     print(liggghts_line(deck, given, values, extra))
     return 0

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from .numbers import real, whole
+
 DESCRIPTION = ("Draw a result off-screen (no display needed): the track at the frame's surface "
                "position and the parts with their real shapes (spheres; chips as boxes, discs as "
                "cylinders, oriented), coloured by speed (the scale spans the parts on the track; "
@@ -33,9 +35,9 @@ def add_arguments(p) -> None:
                         "touching parts (default speed)")
     p.add_argument("--size", type=size, default=(1280, 720), metavar="WxH",
                    help="picture size in pixels (default 1280x720)")
-    p.add_argument("--every", type=int, default=1, metavar="N",
+    p.add_argument("--every", type=whole(1), default=1, metavar="N",
                    help="movie: draw every N-th frame (default 1)")
-    p.add_argument("--fps", type=float, default=25.0, help="movie: frames per second (default 25)")
+    p.add_argument("--fps", type=real(above=0), default=25.0, help="movie: frames per second (default 25)")
     p.add_argument("--allow-incomplete", action="store_true",
                    help="also draw results of runs that were killed or failed")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar for movies")
@@ -47,8 +49,10 @@ def run(args) -> int:
 
     from ..pictures.render import render
     from ..results.reader import Result
+    from .outputs import file_destination, written
 
-    output = args.output or f"{Path(args.result).stem}.png"
+    output = str(file_destination("-o", args.output or f"{Path(args.result).stem}.png",
+                                  (".png", ".mp4")))
     with Result(args.result, allow_incomplete=args.allow_incomplete) as result:
         bar = None
         if output.lower().endswith(".mp4") and not args.quiet and sys.stderr.isatty():
@@ -62,6 +66,7 @@ def run(args) -> int:
         finally:
             if bar is not None:
                 bar.close()
+    written(done.path)
     w, h = done.size
     what = "1 frame" if done.frames == 1 else f"{done.frames} frames"
     print(f"wrote {done.path} ({what}, {w}x{h}, {done.seconds:.1f} s)")

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from ..errors import UsageError
+from .numbers import real
 
 DESCRIPTION = ("Drive the vertical-transport model (or a LIGGGHTS wall) with the measured platform "
                "motion of trial files and compare the predicted part position with the measured one; "
@@ -22,10 +23,10 @@ def add_arguments(p) -> None:
     from .options import ranks
 
     p.add_argument("trials", nargs="+", metavar="TRIAL.csv", help="measured trial files")
-    p.add_argument("--mass", type=float, metavar="KG", help="part mass [kg]")
-    p.add_argument("--normal-force", type=float, metavar="N", help="grasp (normal) force [N]")
-    p.add_argument("--mu-s", type=float, metavar="X", help="static friction coefficient")
-    p.add_argument("--mu-k", type=float, metavar="Y", help="kinetic friction coefficient")
+    p.add_argument("--mass", type=real(above=0), metavar="KG", help="part mass [kg]")
+    p.add_argument("--normal-force", type=real(above=0), metavar="N", help="grasp (normal) force [N]")
+    p.add_argument("--mu-s", type=real(above=0), metavar="X", help="static friction coefficient")
+    p.add_argument("--mu-k", type=real(above=0), metavar="Y", help="kinetic friction coefficient")
     p.add_argument("--engine", choices=("model", "dem"), default="model",
                    help="model (Coulomb stick/slip of Yako et al.) or dem (LIGGGHTS wall; needs "
                         "mu_s = mu_k)")
@@ -48,22 +49,17 @@ def _positive(name: str, value) -> float:
     return float(value)
 
 
-def _plot_path(path: str | None) -> Path | None:
-    """The figure's path, refused before any work if its folder does not exist:
-    a mistyped folder should not be created silently after minutes of work."""
-    if path is None:
-        return None
-    out = Path(path)
-    if not out.parent.is_dir():
-        raise UsageError(f"--plot {path}: folder {out.parent} does not exist")
-    return out
-
-
 def run(args) -> int:
     from ..models.constants import G
     from ..validation.replay.trials import read_trial
+    from .outputs import file_destination, folder_destination
 
-    plot = _plot_path(args.plot)
+    if args.fit and args.plot:
+        raise UsageError("--plot draws a replay; --fit prints the fit only (replay with the fitted "
+                         "--mu-k and --normal-force to plot it)")
+    plot = None if args.plot is None else file_destination("--plot", args.plot, (".png",))
+    if args.engine == "dem":
+        folder_destination("-o", args.output, create=False, parents=True)
     trials = [read_trial(path) for path in args.trials]
     mass = _positive("--mass", args.mass)
     mu_s = _positive("--mu-s", args.mu_s)
@@ -102,8 +98,9 @@ def run(args) -> int:
                   f"stuck {r.stuck_fraction:.0%} of the time")
     if plot is not None:
         from ..validation.plots import plot_replay
+        from .outputs import written
 
-        path = plot_replay(results, plot, engine=args.engine)
+        path = written(plot_replay(results, plot, engine=args.engine))
         if not args.json:
             print(f"figure: {path}")
     return 0

@@ -29,6 +29,7 @@ def run(args) -> int:
     from ..engine.runner import run_deck
     from ..parameters import parse_assignments
     from ..run_progress import RunProgress
+    from .outputs import file_destination, written
 
     # The summary's analyses import scipy (~0.3 s): load them while the worker starts
     # and runs, not before (a short single-part run lasts about as long).
@@ -36,7 +37,7 @@ def run(args) -> int:
     warm.start()
     deck = Deck.find(args.deck)
     params = parse_assignments(args.param)
-    output = args.output or f"{deck.name}.h5"
+    output = str(file_destination("-o", args.output or f"{deck.name}.h5", parents=True))
     progress = RunProgress(deck.name, enabled=False if args.quiet else None)
     try:
         result = run_deck(deck, params, output, ranks=args.ranks, on_event=progress,
@@ -46,6 +47,7 @@ def run(args) -> int:
     if result.reused:
         print(f"vibrofeed: kept {result.output}: a complete result of the same run "
               f"(run id {result.run_id[:12]}...)", file=sys.stderr)
+    written(result.output)
     warm.join()
     from ..run_summary import run_summary
 

@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 from ..values import fmt
-from .options import add_output_arguments, plot_folder, print_figures
+from .numbers import real, whole
+from .options import add_output_arguments, figures_written, plot_folder, print_figures, refuse, unmeasured
 
 DESCRIPTION = ("Singulation of a bulk-feeder result over the steady window: inter-arrival times at "
                "the outlet (coefficient of variation), doubles (parts closer than a gap, or touching), "
@@ -13,20 +14,25 @@ DESCRIPTION = ("Singulation of a bulk-feeder result over the steady window: inte
 
 def add_arguments(p) -> None:
     p.add_argument("result", metavar="RUN.h5", help="result of a bulk-feeder deck")
-    p.add_argument("--gap", type=float, metavar="S",
+    p.add_argument("--gap", type=real(above=0), metavar="S",
                    help="doubles: arrivals less than S seconds apart")
-    p.add_argument("--gap-distance", type=float, metavar="M",
+    p.add_argument("--gap-distance", type=real(at_least=0), metavar="M",
                    help="doubles: less than M metres of clear track between consecutive parts "
                         "(default 0, i.e. abreast or overlapping along the track, unless --gap "
                         "is given)")
-    p.add_argument("--tolerance", type=float, metavar="M",
+    p.add_argument("--tolerance", type=real(at_least=0), metavar="M",
                    help="touching: centre distance <= r_i + r_j + M (default 1%% of a diameter)")
-    p.add_argument("--start", type=float, metavar="S", help="start of the window [s] (default: "
+    p.add_argument("--start", type=real(), metavar="S", help="start of the window [s] (default: "
                    "the detected steady window)")
-    p.add_argument("--end", type=float, metavar="S", help="end of the window [s]")
-    p.add_argument("--cluster-frames", type=int, default=20, metavar="N",
+    p.add_argument("--end", type=real(), metavar="S", help="end of the window [s]")
+    p.add_argument("--cluster-frames", type=whole(1), default=20, metavar="N",
                    help="frames sampled for the cluster sizes (default 20)")
     add_output_arguments(p)
+
+
+# The statistics of the arrivals, which too few exits cannot give.
+ARRIVAL_KEYS = ("mean_interarrival", "cv_interarrival", "mean_gap", "doubles_rate", "doubles_per_s",
+                "singulated_fraction")
 
 
 def table(s: dict) -> str:
@@ -45,7 +51,7 @@ def table(s: dict) -> str:
         sizes += f", ... up to {shown[-1][0]}"
     lines = [
         f"window         {fmt(s['steady_from'])} .. {fmt(s['steady_to'])} s, "
-        f"{s['n_arrivals']} arrivals",
+        f"{s['n_arrivals']} arrivals" + (f"; {s['reason']}" if s.get("reason") else ""),
         f"inter-arrival  mean {fmt(s['mean_interarrival'], 1e3)} ms, "
         f"CV {fmt(s['cv_interarrival'], spec='.3f')} (1: random, 0: periodic)",
         f"doubles        {fmt(s['doubles_rate'], 100, '.1f')} % of consecutive pairs "
@@ -75,6 +81,7 @@ def run(args) -> int:
                          tolerance=args.tolerance, start=args.start, end=args.end,
                          cluster_frames=args.cluster_frames).run()
         summary = sg.summary()
-        figures = singulation_figures(sg, folder) if folder is not None else []
+        figures = figures_written(singulation_figures(sg, folder)) if folder is not None else []
+    reason = unmeasured(summary, ARRIVAL_KEYS)
     print_figures(summary, figures, args.json, table)
-    return 0
+    return refuse(args.result, reason)

@@ -31,6 +31,10 @@ def run(args) -> int:
     from ..sweep.execute import serve, sweep
 
     comm = batch.world()
+    if args.output is not None:
+        from .outputs import folder_destination
+
+        folder_destination("-o", args.output, create=False, parents=True)
     if comm is not None and comm.Get_rank() != 0:
         return serve(comm)
     try:

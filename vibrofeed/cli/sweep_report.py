@@ -20,8 +20,9 @@ def add_arguments(p) -> None:
 
 def run(args) -> int:
     from ..sweep.report import report, text
-    from .options import plot_folder
+    from .options import figures_written, plot_folder
 
     rep = report(args.folder, plot_folder(args.plot))
+    figures_written(rep.get("figures", ()))
     print(json.dumps(rep, indent=2) if args.json else text(rep))
     return 0

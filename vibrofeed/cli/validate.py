@@ -66,13 +66,19 @@ def run(args) -> int:
     from ..validation.crosscheck import CrossCheck
 
     if args.list:
-        names = C.available()
-        width = max(map(len, names))
-        for name in names:
-            case = C.find(name)
-            print(f"{name:<{width}}  [{case.kind}] {case.title}")
+        cases = [C.find(name) for name in C.available()]
+        if args.json:
+            print(json.dumps([{"case": c.name, "kind": c.kind, "title": c.title} for c in cases],
+                             indent=2))
+            return 0
+        width = max(len(c.name) for c in cases)
+        for case in cases:
+            print(f"{case.name:<{width}}  [{case.kind}] {case.title}")
         return 0
+    from .outputs import folder_destination, written
+
     selected = [C.find(n) for n in (args.cases or C.available())]
+    folder_destination("-o", args.output, create=False, parents=True)
     say = (lambda *a: None) if args.json else (lambda text: print(text, file=sys.stderr))
     rows, figures, failed, errors = [], [], [], []
     for case in selected:
@@ -87,7 +93,7 @@ def run(args) -> int:
             say(f"   {case.name}: error: {exc}")
             continue
         rows += outcome.rows
-        figures += outcome.figures
+        figures += [written(f) for f in outcome.figures]
         if not outcome.passed:
             failed.append(case.name)
         if not args.json and len(selected) > 1:

@@ -1,7 +1,9 @@
-"""Validate a result file against the layout in FORMAT.md (``vibrofeed check``)."""
+"""Validate a result file against the layout in FORMAT.md (``vibrofeed check``),
+and look for results that cannot be physical (FORMAT.md, "What check checks")."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import h5py
@@ -336,6 +338,160 @@ class _Checker:
         return status
 
 
+# The physical limits (FORMAT.md, "What check checks"). No part of a vibratory
+# feeder moves faster than a hundred times the surface's peak speed plus the free
+# fall from the height of the scene, nor than MIN_SPEED_LIMIT whatever the drive.
+SPEED_FACTOR = 100.0
+MIN_SPEED_LIMIT = 1.0  # m/s
+G = 9.81  # m/s^2
+# Frames read at once by the physical checks (values of one float element).
+_BLOCK_VALUES = 2_000_000
+
+
+class _Physics:
+    """The physical checks of one file whose layout checked out."""
+
+    def __init__(self, c: _Checker):
+        self.c, self.f = c, c.f
+        variables = self.f.get(L.VARIABLES)
+        self.p = {}
+        for name, ds in (variables.items() if variables is not None else ()):
+            try:
+                self.p[name] = float(_text(ds[()]) if ds.dtype.kind in "SOU" else ds[()])
+            except (TypeError, ValueError):
+                pass
+
+    def step(self) -> None:
+        """A fixed dt beyond the contact's limits (vibrofeed.parameters)."""
+        from ..parameters import step_beyond_contact
+
+        try:
+            problem = step_beyond_contact(self.p)
+        except (KeyError, ValueError, ZeroDivisionError, OverflowError):
+            return
+        if problem:
+            insisted = " (run with dt_unchecked=1)" if self.p.get("dt_unchecked") else ""
+            self.c.error(f"{L.VARIABLES}/dt", f"{problem}{insisted}: the contacts were not resolved")
+
+    def surface_speed(self) -> float:
+        """The surface's peak speed [m/s]: recorded, or of the sine the parameters give."""
+        peak = 2 * math.pi * self.p.get("freq", 0.0) * math.hypot(self.p.get("amp_t", 0.0),
+                                                                 self.p.get("amp_n", 0.0))
+        path = f"{L.SURFACE}/velocity/value"
+        if path in self.f and self.f[path].shape[0]:
+            v = np.linalg.norm(self.f[path][()], axis=-1)
+            if np.isfinite(v).all():
+                peak = max(peak, float(v.max()))
+        return peak
+
+    def run(self) -> None:
+        self.step()
+        if not all(f"{L.PARTS}/{n}/value" in self.f for n in ("id", "position", "velocity", "mass")):
+            return
+        ids = self.f[f"{L.PARTS}/id/value"]
+        pos, vel = self.f[f"{L.PARTS}/position/value"], self.f[f"{L.PARTS}/velocity/value"]
+        mass, time = self.f[f"{L.PARTS}/mass/value"], self.f[f"{L.PARTS}/position/time"][()]
+        frames, slots = ids.shape[:2] if ids.ndim == 2 else (0, 0)
+        if frames == 0 or pos.shape[:2] != (frames, slots) or vel.shape[:2] != (frames, slots):
+            return
+        track = self.f.get(f"{L.TRACK}/vertices")
+        track = track[()] if track is not None and track.ndim == 2 and track.shape[1] == 3 else None
+        first = pos[0][ids[0] != L.ID_FILL]
+        heights = [z for z in (first[:, 2] if len(first) else ()) if math.isfinite(z)] + [0.0]
+        if track is not None and len(track):
+            heights += [float(track[:, 2].min()), float(track[:, 2].max())]
+        height = max(heights) - min(heights)
+        v_surface = self.surface_speed()
+        limit = max(MIN_SPEED_LIMIT, SPEED_FACTOR * v_surface + math.sqrt(2 * G * height))
+        region = None
+        if track is not None and len(track):  # the track's box, a track's size around it
+            lo, hi = track.min(axis=0), track.max(axis=0)
+            margin = float((hi - lo).max()) + self._surface_travel()
+            region = (lo - margin, hi + margin)
+        boundary = [_text(b) for b in np.ravel(self.f[f"{L.PARTS}/box"].attrs.get("boundary", []))] \
+            if f"{L.PARTS}/box" in self.f else []
+        jumps = "periodic" not in boundary
+        block = max(1, _BLOCK_VALUES // max(3 * slots, 1))
+        found = set()
+        prev = None  # (ids, positions) of the frame before the block
+        for a in range(0, frames, block):
+            b = min(frames, a + block)
+            i, x, v, m = ids[a:b], pos[a:b], vel[a:b], mass[a:b]
+            live = i != L.ID_FILL
+            self._speeds(i, v, m, live, a, time, limit, found)
+            if region is not None and "region" not in found:
+                self._region(i, x, live, a, time, region, found)
+            if jumps and "jump" not in found:
+                if prev is not None:
+                    i, x, live = (np.concatenate([prev[0], i]), np.concatenate([prev[1], x]),
+                                  np.concatenate([prev[0] != L.ID_FILL, live]))
+                    start = a - 1
+                else:
+                    start = a
+                self._jumps(i, x, live, start, time, limit, found)
+            prev = (ids[b - 1:b], pos[b - 1:b])
+
+    def _surface_travel(self) -> float:
+        path = f"{L.SURFACE}/position/value"
+        if path in self.f and self.f[path].shape[0]:
+            d = np.abs(self.f[path][()])
+            if np.isfinite(d).all():
+                return float(d.max())
+        return 0.0
+
+    def _speeds(self, ids, v, m, live, a, time, limit, found) -> None:
+        speed = np.where(live, np.linalg.norm(np.nan_to_num(v, nan=0.0), axis=-1), 0.0)
+        if "speed" not in found and np.any(speed > limit):
+            k, j = np.unravel_index(int(np.argmax(speed > limit)), speed.shape)
+            found.add("speed")
+            self.c.error(f"{L.PARTS}/velocity/value",
+                         f"part {int(ids[k, j])} moves at {speed[k, j]:.3g} m/s at frame {a + k} "
+                         f"(t = {time[a + k]:g} s), beyond the {limit:.3g} m/s any part can reach "
+                         "(100 x the surface's peak speed + free fall from the scene's height)")
+        if "energy" in found:
+            return
+        mass = np.where(live, np.nan_to_num(m, nan=0.0), 0.0)
+        total = mass.sum(axis=1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            specific = np.where(total > 0, (0.5 * mass * speed ** 2).sum(axis=1) / total, 0.0)
+        bad = np.nonzero(specific > 0.5 * limit ** 2)[0]
+        if len(bad):
+            k = int(bad[0])
+            found.add("energy")
+            self.c.error(f"{L.PARTS}/velocity/value",
+                         f"the parts' kinetic energy is {specific[k]:.3g} J/kg at frame {a + k} "
+                         f"(t = {time[a + k]:g} s), beyond the {0.5 * limit ** 2:.3g} J/kg of every "
+                         "part at the speed limit: energy grew without a source")
+
+    def _region(self, ids, x, live, a, time, region, found) -> None:
+        lo, hi = region
+        with np.errstate(invalid="ignore"):
+            out = live & np.any((x < lo) | (x > hi), axis=-1)
+        if np.any(out):
+            k, j = np.unravel_index(int(np.argmax(out)), out.shape)
+            found.add("region")
+            self.c.error(f"{L.PARTS}/position/value",
+                         f"part {int(ids[k, j])} is at {np.array2string(x[k, j], precision=3)} m at "
+                         f"frame {a + k} (t = {time[a + k]:g} s), far outside the track "
+                         f"(a track's size around it)")
+
+    def _jumps(self, ids, x, live, start, time, limit, found) -> None:
+        if len(ids) < 2:
+            return
+        same = live[1:] & live[:-1] & (ids[1:] == ids[:-1])
+        dt = np.diff(time[start:start + len(ids)])[:, None]
+        with np.errstate(invalid="ignore"):
+            step = np.linalg.norm(x[1:] - x[:-1], axis=-1)
+            bad = same & (step > 1.5 * limit * dt + 1e-9)
+        if np.any(bad):
+            k, j = np.unravel_index(int(np.argmax(bad)), bad.shape)
+            found.add("jump")
+            self.c.error(f"{L.PARTS}/position/value",
+                         f"part {int(ids[k + 1, j])} moves {step[k, j]:.3g} m between frames "
+                         f"{start + k} and {start + k + 1}, faster than the {limit:.3g} m/s any "
+                         "part can reach")
+
+
 def check_file(path, allow_incomplete: bool = False) -> Report:
     """Check a file; ``Report.ok`` is False if any error was found."""
     try:
@@ -353,4 +509,5 @@ def check_file(path, allow_incomplete: bool = False) -> Report:
         c.track()
         if str(path).endswith(".part") and status == L.STATUS_COMPLETE:  # FORMAT.md: never both
             (c.warn if allow_incomplete else c.error)(L.RUN, "a .part file says 'complete': never renamed")
+        _Physics(c).run()
         return Report(str(path), c.problems, frames=c.frames, parts=parts, status=status)

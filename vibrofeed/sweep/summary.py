@@ -152,16 +152,27 @@ def write(folder, rows: list[dict], parameters: list[str], meta: dict) -> None:
 def read(folder) -> tuple[list[dict], dict]:
     """(rows, root attributes) of ``folder``'s summary.h5; ([], {}) when there is none.
 
-    Each row holds every column; missing values are None."""
-    import h5py
+    Each row holds every column; missing values are None. A damaged file is a
+    :class:`~vibrofeed.errors.ResultError` naming it."""
+    from ..errors import ResultError
 
     path = Path(folder) / H5_NAME
     if not path.is_file():
         return [], {}
+    try:
+        return _read(path)
+    except (OSError, KeyError, ValueError, TypeError, IndexError) as exc:  # truncated, overwritten...
+        raise ResultError(f"{path}: not a readable sweep summary ({type(exc).__name__}: "
+                          f"{str(exc).splitlines()[0] if str(exc) else 'damaged'})") from None
+
+
+def _read(path: Path) -> tuple[list[dict], dict]:
+    import h5py
+
+    from ..errors import ResultError
+
     with h5py.File(path, "r") as f:
         if f.attrs.get("format") != FORMAT:
-            from ..errors import ResultError
-
             raise ResultError(f"{path}: not a vibrofeed sweep summary")
         meta = {k: (v.tolist() if hasattr(v, "tolist") else v) for k, v in f.attrs.items()}
         g = f["jobs"]

@@ -1,0 +1,114 @@
+"""Values that are legal but make no sense: unit slips and options without effect.
+
+:mod:`vibrofeed.parameters` refuses what cannot run. Here is what runs but is
+almost certainly not what the user meant: a density in g/cm³ (2.33 for
+silicon's 2330 kg/m³), a modulus in GPa, a length in mm or µm where the decks
+take metres, a frequency in rad/s, an angle in radians; and a parameter the
+chosen setting ignores (a duty cycle with a sine, a gate position without a
+gate, a chip thickness for spheres). The limits of values no material
+or micro-feeder has are here too (:data:`vibrofeed.parameters.RULES` refuses
+beyond them); :func:`advice` names the rest, one line each,
+naming the parameter (:func:`vibrofeed.parameters.resolve` issues them as
+:class:`ParameterWarning`, which the command line prints as
+``vibrofeed: warning: ...``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Collection, Mapping
+
+# Solids span about 500 (polymer foams excepted) to 22 590 kg/m³ (osmium).
+DENSITY_PLAUSIBLE = (100.0, 25_000.0)  # kg/m³
+DENSITY_MAX = 1e5  # kg/m³: four times osmium; no material
+# A micro-part: microns to a centimetre; a metre is no micro-part.
+PART_PLAUSIBLE = (1e-6, 0.01)  # m
+PART_MAX = 1.0  # m
+# A feeder track: millimetres to a metre or two.
+TRACK_PLAUSIBLE = (1e-4, 2.0)  # m
+# Vibratory feeders: tens of Hz (bowls) to kHz (piezo); beyond 10 kHz ultrasonic.
+FREQ_PLAUSIBLE_MAX = 1e4  # Hz
+# Coulomb friction of solids: 0.05 to about 1.5.
+MU_PLAUSIBLE_MAX = 2.0
+# Surface energies of solids: 0.01 to 2 J/m² (silicon ~1.4).
+SURFACE_ENERGY_PLAUSIBLE_MAX = 10.0  # J/m²
+
+PART_LENGTHS = ("radius", "part_size", "part_thickness", "face_radius")
+TRACK_LENGTHS = ("track_length", "track_width", "wall_height", "gate_width")
+ANGLES = ("phase", "incline")
+
+
+def _round_multiple(x: float, step: float, rel: float = 1e-3) -> bool:
+    """Whether ``x`` is within ``rel`` x ``step`` of a non-zero whole multiple of ``step``."""
+    k = round(x / step)
+    return k != 0 and abs(x - k * step) <= rel * step
+
+
+def advice(p: Mapping[str, float], given: Collection[str] = ()) -> list[str]:
+    """One line per implausible value of ``p`` (numbers by name) and per parameter
+    in ``given`` (the names the user set) that has no effect with the others."""
+    out = []
+
+    def say(name: str, text: str) -> None:
+        out.append(f"parameter {name}={p[name]:g} {text}")
+
+    lo, hi = DENSITY_PLAUSIBLE
+    if "density" in p and p["density"] < lo:
+        say("density", f"kg/m³ is lighter than any solid: a density in g/cm³? (silicon: 2330 kg/m³, "
+                       f"not {p['density']:g})")
+    elif "density" in p and p["density"] > hi:
+        say("density", "kg/m³ is denser than any solid (osmium: 22590 kg/m³)")
+    for name in PART_LENGTHS:
+        x = p.get(name, 0.0)
+        if x > PART_PLAUSIBLE[1]:
+            say(name, f"m is {x * 1e3:g} mm: a length in mm or µm? (lengths are in metres)")
+        elif 0 < x < PART_PLAUSIBLE[0]:
+            say(name, f"m is {x * 1e9:g} nm: smaller than a micro-part (lengths are in metres)")
+    for name in TRACK_LENGTHS:
+        x = p.get(name, 0.0)
+        if x > TRACK_PLAUSIBLE[1]:
+            say(name, f"m is {x:g} metres: a length in mm? (lengths are in metres)")
+        elif 0 < x < TRACK_PLAUSIBLE[0]:
+            say(name, f"m is {x * 1e6:g} µm: narrower than a feeder's track (lengths are in metres)")
+    freq = p.get("freq", 0.0)
+    if freq > FREQ_PLAUSIBLE_MAX:
+        say("freq", f"Hz is beyond vibratory feeders (up to {FREQ_PLAUSIBLE_MAX:g} Hz): in rad/s?")
+    elif freq > 0 and freq != round(freq) and _round_multiple(freq, 2 * math.pi * 5):
+        say("freq", f"Hz is 2 pi x {freq / (2 * math.pi):.4g}: an angular frequency in rad/s? "
+                    "(freq is in Hz)")
+    for name in ANGLES:
+        x = p.get(name, 0.0)
+        if x != round(x) and abs(x) <= 2 * math.pi and _round_multiple(x, math.pi / 36):
+            say(name, f"deg is {x / math.pi:.4g} pi: an angle in radians? (angles are in degrees)")
+    for name in ("mu", "mu_pp"):
+        if p.get(name, 0.0) > MU_PLAUSIBLE_MAX:
+            say(name, "exceeds the friction of solids (0.05 to 1.5)")
+    for name in ("surface_energy", "surface_energy_pp"):
+        if p.get(name, 0.0) > SURFACE_ENERGY_PLAUSIBLE_MAX:
+            say(name, "J/m² exceeds the surface energies of solids (0.01 to 2 J/m²): in mJ/m²?")
+    out += _without_effect(p, given)
+    return out
+
+
+def _without_effect(p: Mapping[str, float], given: Collection[str]) -> list[str]:
+    """The given parameters that the others make idle."""
+    idle = {}
+    waveform = int(p.get("waveform", 0))
+    if "duty" in p and waveform not in (2, 3):
+        idle["duty"] = f"applies to waveforms 2 and 3 (stick-slip, Coulomb pump), not waveform={waveform}"
+    if "phase" in p and waveform == 0 and (p.get("amp_t", 1.0) == 0 or p.get("amp_n", 1.0) == 0):
+        idle["phase"] = "shifts the normal motion against the tangential one: one of them is 0"
+    if "part_size" in p and int(p.get("shape", 0)) == 0:
+        idle["part_thickness"] = "applies to chips and discs (shape 1, 2), not to spheres"
+    if "gate_at" in p and p.get("gate_width", 0.0) == 0:
+        idle["gate_at"] = "places the gate: gate_width=0 has none"
+    if p.get("n_parts", 1.0) == 0:
+        for name in ("fill_from", "fill_to"):
+            idle[name] = "places the pre-fill: n_parts=0 has none"
+    if p.get("hamaker", 0.0) == 0 and p.get("air_viscosity", 0.0) == 0:
+        for name in ("roughness", "face_radius"):
+            idle[name] = "shapes the surface forces: hamaker=0 and air_viscosity=0 turn them off"
+    if p.get("dt", 0.0) == 0:
+        idle["dt_unchecked"] = "allows a fixed dt beyond the contact's limits: dt=0 is automatic"
+    return [f"parameter {name} has no effect: it {why}" for name, why in idle.items()
+            if name in given and name in p]
