@@ -238,7 +238,8 @@ def shape_code(value: str) -> int:
 def prepare_bulk_feeder(values: Mapping[str, str], folder: str | Path) -> Prepared:
     """Write the bulk feeder's geometry for one run into ``folder`` and describe it.
 
-    Files: ``track.stl`` (the track at rest), ``catch.stl`` (a unit catch face the deck
+    Files: ``track.stl`` (the track at rest; a line's section 2: ``track_s2.stl``,
+    vibrofeed.line), ``catch.stl`` (a unit catch face the deck
     scales and places), ``chip.multisphere`` and ``disc.multisphere`` (clump templates),
     ``prepared.in`` (LIGGGHTS variables: the templates' sphere counts and the insertion
     seeds; the deck includes it, since a file-style variable crashes LIGGGHTS 3.8 at exit).
@@ -263,5 +264,10 @@ def prepare_bulk_feeder(values: Mapping[str, str], folder: str | Path) -> Prepar
     lines += [f"variable seed_{k} equal {p}\n" for k, p in enumerate(insertion_seeds(seed, 6), 1)]
     (folder / "prepared.in").write_text("".join(lines))
     template = {0: None, 1: templates["chip"], 2: templates["disc"]}[shape]
+    from .line import combined, write_sections  # a line's further sections (sections > 1)
+
+    section_2 = write_sections(values, folder)
+    if section_2 is not None:
+        vertices, triangles = combined((vertices, triangles), section_2)
     return Prepared(variables={"mesh_dir": str(folder.resolve())}, track=(vertices, triangles),
                     body_template=template)

@@ -144,17 +144,21 @@ class BulkFrames:
     """A bulk feeder's frames: parts as bodies, outlet events, the mass balance.
 
     Built on every rank (the deck's variables are evaluated collectively);
-    :meth:`frame` returns (parts, events, counts) on rank 0, None elsewhere.
+    :meth:`frame` returns (parts, events, rejects, counts) on rank 0, None elsewhere;
+    rejects (parts fallen off a side) only for a feeder line (``sections`` > 1), else None.
     """
 
     def __init__(self, lmp, spec: dict):
-        from .outlet import Outlet, gravity_vector
+        from .outlet import LineOutlet, Outlet, gravity_vector
 
         self.n_spheres = int(round(lmp.variable("body_spheres")))
         g = lmp.variable("g") if lmp.has_variable("g") else 9.81
-        incline = float(spec.get("variables", {}).get("incline", 0.0))
-        self.outlet = Outlet(lmp.variable("outlet_x"), lmp.variable("catch_z"),
-                             gravity_vector(g, incline))
+        variables = spec.get("variables", {})
+        incline = float(variables.get("incline", 0.0))
+        where = (lmp.variable("outlet_x"), lmp.variable("catch_z"), gravity_vector(g, incline))
+        self.line = float(variables.get("sections", 1)) > 1
+        self.outlet = (LineOutlet(*where, (0.0, float(variables["track_length"]))) if self.line
+                       else Outlet(*where))
         self.track, self.template = prepared_geometry(spec)
         self.names = PER_ATOM + (("molecule",) if self.n_spheres > 1 else ())
         self.warnings: list[str] = []
@@ -190,8 +194,10 @@ class BulkFrames:
                                      f"spheres at t = {time:g} s (identity orientation)")
         else:
             parts = spheres(atoms)
+        if self.line:
+            return parts, *self.outlet.step(time, parts, inserted)
         events, counts = self.outlet.step(time, parts, inserted)
-        return parts, events, counts
+        return parts, events, None, counts
 
 
 def surface_state(lmp) -> tuple[list, list]:
@@ -275,7 +281,7 @@ def run(spec: dict) -> int:
             ranks=comm.size, command=spec.get("command", ""), run_id=spec.get("run_id", ""),
             capacity_hint=max(lmp.natoms // (bulk.n_spheres if bulk else 1), 1),
             **({} if bulk is None else {"track": bulk.track, "outlet": bulk.outlet.attributes(),
-                                        "body_template": bulk.template}))
+                                        "body_template": bulk.template, "line": bulk.line}))
         flush_on_engine_exit(writer)
 
     # The run, as (commands, steps) segments with a frame after each. A plain
@@ -315,9 +321,11 @@ def run(spec: dict) -> int:
         else:
             got = bulk.frame(lmp, comm, t)
             if writer is not None:
-                parts, events, counts = got
+                parts, events, rejects, counts = got
                 if events is not None:
                     writer.write_events(events)
+                if rejects is not None:
+                    writer.write_events(rejects, L.REJECTS)
                 writer.write_frame(step, t, parts, pos, vel, counts=counts)
                 lost = counts["lost"]
                 if lost and not lost_reported:
