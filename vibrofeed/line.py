@@ -166,6 +166,19 @@ def section_from(p: Mapping) -> Section:
         wiper_length=WIPER_LENGTH * _get(p, "part_size"))
 
 
+def joint_motion(p: Mapping[str, float]) -> tuple[float, float]:
+    """How far the floors at the joint move apart at most [m]: normal (dz) and along the
+    track (dx). Sines of one frequency: the amplitude of their difference, sqrt(a1^2 + a2^2
+    - 2 a1 a2 cos(phase1 - phase2)) normal, |amp_t - s2_amp_t| along (both start at
+    sin(w t)); of two frequencies: the sum of the amplitudes (the phases drift)."""
+    a1, a2 = p.get("amp_n", 0.0), p.get("s2_amp_n", 0.0)
+    b1, b2 = p.get("amp_t", 0.0), p.get("s2_amp_t", 0.0)
+    if p.get("freq", 0.0) != p.get("s2_freq", 0.0):
+        return a1 + a2, b1 + b2
+    dphi = math.radians(p.get("phase", 0.0) - p.get("s2_phase", 0.0))
+    return math.sqrt(max(a1 * a1 + a2 * a2 - 2 * a1 * a2 * math.cos(dphi), 0.0)), abs(b1 - b2)
+
+
 def check_line(p: Mapping[str, float]) -> None:
     """Relations between a line's parameters (``sections`` > 1), one-line errors; the
     deck refuses the same for runs by hand."""
@@ -182,18 +195,18 @@ def check_line(p: Mapping[str, float]) -> None:
         raise ParameterError(
             f"s2_width={s.width:g} m is narrower than section 1's exit ({exit_width:g} m): the "
             "sections do not join (parts would fall at the joint); narrow section 1 with its gate")
-    if s.step <= p.get("amp_n", 0.0) + p.get("s2_amp_n", 0.0):
+    dz, dx = joint_motion(p)
+    if s.step <= dz:
         raise ParameterError(
-            f"s2_step={s.step:g} m: the joint must step down by more than amp_n + s2_amp_n "
-            f"({p.get('amp_n', 0.0) + p.get('s2_amp_n', 0.0):g} m), or section 2's floor rises "
-            "above section 1's and parts catch its edge")
-    if s.step >= thickness / 2:
-        raise ParameterError(f"s2_step={s.step:g} m is not a small step: keep it below half a "
-                             f"part's thickness ({thickness / 2:g} m)")
-    gap = p.get("amp_t", 0.0) + p.get("s2_amp_t", 0.0)
-    if gap >= widest / 2:
-        raise ParameterError(f"amp_t + s2_amp_t = {gap:g} m opens the joint wider than half a part "
-                             f"({widest / 2:g} m): parts would fall into it")
+            f"s2_step={s.step:g} m: the joint must step down by more than the floors move apart "
+            f"normal to them ({dz:.3g} m: amp_n, s2_amp_n, phases), or section 2's floor rises above "
+            "section 1's and parts catch its edge")
+    if s.step >= thickness:
+        raise ParameterError(f"s2_step={s.step:g} m is not a small step: keep it below a part's "
+                             f"thickness ({thickness:g} m)")
+    if dx >= size / 2:
+        raise ParameterError(f"the joint opens by up to {dx:.3g} m along the track (amp_t, s2_amp_t), "
+                             f"more than half a part ({size / 2:g} m): parts would fall into it")
     radius = thickness / 2
     if s.wall_height <= radius:
         raise ParameterError(f"s2_wall_height={s.wall_height:g} m is no higher than a part's centre "
