@@ -220,3 +220,42 @@ def test_rejects_and_exits_add_up_by_construction():
     ev, rej, c = o.step(0.02, body([1], [1e-3], [1e-4]), 6)
     assert ev is None and rej is None
     assert c == {"inserted": 6, "on_track": 1, "exited": 1, "rejected": 2, "lost": 2}
+
+
+def write_line_result(path, rejected_counts):
+    """A two-frame line result: part 1 stays, part 2 falls off section 2's side in frame 2."""
+    import hashlib
+
+    from helpers import parts
+    from vibrofeed.results.writer import ResultWriter
+
+    w = ResultWriter(path, deck_name="synthetic_line", deck_path="synthetic_line.liggghts",
+                     deck_text="# synthetic line\n", variables={"sections": ("2", "-", "sections", "1")},
+                     derived={"dt_used": 1e-6}, engine_version="LIGGGHTS (synthetic)", seed=1,
+                     run_id=hashlib.sha256(str(path).encode()).hexdigest(),
+                     outlet={"outlet_x": 0.018, "catch_z": -5e-4, "method": "synthetic"}, line=True)
+    o = LineOutlet(0.018, -5e-4, gravity_vector(9.81, 0.0), (0.0, 0.01))
+    for k, z2 in enumerate([1e-4, -6e-4]):
+        p = parts([1, 2], [[1e-3, 0, 1e-4], [0.012, 2e-4, z2]], radius=1.5e-4)
+        events, rejects, counts = o.step(0.01 * k, p, 2)
+        if rejects is not None:
+            w.write_events(rejects, "observables/rejects")
+        w.write_frame(k, 0.01 * k, p, np.zeros(3), np.zeros(3),
+                      counts={**counts, "rejected": rejected_counts[k]})
+    w.finish("complete")
+    return path
+
+
+def test_a_line_result_is_checked_with_its_rejects(tmp_path):
+    from vibrofeed.results.check import check_file
+    from vibrofeed.results.reader import Result
+
+    good = write_line_result(tmp_path / "good.h5", [0, 1])
+    report = check_file(good)
+    assert report.ok, [str(p) for p in report.problems]
+    with Result(good) as r:
+        assert list(r.rejects["id"]) == [2] and list(r.rejects["section"]) == [2]
+        assert list(r.mass_balance["rejected"]) == [0, 1] and len(r.outlet["id"]) == 0
+    bad = write_line_result(tmp_path / "bad.h5", [0, 0])  # the reject not counted
+    problems = " ".join(str(p) for p in check_file(bad).problems)
+    assert "inserted differs from on_track + exited + rejected + lost" in problems
