@@ -73,7 +73,7 @@ _MAX_LAG = 1000
 # Keys of the command's summary (JSON and table), in order.
 SUMMARY_KEYS = ("parts_per_s", "parts_per_s_err", "mass_per_s", "mass_per_s_err", "mean_velocity",
                 "mean_velocity_err", "steady_from", "steady_to", "n_events", "inserted", "exited",
-                "on_track", "lost", "bin_width", "velocity_lag", "profile_x", "profile_velocity",
+                "rejected", "on_track", "lost", "bin_width", "velocity_lag", "profile_x", "profile_velocity",
                 "profile_count")
 
 
@@ -329,7 +329,8 @@ class FeedRate(AnalysisBase):
     (frames per whole-period interval) and ``velocity_alias`` (its distance
     from whole periods, in periods); ``profile_edges``, ``profile_x``,
     ``profile_velocity``, ``profile_count``; the mass balance at the last frame
-    analysed: ``inserted``, ``on_track``, ``exited``, ``lost`` (None without one).
+    analysed: ``inserted``, ``on_track``, ``exited``, ``lost`` (None without one), and
+    ``rejected`` for a feeder line.
 
     >>> fr = FeedRate(result).run()
     >>> fr.results.parts_per_s, fr.results.parts_per_s_err, fr.results.steady_from
@@ -400,6 +401,8 @@ class FeedRate(AnalysisBase):
         for name in L.MASS_BALANCE_COUNTS:
             value = None if balance is None or name not in balance else int(balance[name][last])
             self.results[name] = value
+        if balance is not None and "rejected" in balance:  # a feeder line's
+            self.results["rejected"] = int(balance["rejected"][last])
 
     # -- views ----------------------------------------------------------------------
     def summary(self) -> dict:

@@ -259,3 +259,15 @@ def test_a_line_result_is_checked_with_its_rejects(tmp_path):
     bad = write_line_result(tmp_path / "bad.h5", [0, 0])  # the reject not counted
     problems = " ".join(str(p) for p in check_file(bad).problems)
     assert "inserted differs from on_track + exited + rejected + lost" in problems
+
+
+def test_feedrate_reports_a_lines_rejects(tmp_path):
+    from vibrofeed.cli.feedrate import table
+    from vibrofeed.postproc.feedrate import FeedRate
+    from vibrofeed.results.reader import Result
+
+    with Result(write_line_result(tmp_path / "line.h5", [0, 1])) as r:
+        s = FeedRate(r).run().summary()
+    assert (s["inserted"], s["on_track"], s["exited"], s["rejected"], s["lost"]) == (2, 1, 0, 1, 0)
+    s["model_velocity"], s["model_note"] = None, "synthetic"
+    assert "exited 0, rejected 1, lost 0" in table(s)
