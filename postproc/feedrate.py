@@ -74,8 +74,9 @@ _MAX_LAG = 1000
 # Keys of the command's summary (JSON and table), in order.
 SUMMARY_KEYS = ("parts_per_s", "parts_per_s_err", "mass_per_s", "mass_per_s_err", "mean_velocity",
                 "mean_velocity_err", "steady_from", "steady_to", "n_events", "inserted", "exited",
-                "on_track", "lost", "bin_width", "velocity_lag", "profile_x", "profile_velocity",
-                "profile_count", "model_velocity", "model_note", "velocity_ratio", "reason")
+                "rejected", "on_track", "lost", "bin_width", "velocity_lag", "profile_x",
+                "profile_velocity", "profile_count", "model_velocity", "model_note", "velocity_ratio",
+                "reason")
 # Parameters the single-part model needs from the deck (the rest have defaults).
 MODEL_NEEDS = ("freq", "mu", "restitution")
 
@@ -413,7 +414,8 @@ class FeedRate(AnalysisBase):
     from whole periods, in periods); ``profile_edges``, ``profile_x``,
     ``profile_velocity``, ``profile_velocity_err`` (batch means per bin, NaN in a bin
     seen by fewer than two batches), ``profile_count``; the mass balance at the last frame
-    analysed: ``inserted``, ``on_track``, ``exited``, ``lost`` (None without one);
+    analysed: ``inserted``, ``on_track``, ``exited``, ``lost`` (None without one),
+    and ``rejected`` for a feeder line;
     with ``model``: ``model_velocity`` [m/s] (None when the model does not
     apply), ``model_note`` (why not, or that it did not converge; else empty)
     and ``velocity_ratio`` (mean_velocity / model_velocity).
@@ -494,6 +496,8 @@ class FeedRate(AnalysisBase):
         for name in L.MASS_BALANCE_COUNTS:
             value = None if balance is None or name not in balance else int(balance[name][last])
             self.results[name] = value
+        if balance is not None and "rejected" in balance:  # a feeder line's
+            self.results["rejected"] = int(balance["rejected"][last])
 
     # -- views ----------------------------------------------------------------------
     def summary(self) -> dict:

@@ -28,6 +28,8 @@ from pathlib import Path
 import numpy as np
 
 from .errors import ParameterError
+from .line import combined, write_sections  # a line's further sections (sections > 1)
+from .mesh import MeshBuilder, write_stl
 
 # Largest spacing of a clump's spheres, as a fraction of their diameter: the faces stay
 # within 4 % of the thickness of flat (the bumps between spheres are shallow).
@@ -63,32 +65,6 @@ class Prepared:
 
 
 # ------------------------------------------------------------------ meshes
-class _Builder:
-    """Collects triangles over shared vertices (a vertex is shared when its coordinates
-    agree to 1e-12 m)."""
-
-    def __init__(self):
-        self.vertices: list[tuple[float, float, float]] = []
-        self.index: dict[tuple[float, float, float], int] = {}
-        self.triangles: list[tuple[int, int, int]] = []
-
-    def vertex(self, p) -> int:
-        key = tuple(round(float(c), 12) + 0.0 for c in p)  # + 0.0: -0.0 and 0.0 are one vertex
-        if key not in self.index:
-            self.index[key] = len(self.vertices)
-            self.vertices.append(key)
-        return self.index[key]
-
-    def quad(self, a, b, c, d) -> None:
-        """Two triangles a-b-c, a-c-d (corners in order around the quad)."""
-        i, j, k, m = (self.vertex(p) for p in (a, b, c, d))
-        self.triangles += [(i, j, k), (i, k, m)]
-
-    def mesh(self) -> tuple[np.ndarray, np.ndarray]:
-        return (np.array(self.vertices, dtype=np.float64).reshape(-1, 3),
-                np.array(self.triangles, dtype=np.int32).reshape(-1, 3))
-
-
 def wall_stations(track_length: float, track_width: float, gate_width: float = 0.0,
                   gate_x: float | None = None, spacing: float | None = None):
     """x stations along the track and the walls' half width at each.
@@ -120,7 +96,7 @@ def track_mesh(track_length: float, track_width: float, wall_height: float,
     outlet edge x = track_length. Floor and walls share vertices along their common
     edges (whole edges: no vertex lies inside another face's edge)."""
     xs, half = wall_stations(track_length, track_width, gate_width, gate_x, spacing)
-    b = _Builder()
+    b = MeshBuilder()
     for x0, x1, h0, h1 in zip(xs[:-1], xs[1:], half[:-1], half[1:]):
         b.quad((x0, -h0, 0), (x1, -h1, 0), (x1, h1, 0), (x0, h0, 0))  # floor, normal +z
         b.quad((x0, h0, 0), (x1, h1, 0), (x1, h1, wall_height), (x0, h0, wall_height))  # y > 0
@@ -134,23 +110,10 @@ def catch_face(length: float = CATCH_LENGTH, width: float = 1.0,
                z: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """A horizontal rectangle from x = 0 to ``length``, y in +-width/2, at height ``z``
     (normal -z: parts cross it downwards)."""
-    b = _Builder()
+    b = MeshBuilder()
     h = width / 2
     b.quad((0, -h, z), (0, h, z), (length, h, z), (length, -h, z))
     return b.mesh()
-
-
-def write_stl(vertices: np.ndarray, triangles: np.ndarray, path: str | Path,
-              name: str = "vibrofeed") -> Path:
-    """Write an indexed mesh as a binary STL (numpy-stl), normals from the corner order."""
-    from stl import mesh as stl_mesh
-
-    m = stl_mesh.Mesh(np.zeros(len(triangles), dtype=stl_mesh.Mesh.dtype), name=name)
-    m.vectors[:] = vertices[triangles]
-    m.update_normals()
-    path = Path(path)
-    m.save(str(path))
-    return path
 
 
 # ------------------------------------------------------------------ clumps
@@ -238,7 +201,8 @@ def shape_code(value: str) -> int:
 def prepare_bulk_feeder(values: Mapping[str, str], folder: str | Path) -> Prepared:
     """Write the bulk feeder's geometry for one run into ``folder`` and describe it.
 
-    Files: ``track.stl`` (the track at rest), ``catch.stl`` (a unit catch face the deck
+    Files: ``track.stl`` (the track at rest; a line's section 2: ``track_s2.stl``,
+    vibrofeed.line), ``catch.stl`` (a unit catch face the deck
     scales and places), ``chip.multisphere`` and ``disc.multisphere`` (clump templates),
     ``prepared.in`` (LIGGGHTS variables: the templates' sphere counts and the insertion
     seeds; the deck includes it, since a file-style variable crashes LIGGGHTS 3.8 at exit).
@@ -263,5 +227,9 @@ def prepare_bulk_feeder(values: Mapping[str, str], folder: str | Path) -> Prepar
     lines += [f"variable seed_{k} equal {p}\n" for k, p in enumerate(insertion_seeds(seed, 6), 1)]
     (folder / "prepared.in").write_text("".join(lines))
     template = {0: None, 1: templates["chip"], 2: templates["disc"]}[shape]
+
+    section_2 = write_sections(values, folder)
+    if section_2 is not None:
+        vertices, triangles = combined((vertices, triangles), section_2)
     return Prepared(variables={"mesh_dir": str(folder.resolve())}, track=(vertices, triangles),
                     body_template=template)

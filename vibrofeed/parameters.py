@@ -14,6 +14,7 @@ from collections.abc import Callable, Mapping
 
 from .decks import RESERVED, Deck
 from .errors import ParameterError
+from .line import check_line
 from .plausibility import DENSITY_MAX, PART_MAX, advice
 
 NO_MICRO_PART = "a metre is no micro-part; lengths are in metres"
@@ -145,6 +146,24 @@ RULES: dict[str, Callable[[float], str | None]] = {
                               why="air is 1.81e-5 Pa s"),
     "face_radius": _positive_up_to(PART_MAX, NO_MICRO_PART, zero=True),
     "dt_unchecked": _integer(choices=(0, 1)),
+    # a feeder line's section 2 (vibrofeed.line; docs/feeder-lines.md)
+    "sections": _integer(choices=(1, 2)),
+    "s2_length": _positive,
+    "s2_width": _positive,
+    "s2_wall_height": _positive,
+    "s2_step": _positive,
+    "s2_cross_tilt": _between(0, 45, lo_open=False, hi_open=False),
+    "s2_freq": _positive,
+    "s2_amp_t": _between(0, MAX_AMPLITUDE, lo_open=False, hi_open=False,
+                         why="a feeder's stroke is um to mm; amplitudes are in metres"),
+    "s2_amp_n": _between(0, MAX_AMPLITUDE, lo_open=False, hi_open=False,
+                         why="a feeder's stroke is um to mm; amplitudes are in metres"),
+    "s2_phase": _finite,
+    "s2_drop_from": _between(0, 1, lo_open=False, hi_open=False),
+    "s2_drop_to": _between(0, 1, lo_open=False, hi_open=False),
+    "s2_drop_width": _non_negative,
+    "s2_wiper_height": _non_negative,
+    "s2_wiper_at": _between(0, 1, lo_open=False),
 }
 
 # Parameters that also take names; a name is replaced by the deck's number.
@@ -231,14 +250,15 @@ MAX_FRAMES = 1_000_000
 
 def _check_relations(p: Mapping[str, float]) -> None:
     """Limits that involve several parameters."""
-    for amp in ("amp_n", "amp_t"):
-        if amp in p and "freq" in p:
-            speed = 2 * math.pi * p["freq"] * p[amp]
+    drives = (("amp_n", "freq"), ("amp_t", "freq"), ("s2_amp_n", "s2_freq"), ("s2_amp_t", "s2_freq"))
+    for amp, freq in drives:
+        if amp in p and freq in p:
+            speed = 2 * math.pi * p[freq] * p[amp]
             if speed > MAX_SURFACE_SPEED:
                 raise ParameterError(
-                    f"{amp}={p[amp]:g} m at freq={p['freq']:g} Hz moves the surface at "
+                    f"{amp}={p[amp]:g} m at {freq}={p[freq]:g} Hz moves the surface at "
                     f"{speed:.3g} m/s peak (limit {MAX_SURFACE_SPEED:g} m/s: real feeders stay "
-                    f"below 0.5 m/s); lower {amp} or freq")
+                    f"below 0.5 m/s); lower {amp} or {freq}")
     if "output_dt" in p and "t_end" in p:
         if p["output_dt"] > p["t_end"]:
             raise ParameterError(
@@ -249,6 +269,7 @@ def _check_relations(p: Mapping[str, float]) -> None:
                 f"t_end={p['t_end']:g} s with output_dt={p['output_dt']:g} s would write "
                 f"{frames:.3g} frames (limit {MAX_FRAMES:.0e}); raise output_dt or shorten t_end")
     _check_bulk_feeder(p)
+    check_line(p)
     _check_surface_forces(p)
     dt = p.get("dt", 0.0)
     if dt > 0:

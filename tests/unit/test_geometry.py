@@ -19,8 +19,8 @@ from vibrofeed.geometry import (
     prepare_bulk_feeder,
     shape_code,
     track_mesh,
-    write_stl,
 )
+from vibrofeed.mesh import write_stl
 
 L, W, H = 0.02, 2e-3, 1e-3
 

@@ -79,6 +79,22 @@ BULK = {
     "pair": (0, True, 1, True, (0, 1)),
     "pull_speed": (0, False, INF, False, None),
     "overlap0": (0, False, INF, False, None),
+    # a feeder line's section 2 (vibrofeed.line)
+    "sections": (1, True, 2, True, (1, 2)),
+    "s2_length": (0, False, INF, False, None),
+    "s2_width": (0, False, INF, False, None),
+    "s2_wall_height": (0, False, INF, False, None),
+    "s2_step": (0, False, INF, False, None),
+    "s2_cross_tilt": (0, True, 45, True, None),
+    "s2_freq": (0, False, INF, False, None),
+    "s2_amp_t": (0, True, 0.01, True, None),
+    "s2_amp_n": (0, True, 0.01, True, None),
+    "s2_phase": (-INF, False, INF, False, None),
+    "s2_drop_from": (0, True, 1, True, None),
+    "s2_drop_to": (0, True, 1, True, None),
+    "s2_drop_width": (0, True, INF, False, None),
+    "s2_wiper_height": (0, True, INF, False, None),
+    "s2_wiper_at": (0, True, 1, False, None),
 }
 ALL = {**BOUNDS, **BULK}
 

@@ -51,8 +51,9 @@ def table(s: dict) -> str:
                          f"bulk / model = {fmt(s['velocity_ratio'], spec='.3f')}"
                          + (f"; {s['model_note']}" if s["model_note"] else ""))
     if s.get("inserted") is not None:
+        rejected = f", rejected {s['rejected']}" if s.get("rejected") is not None else ""
         lines.append(f"mass balance   inserted {s['inserted']}, on track {s['on_track']}, exited "
-                     f"{s['exited']}, lost {s['lost']} (last frame)")
+                     f"{s['exited']}{rejected}, lost {s['lost']} (last frame)")
     return "\n".join(lines)
 
 

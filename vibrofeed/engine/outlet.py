@@ -74,24 +74,64 @@ class Outlet:
     def attributes(self) -> dict:
         return {"outlet_x": self.outlet_x, "catch_z": self.catch_z, "method": METHOD}
 
+    def _events(self, time: float, parts: dict, new: np.ndarray) -> dict | None:
+        """The event table of the parts ``new`` marks, timed at their catch-plane crossing."""
+        if not new.any():
+            return None
+        ids = np.asarray(parts["id"], dtype=np.int64)[new]
+        x = np.asarray(parts["position"], dtype=float).reshape(-1, 3)[new]
+        v = np.asarray(parts["velocity"], dtype=float).reshape(-1, 3)[new]
+        tau, pos, vel = ballistic_crossing(x, v, self.catch_z, self.gravity)
+        self.not_ballistic += int(np.count_nonzero(tau == 0))
+        order = np.argsort(tau, kind="stable")  # in the order they crossed
+        q = parts.get("orientation")
+        q = np.tile([1.0, 0.0, 0.0, 0.0], (len(ids), 1)) if q is None else np.asarray(q)[new]
+        return {"time": (time + tau)[order], "id": ids[order], "position": pos[order],
+                "velocity": vel[order], "orientation": q[order]}
+
     def step(self, time: float, parts: dict, inserted: int) -> tuple[dict | None, dict]:
         ids = np.asarray(parts["id"], dtype=np.int64)
         x = np.asarray(parts["position"], dtype=float).reshape(-1, 3)
         reported = np.isin(ids, self.exited, assume_unique=True)
         new = (x[:, 0] > self.outlet_x) & (x[:, 2] < self.catch_z) & ~reported
-        events = None
-        if new.any():
-            v = np.asarray(parts["velocity"], dtype=float).reshape(-1, 3)[new]
-            tau, pos, vel = ballistic_crossing(x[new], v, self.catch_z, self.gravity)
-            self.not_ballistic += int(np.count_nonzero(tau == 0))
-            order = np.argsort(tau, kind="stable")  # in the order they crossed
-            q = parts.get("orientation")
-            q = np.tile([1.0, 0.0, 0.0, 0.0], (int(new.sum()), 1)) if q is None else np.asarray(q)[new]
-            events = {"time": (time + tau)[order], "id": ids[new][order], "position": pos[order],
-                      "velocity": vel[order], "orientation": q[order]}
-            self.exited = np.union1d(self.exited, ids[new])
+        events = self._events(time, parts, new)
+        self.exited = np.union1d(self.exited, ids[new])
         on_track = int(len(ids) - reported.sum() - new.sum())
         exited = len(self.exited)
         counts = {"inserted": int(inserted), "on_track": on_track, "exited": exited,
                   "lost": int(inserted) - on_track - exited}
         return events, counts
+
+
+class LineOutlet(Outlet):
+    """A feeder line's outlet and rejects: a part below the catch plane before the outlet
+    edge fell off a side (a side drop, swept off by a wiper, or over a wall) and is a
+    *reject* of the section it fell from (``section_x``: the sections' start x, ascending).
+
+    ``step(time, parts, inserted)`` returns (outlet events, reject events with their
+    ``section`` (1-based), counts with ``rejected``): inserted = on_track + exited +
+    rejected + lost.
+    """
+
+    def __init__(self, outlet_x: float, catch_z: float, gravity, section_x):
+        super().__init__(outlet_x, catch_z, gravity)
+        self.section_x = np.asarray(section_x, dtype=float)
+        self.rejected = np.empty(0, dtype=np.int64)  # ids with a reject event, sorted
+
+    def step(self, time: float, parts: dict, inserted: int):
+        ids = np.asarray(parts["id"], dtype=np.int64)
+        x = np.asarray(parts["position"], dtype=float).reshape(-1, 3)
+        reported = np.isin(ids, np.union1d(self.exited, self.rejected))
+        below = (x[:, 2] < self.catch_z) & ~reported
+        out, fell = below & (x[:, 0] > self.outlet_x), below & (x[:, 0] <= self.outlet_x)
+        events, rejects = self._events(time, parts, out), self._events(time, parts, fell)
+        if rejects is not None:  # the section it fell from: where it crossed the plane
+            rejects["section"] = np.searchsorted(self.section_x, rejects["position"][:, 0],
+                                                 side="right").clip(1, len(self.section_x))
+        self.exited = np.union1d(self.exited, ids[out])
+        self.rejected = np.union1d(self.rejected, ids[fell])
+        on_track = int(len(ids) - reported.sum() - below.sum())
+        exited, rejected = len(self.exited), len(self.rejected)
+        counts = {"inserted": int(inserted), "on_track": on_track, "exited": exited,
+                  "rejected": rejected, "lost": int(inserted) - on_track - exited - rejected}
+        return events, rejects, counts

@@ -465,7 +465,8 @@ def _mass_balance_problem(counts: dict | None) -> str | None:
     what = (f"{lost} of {inserted} parts were lost (they left without crossing the outlet)"
             if lost > 0 else f"{-lost} part(s) counted twice")
     return (f"{what}: the mass balance does not close (inserted {inserted}, on the track "
-            f"{counts['on_track']}, exited {counts['exited']})")
+            f"{counts['on_track']}, exited {counts['exited']}"
+            + (f", rejected {counts['rejected']})" if "rejected" in counts else ")"))
 
 
 def _mount_point(path: Path) -> str:

@@ -217,17 +217,21 @@ class BulkFrames:
     """A bulk feeder's frames: parts as bodies, outlet events, the mass balance.
 
     Built on every rank (the deck's variables are evaluated collectively);
-    :meth:`frame` returns (parts, events, counts) on rank 0, None elsewhere.
+    :meth:`frame` returns (parts, events, rejects, counts) on rank 0, None elsewhere;
+    rejects (parts fallen off a side) only for a feeder line (``sections`` > 1), else None.
     """
 
     def __init__(self, lmp, spec: dict):
-        from .outlet import Outlet, gravity_vector
+        from .outlet import LineOutlet, Outlet, gravity_vector
 
         self.n_spheres = int(round(lmp.variable("body_spheres")))
         g = lmp.variable("g") if lmp.has_variable("g") else G
-        incline = float(spec.get("variables", {}).get("incline", 0.0))
-        self.outlet = Outlet(lmp.variable("outlet_x"), lmp.variable("catch_z"),
-                             gravity_vector(g, incline))
+        variables = spec.get("variables", {})
+        incline = float(variables.get("incline", 0.0))
+        where = (lmp.variable("outlet_x"), lmp.variable("catch_z"), gravity_vector(g, incline))
+        self.line = float(variables.get("sections", 1)) > 1
+        self.outlet = (LineOutlet(*where, (0.0, float(variables["track_length"]))) if self.line
+                       else Outlet(*where))
         self.track, self.template = prepared_geometry(spec)
         self.names = PER_ATOM + (("molecule",) if self.n_spheres > 1 else ())
         self.warnings: list[str] = []
@@ -263,8 +267,10 @@ class BulkFrames:
                                      f"spheres at t = {time:g} s (identity orientation)")
         else:
             parts = spheres(atoms)
+        if self.line:
+            return parts, *self.outlet.step(time, parts, inserted)
         events, counts = self.outlet.step(time, parts, inserted)
-        return parts, events, counts
+        return parts, events, None, counts
 
 
 def surface_state(lmp) -> tuple[list, list]:
@@ -343,7 +349,7 @@ def open_writer(spec: dict, derived: dict, ranks: int, natoms: int, bulk):
         ranks=ranks, command=spec.get("command", ""), run_id=spec.get("run_id", ""),
         capacity_hint=max(natoms // (bulk.n_spheres if bulk else 1), 1),
         **({} if bulk is None else {"track": bulk.track, "outlet": bulk.outlet.attributes(),
-                                    "body_template": bulk.template}))
+                                    "body_template": bulk.template, "line": bulk.line}))
     flush_on_engine_exit(writer)
     return writer
 
@@ -391,9 +397,11 @@ class Frames:
             return t
         got = self.bulk.frame(lmp, self.comm, t)
         if self.writer is not None:
-            parts, events, counts = got
+            parts, events, rejects, counts = got
             if events is not None:
                 self.writer.write_events(events)
+            if rejects is not None:
+                self.writer.write_events(rejects, L.REJECTS)
             self.writer.write_frame(step, t, parts, pos, vel, counts=counts)
             self.counts = counts
             lost = counts["lost"]

@@ -185,8 +185,10 @@ class _Checker:
         if np.any(~np.isfinite(norm)) or np.any(np.abs(norm - 1) > 1e-6):
             self.error(f"{path}/value", "an existing part's orientation is not a unit quaternion")
 
-    def outlet(self):
-        where = L.outlet_path(self.f)  # format 1.3, or observables/outlet before
+    def outlet(self, group: str | None = None):
+        """The outlet's event table (format 1.3, or observables/outlet before), or a feeder
+        line's rejects (``group`` L.REJECTS); its length."""
+        where = L.outlet_path(self.f) if group is None else (group if group in self.f else None)
         if where is None or not self.need(where, h5py.Group):
             return 0
         g = self.f[where]
@@ -195,7 +197,8 @@ class _Checker:
                 self.error(where, f"attribute {name!r} missing")
         n = None
         table = {}
-        for name, (_, comps, unit) in L.OUTLET_ELEMENTS.items():
+        elements = L.REJECT_ELEMENTS if group == L.REJECTS else L.OUTLET_ELEMENTS
+        for name, (_, comps, unit) in elements.items():
             path = f"{where}/{name}"
             if not self.need(path, h5py.Dataset):
                 continue
@@ -222,12 +225,15 @@ class _Checker:
                 self.error(f"{where}/orientation", "not unit quaternions")
         return n or 0
 
-    def mass_balance(self, events: int, status: str):
-        """The counts must add up, and no part may be lost (FORMAT.md, "Mass balance")."""
+    def mass_balance(self, events: int, status: str, rejects: int = 0):
+        """The counts must add up, and no part may be lost (FORMAT.md, "Mass balance");
+        a feeder line's counts its rejects too (L.LINE_COUNTS)."""
         if L.MASS_BALANCE not in self.f:
             return
+        line = "rejected" in self.f[L.MASS_BALANCE]
+        names = L.LINE_COUNTS if line else L.MASS_BALANCE_COUNTS
         counts = {}
-        for name in L.MASS_BALANCE_COUNTS:
+        for name in names:
             path = f"{L.MASS_BALANCE}/{name}"
             v = self.time_series(path, 0, None)
             if v is None:
@@ -241,7 +247,7 @@ class _Checker:
                                                   self.f[f"{L.PARTS}/position/step"][()]):
                 self.error(f"{path}/step", "not sampled at the particle frames")
             counts[name] = v[()].astype(np.int64)
-        if len(counts) != len(L.MASS_BALANCE_COUNTS) or self.frames == 0:
+        if len(counts) != len(names) or self.frames == 0:
             return
         if any(np.any(c < 0) for c in counts.values()):
             self.error(L.MASS_BALANCE, "negative counts (frames without a mass balance)")
@@ -253,21 +259,27 @@ class _Checker:
                        f"{int(counts['lost'][k])} part(s) lost at frame {k} (t = "
                        f"{self.f[f'{L.PARTS}/position/time'][k]:g} s): they disappeared without "
                        "an outlet event")
-        for name in ("inserted", "exited"):
+        gone = counts["exited"] + counts.get("rejected", 0)  # left the track: still falling, or removed
+        for name in ("inserted", "exited", "rejected")[:3 if line else 2]:
             if np.any(np.diff(counts[name]) < 0):
                 self.error(f"{L.MASS_BALANCE}/{name}", "decreases")
-        if np.any(counts["inserted"] != counts["on_track"] + counts["exited"] + counts["lost"]):
-            self.error(L.MASS_BALANCE, "inserted differs from on_track + exited + lost")
+        if np.any(counts["inserted"] != counts["on_track"] + gone + counts["lost"]):
+            self.error(L.MASS_BALANCE, "inserted differs from on_track + exited + "
+                                       f"{'rejected + ' if line else ''}lost")
         # present parts are on the track or falling (exited, not yet removed)
         live = getattr(self, "live", None)
         if live is not None and len(live) == self.frames:
             falling = live - counts["on_track"]
-            if np.any(falling < 0) or np.any(falling > counts["exited"]):
+            if np.any(falling < 0) or np.any(falling > gone):
                 self.error(L.MASS_BALANCE, "on_track does not match the parts present "
-                                           "(on_track <= present <= on_track + exited)")
+                                           "(on_track <= present <= on_track + exited"
+                                           f"{' + rejected' if line else ''})")
         if status == L.STATUS_COMPLETE and int(counts["exited"][-1]) != events:
             self.error(f"{L.MASS_BALANCE}/exited",
                        f"{int(counts['exited'][-1])} exited at the last frame, {events} outlet events")
+        if line and status == L.STATUS_COMPLETE and int(counts["rejected"][-1]) != rejects:
+            self.error(f"{L.MASS_BALANCE}/rejected",
+                       f"{int(counts['rejected'][-1])} rejected at the last frame, {rejects} reject events")
 
     def track(self):
         if L.TRACK in self.f and self.need(L.TRACK, h5py.Group):
@@ -505,7 +517,7 @@ def check_file(path, allow_incomplete: bool = False) -> Report:
         c.surface()
         status = c.parameters()
         events = c.outlet()
-        c.mass_balance(events, status)
+        c.mass_balance(events, status, c.outlet(L.REJECTS))
         c.track()
         if str(path).endswith(".part") and status == L.STATUS_COMPLETE:  # FORMAT.md: never both
             (c.warn if allow_incomplete else c.error)(L.RUN, "a .part file says 'complete': never renamed")

@@ -20,6 +20,7 @@ PARTS = "particles/parts"
 SURFACE = "observables/surface"
 OUTLET = "vibrofeed/outlet"   # a non-H5MD group: H5MD allows unspecified groups at the root
 OUTLET_BEFORE_1_3 = "observables/outlet"
+REJECTS = "vibrofeed/rejects"  # a feeder line's reject table, beside the outlet's
 MASS_BALANCE = "observables/mass_balance"
 PARAMETERS = "parameters"
 RUN = "parameters/run"
@@ -80,11 +81,19 @@ def outlet_path(f) -> str | None:
 BOX_BOUNDARY = ("none", "none", "none")
 BOX_EDGES_PLACEHOLDER = (0.0, 0.0, 0.0)
 
+# A feeder line's reject table: as the outlet's, plus the section a part fell from
+# (its position tells which tooling: the side drop's stretch, or before the wiper).
+REJECT_ELEMENTS = {**OUTLET_ELEMENTS, "section": ("i4", 0, None)}
+EVENT_TABLES = {OUTLET: OUTLET_ELEMENTS, REJECTS: REJECT_ELEMENTS}
+
 # The mass balance, one H5MD time series of int64 per count: inserted = on_track
 # + exited + lost, where exited counts the outlet events so far (parts that left
 # the track, including those still falling to the box floor) and lost the parts
 # that disappeared without an event (must stay 0).
 MASS_BALANCE_COUNTS = ("inserted", "on_track", "exited", "lost")
+# A feeder line (sections > 1) also counts its rejects, the parts that fell off a side
+# (one event each in REJECTS): inserted = on_track + exited + rejected + lost.
+LINE_COUNTS = MASS_BALANCE_COUNTS + ("rejected",)
 
 # Time-dependent observables of the vibrating surface, shape (frames, 3).
 SURFACE_ELEMENTS = {

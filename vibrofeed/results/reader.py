@@ -316,10 +316,18 @@ class Result:
         """The outlet events, one row per part that left the track: ``time`` (E,) [s],
         ``id`` (E,), ``position`` (E, 3) [m], ``velocity`` (E, 3) [m s-1],
         ``orientation`` (E, 4); empty arrays when the file has no event table."""
-        where = L.outlet_path(self.file)
-        group = None if where is None else self.file[where]
+        return self._events(L.outlet_path(self.file), L.OUTLET_ELEMENTS)
+
+    @cached_property
+    def rejects(self) -> dict[str, np.ndarray]:
+        """A feeder line's rejects, one row per part fallen off a side: as :attr:`outlet`,
+        plus ``section`` (E,) (1-based); empty arrays when the file has no reject table."""
+        return self._events(L.REJECTS if L.REJECTS in self.file else None, L.REJECT_ELEMENTS)
+
+    def _events(self, path: str | None, elements: dict) -> dict[str, np.ndarray]:
+        group = None if path is None else self.file[path]
         out = {}
-        for name, (dtype, comps, _) in L.OUTLET_ELEMENTS.items():
+        for name, (dtype, comps, _) in elements.items():
             if group is not None and name in group:
                 out[name] = group[name][()]
             else:
@@ -339,11 +347,12 @@ class Result:
 
     @cached_property
     def mass_balance(self) -> dict[str, np.ndarray] | None:
-        """``{inserted, on_track, exited, lost}`` -> (frames,) int64, or None when absent."""
+        """``{inserted, on_track, exited, lost}`` (and a feeder line's ``rejected``) ->
+        (frames,) int64, or None when absent."""
         group = self.file.get(L.MASS_BALANCE)
         if group is None:
             return None
-        return {name: group[name]["value"][()] for name in L.MASS_BALANCE_COUNTS if name in group}
+        return {name: group[name]["value"][()] for name in L.LINE_COUNTS if name in group}
 
     @cached_property
     def track_mesh(self) -> tuple[np.ndarray, np.ndarray] | None:

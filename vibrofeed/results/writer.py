@@ -157,6 +157,9 @@ class ResultWriter:
         ``{"outlet_x": m, "catch_z": m, "method": text}``: creates the (empty)
         outlet event table at once, so that a run in which no part leaves
         still has one. :meth:`write_events` creates it otherwise.
+    line:
+        a feeder line (sections > 1): creates the reject table (``L.REJECTS``, the
+        outlet's attributes) and records the ``rejected`` count (``L.LINE_COUNTS``).
     """
 
     def __init__(self, path, *, deck_name: str, deck_path: str, deck_text: str,
@@ -165,14 +168,14 @@ class ResultWriter:
                  engine_version: str, seed: int | None, ranks: int = 1,
                  command: str = "", run_id: str = "", capacity_hint: int = 1,
                  max_delay: float = 0.25, track=None, body_template=None,
-                 outlet: Mapping | None = None):
+                 outlet: Mapping | None = None, line: bool = False):
         self.path = str(path)
         self.slots = SlotMap()
         self.frames = 0          # frames handed over
         self.written = 0         # frames on disk
         self.max_delay = max_delay
         self._pending: list = []  # (step, time, {name: row}, surface_pos, surface_vel, counts)
-        self._pending_events: list = []  # event tables handed over, not yet written
+        self._pending_events: list = []  # (table path, event table) handed over, not yet written
         self.events = 0          # events handed over
         self._pending_since = 0.0
         self._lock = threading.Lock()
@@ -194,7 +197,8 @@ class ResultWriter:
         self._step = f[L.PARTS]["position/step"]
         self._time = f[L.PARTS]["position/time"]
         self._counts: dict = {}  # mass-balance value datasets, once created
-        self._outlet: dict = {}  # outlet table datasets, once created
+        self._count_names = L.MASS_BALANCE_COUNTS  # L.LINE_COUNTS once a frame has "rejected"
+        self._tables: dict = {}  # event table path -> its datasets, once created
         if track is not None:
             self._write_track(f, *track)
         if body_template is not None:
@@ -204,6 +208,9 @@ class ResultWriter:
             set_unit(f.create_dataset(L.BODY_TEMPLATE, data=template), "m")
         if outlet is not None:
             self._create_outlet(outlet)
+        if line:  # a feeder line: its reject table (empty until a part falls off) and count
+            self._create_outlet(outlet or {}, L.REJECTS)
+            self._count_names = L.LINE_COUNTS
         f.flush()
         # Flush from a thread too, so a frame waits at most max_delay even when
         # the next one is long in coming (the engine releases the GIL).
@@ -316,22 +323,24 @@ class ResultWriter:
         set_unit(g.create_dataset("vertices", data=vertices), "m")
         g.create_dataset("triangles", data=triangles.astype("i4"))
 
-    def _create_outlet(self, attrs: Mapping) -> None:
-        g = self.file.create_group(L.OUTLET)
+    def _create_outlet(self, attrs: Mapping, path: str = L.OUTLET) -> None:
+        """An event table (the outlet's, or a line's rejects) with the outlet's attributes."""
+        g = self.file.create_group(path)
         g.attrs["outlet_x"] = float(attrs.get("outlet_x", np.nan))
         g.attrs["catch_z"] = float(attrs.get("catch_z", np.nan))
         g.attrs["method"] = str(attrs.get("method", ""))
-        for name, (dtype, comps, unit) in L.OUTLET_ELEMENTS.items():
+        table = self._tables[path] = {}
+        for name, (dtype, comps, unit) in L.EVENT_TABLES[path].items():
             shape, maxshape = ((0, comps), (None, comps)) if comps else ((0,), (None,))
             ds = g.create_dataset(name, shape=shape, maxshape=maxshape, dtype=dtype,
                                   chunks=(1024, comps) if comps else (1024,))
             if unit:
                 set_unit(ds, unit)
-            self._outlet[name] = ds
+            table[name] = ds
 
     def _create_counts(self) -> None:
         """The mass-balance series; frames written before read the fill -1."""
-        for name in L.MASS_BALANCE_COUNTS:
+        for name in self._count_names:
             g = self.file.create_group(f"{L.MASS_BALANCE}/{name}")
             self._counts[name] = g.create_dataset(
                 "value", shape=(self.written,), maxshape=(None,), dtype="i8", chunks=(1024,),
@@ -383,7 +392,7 @@ class ResultWriter:
         ``velocity``, ``angular_velocity``, ``force`` and optionally
         ``orientation`` (quaternions w, x, y, z); rows may come in any order.
         ``counts`` is the mass balance at this frame: ``{"inserted", "on_track",
-        "exited", "lost"}`` (ints).
+        "exited", "lost"}`` (ints), and ``"rejected"`` for a feeder line.
         """
         slots = self.slots.assign(parts["id"])  # refuses duplicate ids
         # (slots, values) per element, scattered into the batch's block when
@@ -397,10 +406,10 @@ class ResultWriter:
                     raise ValueError(f"parts[{name!r}] has {value.shape[0]} rows, id has {len(slots)}")
                 rows[name] = value
         if counts is not None:
-            missing = [c for c in L.MASS_BALANCE_COUNTS if c not in counts]
+            missing = [c for c in self._count_names if c not in counts]
             if missing:
                 raise ValueError(f"counts lacks {', '.join(missing)}")
-            counts = np.array([int(counts[c]) for c in L.MASS_BALANCE_COUNTS], dtype=np.int64)
+            counts = np.array([int(counts[c]) for c in self._count_names], dtype=np.int64)
         with self._lock:
             if not self._pending and not self._pending_events:  # the batch's first item
                 self._pending_since = _time.monotonic()
@@ -412,16 +421,17 @@ class ResultWriter:
         if due:
             self.flush()
 
-    def write_events(self, events: Mapping[str, np.ndarray]) -> None:
+    def write_events(self, events: Mapping[str, np.ndarray], path: str = L.OUTLET) -> None:
         """Hand over outlet events (parts that left the track), any number at once.
 
         ``events`` maps ``time`` (E,) [s], ``id`` (E,), ``position`` (E, 3) [m],
         ``velocity`` (E, 3) [m s-1] and ``orientation`` (E, 4) to arrays; they
-        are written with the next frame (same delay, same flush).
+        are written with the next frame (same delay, same flush). ``path``
+        L.REJECTS: a feeder line's rejects, with ``section`` (E,) too.
         """
         table = {}
         n = len(np.atleast_1d(events["id"]))
-        for name, (dtype, comps, _) in L.OUTLET_ELEMENTS.items():
+        for name, (dtype, comps, _) in L.EVENT_TABLES[path].items():
             if name == "orientation" and name not in events:  # plain spheres
                 value = np.tile(np.asarray(L.IDENTITY_QUATERNION), (n, 1))
             else:
@@ -433,7 +443,7 @@ class ResultWriter:
         with self._lock:
             if not self._pending and not self._pending_events:
                 self._pending_since = _time.monotonic()
-            self._pending_events.append(table)
+            self._pending_events.append((path, table))
             self.events += n
 
     def flush(self) -> None:
@@ -445,11 +455,12 @@ class ResultWriter:
         if not self.file.id.valid or not (self._pending or self._pending_events):
             return
         if self._pending_events:
-            if not self._outlet:
-                self._create_outlet({"method": ""})
-            for name, ds in self._outlet.items():
-                block = np.concatenate([table[name] for table in self._pending_events])
-                self._append(ds, ds.shape[0], block)
+            for path in dict.fromkeys(p for p, _ in self._pending_events):
+                if path not in self._tables:
+                    self._create_outlet({"method": ""}, path)
+                tables = [table for p, table in self._pending_events if p == path]
+                for name, ds in self._tables[path].items():
+                    self._append(ds, ds.shape[0], np.concatenate([table[name] for table in tables]))
             self._pending_events = []
         if not self._pending:
             self.file.flush()
@@ -471,9 +482,9 @@ class ResultWriter:
                     block[i, frame[2][""]] = value
             self._append(ds, k0, block)
         if self._counts:
-            counts = np.array([f[5] if f[5] is not None else np.full(len(L.MASS_BALANCE_COUNTS), -1)
+            counts = np.array([f[5] if f[5] is not None else np.full(len(self._count_names), -1)
                                for f in self._pending], dtype=np.int64)
-            for j, name in enumerate(L.MASS_BALANCE_COUNTS):
+            for j, name in enumerate(self._count_names):
                 self._append(self._counts[name], k0, counts[:, j])
         self._append(self._surface["position"], k0, np.array([f[3] for f in self._pending]))
         self._append(self._surface["velocity"], k0, np.array([f[4] for f in self._pending]))

@@ -1,0 +1,274 @@
+"""Feeder lines (vibrofeed.line): section 2's mesh joins section 1 with a step down, is closed
+where parts must stay on it and open only at the joint, the outlet, the wall tops and the side
+drop; its cross tilt, drop and wiper have the asked dimensions; a line's parameters are checked
+with one-line errors; and the reject bookkeeping adds up on parts whose fate is known."""
+
+import math
+from collections import Counter
+
+import numpy as np
+import pytest
+
+from helpers import DECKS
+from vibrofeed.decks import Deck
+from vibrofeed.engine.outlet import LineOutlet, gravity_vector
+from vibrofeed.errors import ParameterError
+from vibrofeed.geometry import prepare_bulk_feeder, track_mesh
+from vibrofeed.line import Section, combined, joint_motion, section_from, section_mesh
+from vibrofeed.parameters import resolve
+from vibrofeed.results.layout import REJECTS
+
+L1, W1 = 0.01, 1.2e-3
+TOL = 1e-12
+
+
+def section(**kw) -> Section:
+    base = dict(x0=L1, length=8e-3, width=4.2e-4, wall_height=6e-4, step=5e-5, cross_tilt=10.0)
+    return Section(**{**base, **kw})
+
+
+def edges(triangles):
+    e = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
+    return Counter(map(tuple, np.sort(e, axis=1)))
+
+
+def open_edges(v, t):
+    return [v[list(e)] for e, n in edges(t).items() if n == 1]
+
+
+def test_section_dimensions_and_cross_tilt():
+    s = section()
+    v, t = section_mesh(s)
+    tilt = math.tan(math.radians(10.0))
+    assert v[:, 0].min() == pytest.approx(L1, abs=TOL) and v[:, 0].max() == pytest.approx(L1 + 8e-3, abs=TOL)
+    assert np.abs(v[:, 1]).max() == pytest.approx(2.1e-4, abs=TOL)
+    # the floor descends across towards the reference wall at -w/2: 5e-5 + 4.2e-4 tan 10 deg down there
+    assert s.lowest == pytest.approx(-(5e-5 + 4.2e-4 * tilt), abs=TOL)
+    assert v[:, 2].min() == pytest.approx(s.lowest, abs=TOL)
+    assert v[:, 2].max() == pytest.approx(-5e-5 + 6e-4, abs=TOL)  # wall tops
+    floor = np.array([c for c in v if c[2] < -5e-5 + 1e-9])  # at or below the floor's high edge
+    assert np.allclose(floor[:, 2], -5e-5 - (2.1e-4 - floor[:, 1]) * tilt, rtol=0, atol=TOL)
+
+
+@pytest.mark.parametrize("drop", [False, True])
+def test_closed_along_the_walls_open_only_where_parts_may_leave(drop):
+    kw = dict(drop_from=0.25, drop_to=0.5, drop_width=2.5e-4) if drop else {}
+    s = section(**kw)
+    v, t = section_mesh(s)
+    counts = edges(t)
+    assert set(counts.values()) <= {1, 2}
+    lo, hi, top = -s.width / 2, s.width / 2, -s.step + s.wall_height
+    a, b = s.drop_x if drop else (np.inf, np.inf)
+    inner = lo + s.drop_width
+    for p, q in open_edges(v, t):
+        x, y, z = (p + q) / 2
+        at_ends = np.isclose(p[0], q[0]) and (np.isclose(x, s.x0) or np.isclose(x, s.x1))
+        on_top = np.isclose(p[2], top) and np.isclose(q[2], top)
+        at_drop_ends = np.isclose(x, a) or np.isclose(x, b)
+        wall_end = drop and np.isclose(p[0], q[0]) and np.isclose(y, hi) and at_drop_ends
+        drop_edge = drop and np.isclose(p[1], inner) and np.isclose(q[1], inner) and a - TOL <= x <= b + TOL
+        drop_step = drop and np.isclose(p[0], q[0]) and at_drop_ends and y > inner
+        assert at_ends or on_top or wall_end or drop_edge or drop_step, (p, q)
+    # the floor edge along the reference wall is never open; along the other wall only over the drop
+    for p, q in open_edges(v, t):
+        along = not np.isclose(p[0], q[0])
+        assert not (along and np.isclose(p[1], lo) and np.isclose(q[1], lo) and p[2] < top - TOL)
+        if along and np.isclose(p[1], hi) and np.isclose(q[1], hi) and p[2] < top - TOL:
+            pytest.fail(f"the floor's edge at +w/2 is open at x = {p[0]:g}..{q[0]:g} m")
+    if drop:  # over the drop no floor reaches past the drop width
+        over = (v[:, 0] > a + TOL) & (v[:, 0] < b - TOL)
+        assert over.any() and v[over, 1].max() == pytest.approx(inner, abs=TOL)
+
+
+def test_normals_face_into_the_section():
+    trimesh = pytest.importorskip("trimesh")
+    s = section(drop_from=0.25, drop_to=0.5, drop_width=2.5e-4, wiper_height=3.5e-4, wiper_at=0.7,
+                wiper_length=3e-4)
+    v, t = section_mesh(s)
+    m = trimesh.Trimesh(v, t, process=False)
+    n, c = m.face_normals, m.triangles_center
+    floor = np.isclose(c[:, 2], s.floor_z(c[:, 1]), rtol=0, atol=1e-9)
+    assert floor.any() and np.all(n[floor, 2] > 0.98)  # cos 10 deg
+    side = np.abs(n[:, 1]) > 0.99
+    assert side.any() and np.all(n[side, 1] * c[side, 1] < 0)  # the walls face the centre line
+    under = n[:, 2] < -0.98
+    assert under.any()  # the wiper's underside faces the floor
+    upstream = n[:, 0] < -0.99
+    assert upstream.any() and np.allclose(c[upstream, 0], s.wiper_x[0], rtol=0, atol=TOL)
+
+
+def test_wiper_underside_follows_the_floor_at_its_height():
+    s = section(wiper_height=3.5e-4, wiper_at=0.5, wiper_length=3e-4)
+    v, t = section_mesh(s)
+    w0, w1 = s.wiper_x
+    assert w0 == pytest.approx(L1 + 4e-3, abs=TOL) and w1 - w0 == pytest.approx(3e-4, abs=TOL)
+    bar = v[(v[:, 0] >= w0 - TOL) & (v[:, 0] <= w1 + TOL)]
+    under = bar[np.isclose(bar[:, 2], s.floor_z(bar[:, 1]) + 3.5e-4, rtol=0, atol=TOL)]
+    # both ends of the bar, on both walls: the clearance is the same across the tilted floor
+    assert len(under) == 4 and np.allclose(np.sort(np.abs(under[:, 1])), 2.1e-4, rtol=0, atol=TOL)
+
+
+def test_section_joins_section_one_with_a_step_down():
+    v1, t1 = track_mesh(L1, W1, 1e-3, gate_width=4.2e-4, gate_x=0.6 * L1)
+    s = section()
+    v2, t2 = section_mesh(s)
+    exit_y = np.abs(v1[np.isclose(v1[:, 0], L1) & (v1[:, 2] == 0), 1]).max()
+    start = v2[np.isclose(v2[:, 0], L1)]
+    assert start[:, 1].min() <= -exit_y + TOL and start[:, 1].max() >= exit_y - TOL  # covers the exit
+    floor_start = start[start[:, 2] < -s.step + 1e-9, 2]
+    assert floor_start.max() == pytest.approx(-5e-5, abs=TOL)  # a step of s2_step at the high edge
+    v, t = combined((v1, t1), (v2, t2))
+    assert len(v) == len(v1) + len(v2) and len(t) == len(t1) + len(t2)
+    assert np.array_equal(v[t[len(t1):]], v2[t2])
+
+
+def test_tooling_that_does_not_fit_is_refused():
+    with pytest.raises(ParameterError, match="wiper"):
+        section_mesh(section(wiper_height=3.5e-4, wiper_at=0.99, wiper_length=3e-4))
+
+
+def line_values(**given):
+    base = {"sections": "2", "n_parts": "200", "track_length": "0.01", "track_width": "1.2e-3",
+            "gate_width": "4.2e-4", "gate_at": "0.6", "fill_from": "0.05", "fill_to": "0.6",
+            "s2_width": "4.2e-4", "s2_wall_height": "6e-4", "s2_cross_tilt": "10"}
+    return {**base, **{k: str(v) for k, v in given.items()}}
+
+
+def test_prepare_writes_each_section_its_own_mesh(tmp_path):
+    from stl import mesh as stl_mesh
+
+    deck = Deck(DECKS / "bulk_feeder.liggghts")
+    values = resolve(deck, line_values(s2_drop_from=0.3, s2_drop_to=0.6, s2_drop_width=2.5e-4))
+    prepared = prepare_bulk_feeder(values, tmp_path)
+    v2, t2 = section_mesh(section_from(values))
+    stl = stl_mesh.Mesh.from_file(str(tmp_path / "track_s2.stl"))
+    assert np.allclose(stl.vectors, v2[t2], rtol=0, atol=1e-8)  # STL is float32: ~2e-9 m at 2 cm
+    v1, t1 = track_mesh(0.01, 1.2e-3, 1e-3, 4.2e-4, 0.006)
+    v, t = prepared.track  # the line at rest: both sections
+    assert np.array_equal(v, np.concatenate([v1, v2])) and len(t) == len(t1) + len(t2)
+
+
+def test_a_single_section_is_the_bulk_feeder_unchanged(tmp_path):
+    deck = Deck(DECKS / "bulk_feeder.liggghts")
+    values = resolve(deck, {})
+    assert values["sections"] == "1"
+    prepared = prepare_bulk_feeder(values, tmp_path)
+    assert not (tmp_path / "track_s2.stl").exists()
+    v, t = track_mesh(0.02, 2e-3, 1e-3, 0.0, 0.7 * 0.02)
+    assert np.array_equal(prepared.track[0], v) and np.array_equal(prepared.track[1], t)
+
+
+@pytest.mark.parametrize("given, words", [
+    ({"s2_width": 3e-4}, "narrower than section 1's exit"),
+    ({"s2_width": 2e-4}, "narrower than a part"),
+    ({"s2_step": 2e-5, "s2_phase": -30}, "must step down by more than"),
+    ({"s2_step": 3e-4}, "not a small step"),
+    ({"s2_amp_t": 2.6e-4}, "joint opens"),
+    ({"s2_wiper_height": 2e-4}, "lower than a part's thickness"),
+    ({"s2_wiper_height": 7e-4}, "not below the walls"),
+    ({"s2_wiper_height": 4e-4, "s2_wiper_at": 0.99}, "runs past the outlet"),
+    ({"s2_drop_to": 0.5, "s2_drop_width": 1e-4}, "less than half a part"),
+    ({"s2_drop_to": 0.5, "s2_drop_width": 5e-4}, "narrower than s2_width"),
+    ({"s2_wall_height": 1e-4}, "no higher than a part's centre"),
+    ({"waveform": 1}, "sines"),
+    ({"hamaker": 1e-19}, "section 1's floor only"),
+    ({"s2_amp_n": 0.005}, "s2_amp_n=0.005 m at s2_freq=100 Hz"),
+    ({"sections": 3}, "sections=3"),
+])
+def test_line_refusals_are_one_line(given, words):
+    deck = Deck(DECKS / "bulk_feeder.liggghts")
+    with pytest.raises(ParameterError) as err:
+        resolve(deck, line_values(**given))
+    assert words in str(err.value) and "\n" not in str(err.value)
+
+
+def test_the_same_values_pass_with_one_section():
+    deck = Deck(DECKS / "bulk_feeder.liggghts")
+    resolve(deck, {"s2_width": "3e-4", "s2_step": "1e-3"})  # sections=1: the s2_* are unused
+
+
+def test_joint_motion_closed_forms():
+    a, b = 5e-5, 1e-4
+    p = {"freq": 100, "s2_freq": 100, "amp_n": a, "s2_amp_n": a, "amp_t": a, "s2_amp_t": b,
+         "phase": 0, "s2_phase": -60}
+    dz, dx = joint_motion(p)
+    assert dz == pytest.approx(a, rel=1e-12)  # two equal sines 60 degrees apart differ by one amplitude
+    assert dx == pytest.approx(b - a, rel=1e-12)
+    dz, dx = joint_motion({**p, "s2_freq": 120})
+    assert dz == pytest.approx(2 * a, rel=1e-12) and dx == pytest.approx(a + b, rel=1e-12)
+
+
+def body(ids, x, z, vz=-0.1):
+    n = len(ids)
+    return {"id": np.array(ids), "position": np.column_stack([x, np.zeros(n), z]),
+            "velocity": np.tile([0.0, 0.0, vz], (n, 1))}
+
+
+def test_rejects_and_exits_add_up_by_construction():
+    g = gravity_vector(9.81, 0.0)
+    o = LineOutlet(0.018, -5e-4, g, (0.0, 0.01))
+    # frame 1: five parts on the line; frame 2: 2 falls off section 2's side, 4 off section 1,
+    # 5 leaves over the outlet edge; frame 3: 3 vanishes without an event (lost), 2 is gone
+    ev, rej, c = o.step(0.0, body([1, 2, 3, 4, 5], [1e-3, 0.012, 0.013, 0.005, 0.0179], [1e-4] * 5), 5)
+    assert ev is None and rej is None and c == {"inserted": 5, "on_track": 5, "exited": 0, "rejected": 0,
+                                                 "lost": 0}
+    ev, rej, c = o.step(0.01, body([1, 2, 3, 4, 5], [1e-3, 0.012, 0.013, 0.005, 0.0185],
+                                   [1e-4, -6e-4, 1e-4, -7e-4, -6e-4]), 6)
+    assert list(ev["id"]) == [5] and sorted(rej["id"]) == [2, 4]
+    assert dict(zip(rej["id"], rej["section"])) == {2: 2, 4: 1}
+    assert np.allclose(rej["position"][:, 2], -5e-4, rtol=0, atol=1e-12)  # timed at the catch plane
+    assert c == {"inserted": 6, "on_track": 2, "exited": 1, "rejected": 2, "lost": 1}
+    ev, rej, c = o.step(0.02, body([1], [1e-3], [1e-4]), 6)
+    assert ev is None and rej is None
+    assert c == {"inserted": 6, "on_track": 1, "exited": 1, "rejected": 2, "lost": 2}
+
+
+def write_line_result(path, rejected_counts):
+    """A two-frame line result: part 1 stays, part 2 falls off section 2's side in frame 2."""
+    import hashlib
+
+    from helpers import parts
+    from vibrofeed.results.writer import ResultWriter
+
+    w = ResultWriter(path, deck_name="synthetic_line", deck_path="synthetic_line.liggghts",
+                     deck_text="# synthetic line\n", variables={"sections": ("2", "-", "sections", "1")},
+                     derived={"dt_used": 1e-6}, engine_version="LIGGGHTS (synthetic)", seed=1,
+                     run_id=hashlib.sha256(str(path).encode()).hexdigest(),
+                     outlet={"outlet_x": 0.018, "catch_z": -5e-4, "method": "synthetic"}, line=True)
+    o = LineOutlet(0.018, -5e-4, gravity_vector(9.81, 0.0), (0.0, 0.01))
+    for k, z2 in enumerate([1e-4, -6e-4]):
+        p = parts([1, 2], [[1e-3, 0, 1e-4], [0.012, 2e-4, z2]], radius=1.5e-4)
+        events, rejects, counts = o.step(0.01 * k, p, 2)
+        if rejects is not None:
+            w.write_events(rejects, REJECTS)
+        w.write_frame(k, 0.01 * k, p, np.zeros(3), np.zeros(3),
+                      counts={**counts, "rejected": rejected_counts[k]})
+    w.finish("complete")
+    return path
+
+
+def test_a_line_result_is_checked_with_its_rejects(tmp_path):
+    from vibrofeed.results.check import check_file
+    from vibrofeed.results.reader import Result
+
+    good = write_line_result(tmp_path / "good.h5", [0, 1])
+    report = check_file(good)
+    assert report.ok, [str(p) for p in report.problems]
+    with Result(good) as r:
+        assert list(r.rejects["id"]) == [2] and list(r.rejects["section"]) == [2]
+        assert list(r.mass_balance["rejected"]) == [0, 1] and len(r.outlet["id"]) == 0
+    bad = write_line_result(tmp_path / "bad.h5", [0, 0])  # the reject not counted
+    problems = " ".join(str(p) for p in check_file(bad).problems)
+    assert "inserted differs from on_track + exited + rejected + lost" in problems
+
+
+def test_feedrate_reports_a_lines_rejects(tmp_path):
+    from vibrofeed.cli.feedrate import table
+    from vibrofeed.postproc.feedrate import FeedRate
+    from vibrofeed.results.reader import Result
+
+    with Result(write_line_result(tmp_path / "line.h5", [0, 1])) as r:
+        s = FeedRate(r).run().summary()
+    assert (s["inserted"], s["on_track"], s["exited"], s["rejected"], s["lost"]) == (2, 1, 0, 1, 0)
+    s["model_velocity"], s["model_note"] = None, "synthetic"
+    assert "exited 0, rejected 1, lost 0" in table(s)
