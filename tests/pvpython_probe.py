@@ -1,4 +1,4 @@
-"""Run by ``pvpython`` (tests/unit/test_paraview.py): open a vibrofeed ParaView export as a
+"""Run by ``pvpython`` (tests/unit/pictures/test_paraview.py): open a vibrofeed ParaView export as a
 user would and print, as JSON, what ParaView loads at every time step.
 
 Usage: pvpython pvpython_probe.py RUN.pvd [RUN_outlet.vtp]

@@ -361,7 +361,7 @@ AIR_MEAN_FREE_PATH = 6.8e-8  # m, the smallest air-film clearance
 
 # Stefan's law for a square plate of side a: F = STEFAN_SQUARE mu a^4 V / h^3 (the
 # rectangle's series solution of the Reynolds equation; vibrofeed/models/squeeze_film.py
-# computes it, tests/unit/test_squeeze_film.py checks this copy).
+# computes it, tests/unit/models/test_squeeze_film.py checks this copy).
 STEFAN_SQUARE = 0.421731044868524
 
 

@@ -34,7 +34,7 @@ stated size; the energy needs 12 um. The four readings of "two 100 um spheres"
 likeliest reading, two spheres of 100 um radius (R* = 50 um), gives 20.8 uN
 and -4.2e-15 J: the quoted force is then 10x too large (a slip of a decimal)
 and the energy right to its order of magnitude. `sphere_figure_readings`
-computes this table; tests/unit/test_adhesion.py asserts it.
+computes this table; tests/unit/models/test_adhesion.py asserts it.
 
 Time step: the force near contact is stiff. Its gradient at the standoff,
 kappa = A R / (3 s^3) for a sphere (A S / (2 pi s^4) for a flat face of area

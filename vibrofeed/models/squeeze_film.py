@@ -55,7 +55,7 @@ above, the deficit is the saturated one. With tau = 10 ms this is the
 figure's description exactly ("frequency dependence at low frequency",
 "magnification between 0 and 3 Hz", saturation above): the low-frequency
 dependence is the transient of a fixed observation window, not a property
-of the launched part. tests/unit/test_squeeze_film.py asserts both readings.
+of the launched part. tests/unit/models/test_squeeze_film.py asserts both readings.
 
 **A square face** (a chip of side a): the Reynolds equation's solution for a
 rectangle of sides B <= L (a series in tanh; e.g. Hamrock, Schmid & Jacobson,
