@@ -43,6 +43,35 @@ nearly independent, so the error includes that correlation, which a Poisson
 sqrt(N)/T would not. The conveying velocity's error is the batch means of its
 whole-period intervals, the same way.
 
+Sections and joints (feeder lines)
+----------------------------------
+A line's sections (:mod:`.line`: section 1 up to the joint x = track_length,
+section 2 from it to the outlet edge, along x in the track's frame) each get:
+the flux through their downstream end (the joint: parts crossing it from
+x < joint to x >= joint between two frames and staying beyond it, each once,
+at the linearly interpolated time; the outlet: the feed rate) in the steady
+window with its batch-means error; the rejects fallen from them per second;
+the conveying speed of the parts over them (whole periods, both ends of an
+interval over the section); the hold-up (mean parts over them at the window's
+frames, parts with an outlet or reject event left out) and the line density
+(hold-up per metre). In steady feeding a joint's flux is the next section's
+out-flux plus its rejects. The rejects are also sorted by the tooling where
+they fell (side drop, wiper, other: :func:`.line.tooling`).
+
+Steadiness of the bed
+---------------------
+Steady exits do not make a steady bed: a bed still speeding up, or a section
+still filling, can hand the outlet a steady stream for a while. Over the
+window, in batches of whole periods (``batches``, at least 6), every section's
+conveying speed and every fed section's hold-up (a section past a joint, or
+section 1 with an inlet) are followed; one drifts when the means of the last
+and first thirds of its batches differ by more than 3 standard errors of that
+difference (the batch scatter about a straight line, :func:`.line.drift`).
+A store without inflow (section 1 of a pre-filled bed without inlet) drains
+at its out-flux however steadily it feeds, so its hold-up is not judged. A
+drift makes ``unsteady`` (and ``reason``) say which, and how much: the rate is
+then not a steady one. A single track is section 1.
+
 Dilute limit
 ------------
 The conveying velocity is compared with that of one part alone on the track
@@ -58,8 +87,21 @@ import math
 import numpy as np
 
 from ..errors import InputError
+from ..line import section_from
 from ..results import layout as L
 from .base import AnalysisBase
+from .line import (
+    DRIFT_MIN_BATCHES,
+    TOOLING,
+    batch_cuts,
+    batch_means,
+    bed_pass,
+    is_line,
+    section_bounds,
+    tooling,
+    trend,
+    unsteady,
+)
 
 # Frames read at once: blocks of at most this many slot values.
 _BLOCK_VALUES = 1 << 22
@@ -73,10 +115,12 @@ _PERIOD_TOLERANCE = 1e-4
 _MAX_LAG = 1000
 # Keys of the command's summary (JSON and table), in order.
 SUMMARY_KEYS = ("parts_per_s", "parts_per_s_err", "mass_per_s", "mass_per_s_err", "mean_velocity",
-                "mean_velocity_err", "steady_from", "steady_to", "n_events", "inserted", "exited",
-                "rejected", "on_track", "lost", "bin_width", "velocity_lag", "profile_x",
-                "profile_velocity", "profile_count", "model_velocity", "model_note", "velocity_ratio",
-                "reason")
+                "mean_velocity_err", "steady_from", "steady_to", "unsteady", "bed_trends", "n_events",
+                "inserted", "exited", "rejected", "on_track", "lost", "sections", "rejects_by_tooling",
+                "bin_width", "velocity_lag", "profile_x", "profile_velocity", "profile_count",
+                "model_velocity", "model_note", "velocity_ratio", "reason")
+# Summary keys of feeder lines only.
+LINE_KEYS = ("rejected", "sections", "rejects_by_tooling")
 # Parameters the single-part model needs from the deck (the rest have defaults).
 MODEL_NEEDS = ("freq", "mu", "restitution")
 
@@ -244,12 +288,10 @@ def batch_rate(times, weights, t_a: float, t_b: float, freq: float, batches: int
     weights = np.asarray(weights, dtype=float)
     inside = (times >= t_a) & (times < t_b)
     rate = float(weights[inside].sum() / (t_b - t_a))
-    units = max(1, int(round((t_b - t_a) * freq))) if freq > 0 else 200
-    b = min(int(batches), units)
+    cuts = batch_cuts(t_a, t_b, freq, batches)  # periods per batch, +-1
+    b = len(cuts) - 1
     if b < 2:
         return rate, math.nan
-    sizes = [len(c) for c in np.array_split(np.arange(units), b)]  # periods per batch, +-1
-    cuts = t_a + (t_b - t_a) * np.r_[0, np.cumsum(sizes)] / units
     sums = np.histogram(times[inside], bins=cuts, weights=weights[inside])[0]
     rates = sums / np.diff(cuts)
     return rate, float(rates.std(ddof=1) / math.sqrt(b))
@@ -304,20 +346,27 @@ def period_lag(times, freq: float) -> tuple[int, float]:
     return int(lags[k]), float(off[k])
 
 
-def period_velocities(result, frames, axis: int = 0, x_max: float = math.inf):
+def period_velocities(result, frames, axis: int = 0, x_max: float = math.inf,
+                      x_min: float = -math.inf):
     """Whole-period speeds of the parts: (x_mid, velocity, interval) arrays.
 
     ``frames`` are frame indices in increasing order; the intervals chain
     frames[0], frames[m], frames[2m], ... with m from :func:`period_lag`. One
-    row per part present at both ends of an interval and on the track
-    (x <= x_max in the track's frame) at both: the mid-point along ``axis`` in
-    the track's frame [m], the speed [m/s], and the interval's number.
-    Returns also (m, alias).
+    row per part present at both ends of an interval and on the track, or on
+    the stretch asked for (x_min <= x <= x_max in the track's frame), at both:
+    the mid-point along ``axis`` in the track's frame [m], the speed [m/s], and
+    the interval's number. An interval longer or shorter than m frames of the
+    usual spacing (an uneven last frame) is left out: it would not span whole
+    periods. Returns also (m, alias).
     """
     frames = np.asarray(frames, dtype=np.int64)
     freq = float(result.parameters.get("freq", 0.0))
-    m, alias = period_lag(result.time[frames], freq)
+    times = result.time[frames]
+    m, alias = period_lag(times, freq)
     chain = frames[::m]
+    # The chain's intervals as long as m usual frame spacings (within the whole-period tolerance).
+    spacing = m * float(np.median(np.diff(times))) if len(times) > 1 else 0.0
+    even = np.abs(np.diff(result.time[chain]) - spacing) * max(freq, 0.0) <= _PERIOD_TOLERANCE
     xs, vs, ks = [], [], []
     if len(chain) < 2:
         return np.empty(0), np.empty(0), np.empty(0, dtype=np.int64), (m, alias)
@@ -328,8 +377,9 @@ def period_velocities(result, frames, axis: int = 0, x_max: float = math.inf):
         x = result.read("position", frames=block)[..., axis]
         track_x = x - result.read("surface_position", frames=block)[:, axis][:, None]
         t = result.time[block]
-        same = (ids[:-1] == ids[1:]) & (ids[:-1] != L.ID_FILL)
+        same = (ids[:-1] == ids[1:]) & (ids[:-1] != L.ID_FILL) & even[a:a + len(block) - 1, None]
         same &= (track_x[:-1] <= x_max) & (track_x[1:] <= x_max)
+        same &= (track_x[:-1] >= x_min) & (track_x[1:] >= x_min)
         k, slot = np.nonzero(same)
         xs.append(0.5 * (track_x[k, slot] + track_x[k + 1, slot]))
         vs.append((x[k + 1, slot] - x[k, slot]) / (t[k + 1] - t[k]))
@@ -420,6 +470,23 @@ class FeedRate(AnalysisBase):
     apply), ``model_note`` (why not, or that it did not converge; else empty)
     and ``velocity_ratio`` (mean_velocity / model_velocity).
 
+    The bed (module docstring): ``unsteady`` (why the bed is not steady over
+    the window, else None; also the ``reason`` when there are enough exits),
+    ``bed_trends`` (per section and quantity judged: ``section``, ``quantity``
+    "conveying speed" [m/s] or "hold-up" [parts], ``first``, ``last`` (means of
+    the first and last thirds), ``error``, ``drifts``), ``bed`` (``batch_edges``,
+    ``speed`` and ``hold_up`` per section and batch, ``joint_crossings``: per
+    joint, (times, ids) of the parts counted). A feeder line also gets
+    ``sections``: per section a dict of ``section`` (1-based), ``x_from``,
+    ``x_to`` [m], ``joint_flux``, ``joint_flux_error`` [1/s] (through its
+    downstream end: the joint, or the outlet for the last section),
+    ``reject_rate``, ``reject_rate_error`` [1/s], ``rejects_in_window``,
+    ``speed``, ``speed_error`` [m/s], ``hold_up``, ``hold_up_error`` [parts],
+    ``line_density`` [1/m]; and ``rejects_by_tooling``: for ``side_drop``,
+    ``wiper``, ``other``, ``per_s``, ``per_s_error`` (in the window),
+    ``in_window``, ``total`` (in the run analysed), or None for a tool the line
+    does not have.
+
     >>> fr = FeedRate(result).run()
     >>> fr.results.parts_per_s, fr.results.parts_per_s_err, fr.results.steady_from
     """
@@ -467,6 +534,8 @@ class FeedRate(AnalysisBase):
                                                         self.batches)
         self._velocities(frames, t_a, t_b)
         self._mass_balance(frames)
+        self._bed(frames, t_a, t_b, freq)
+        r.reason = r.reason or r.unsteady  # a drifting bed measures no steady rate either
         if self.model:
             r.model_velocity, r.model_note = dilute_limit(result.parameters)
             r.velocity_ratio = velocity_ratio(r.mean_velocity, r.model_velocity)
@@ -498,6 +567,98 @@ class FeedRate(AnalysisBase):
             self.results[name] = value
         if balance is not None and "rejected" in balance:  # a feeder line's
             self.results["rejected"] = int(balance["rejected"][last])
+
+    def _bed(self, frames: np.ndarray, t_a: float, t_b: float, freq: float) -> None:
+        """The bed section by section (module docstring, "Sections and joints"): ``sections``
+        and ``rejects_by_tooling`` for a line; for any result its drift over the window
+        (``bed``, ``bed_trends``, ``unsteady``)."""
+        r, result = self.results, self.result
+        edge = outlet_x(result)
+        bounds = section_bounds(result.parameters, edge)
+        out, rejects = result.outlet, result.rejects
+        crossings, counts = bed_pass(result, frames, [lo for lo, _ in bounds[1:]], edge,
+                                     np.r_[out["id"], rejects["id"]],
+                                     np.r_[out["time"], rejects["time"]], self.axis)
+        inside = (self.times >= t_a - 1e-12) & (self.times <= t_b + 1e-12)
+        window, window_t = frames[inside], self.times[inside]
+        span = (t_a, t_b, freq)
+        cuts = batch_cuts(t_a, t_b, freq, max(self.batches, DRIFT_MIN_BATCHES))
+        # A store without inflow (section 1 of a pre-filled bed, no inlet) drains at its
+        # out-flux however steadily it feeds: only a fed section's hold-up must hold.
+        fed = float(result.parameters.get("inlet_rate", 0.0)) > 0
+        sections, speeds, held, trends = [], [], [], []
+        for k, (lo, hi) in enumerate(bounds):
+            last = k == len(bounds) - 1
+            # Section 1 takes everything upstream of the joint, the last one up to the edge.
+            x_min = -math.inf if k == 0 else lo
+            x_max = edge if last else float(np.nextafter(hi, -math.inf))
+            _, v, interval, (m, _) = period_velocities(result, window, self.axis,
+                                                       x_max if math.isfinite(x_max) else math.inf, x_min)
+            chain_t = result.time[window[::m]]
+            mid_t = 0.5 * (chain_t[interval] + chain_t[interval + 1]) if len(v) else np.empty(0)
+            n = counts[inside, k].astype(float)
+            flux = (r.parts_per_s, r.parts_per_s_err) if last else \
+                batch_rate(crossings[k][0], np.ones(len(crossings[k][0])), *span, self.batches)
+            sections.append(self._section(k, lo, hi, v, interval, window_t, n, flux, rejects, span))
+            speeds.append(batch_means(mid_t, v, cuts))
+            held.append(batch_means(window_t, n, cuts))
+            trends += trend(k + 1, "conveying speed", speeds[-1])
+            if k > 0 or fed:
+                trends += trend(k + 1, "hold-up", held[-1])
+        r.bed = {"batch_edges": cuts, "speed": np.array(speeds), "hold_up": np.array(held),
+                 "joint_crossings": crossings}
+        r.bed_trends = trends
+        r.unsteady = unsteady(trends)
+        if is_line(result.parameters):
+            r.sections = sections
+            r.rejects_by_tooling = self._rejects_by_tooling(rejects, span)
+
+    def _section(self, k: int, lo: float, hi: float, v, interval, window_t, n, flux: tuple,
+                 rejects: dict, span: tuple) -> dict:
+        """Section ``k``'s figures (0-based; ``sections`` in the class docstring): whole-period
+        speeds ``v`` (their ``interval`` numbers), parts over it ``n`` at the window's frames
+        (times ``window_t``), the (rate, error) through its downstream end."""
+        t_a, t_b, freq = span
+        speed, speed_err = _mean_and_batch_error(v, interval, self.batches)
+        hold_up = float(n.mean()) if len(n) else math.nan
+        per_batch = batch_means(window_t, n, batch_cuts(t_a, t_b, freq, self.batches))
+        per_batch = per_batch[np.isfinite(per_batch)]
+        hold_err = (float(per_batch.std(ddof=1) / math.sqrt(len(per_batch))) if len(per_batch) >= 2
+                    else math.nan)
+        mine = rejects["section"] == k + 1
+        rate, rate_err = batch_rate(rejects["time"][mine], np.ones(int(mine.sum())), t_a, t_b, freq,
+                                    self.batches)
+        length = hi - lo
+        return {"section": k + 1, "x_from": lo, "x_to": hi,
+                "joint_flux": flux[0], "joint_flux_error": flux[1],
+                "reject_rate": rate, "reject_rate_error": rate_err,
+                "rejects_in_window": int((mine & (rejects["time"] >= t_a) & (rejects["time"] < t_b)).sum()),
+                "speed": speed, "speed_error": speed_err,
+                "line_density": hold_up / length if length > 0 else math.nan,
+                "hold_up": hold_up, "hold_up_error": hold_err}
+
+    def _rejects_by_tooling(self, rejects: dict, span: tuple) -> dict:
+        """Per tool (:data:`.line.TOOLING`): rejects per second in the window with their
+        batch-means error, the number in the window and in the run analysed; None for a
+        tool the line does not have."""
+        result, (t_a, t_b, freq) = self.result, span
+        s = section_from(result.parameters)
+        size = float(result.parameters.get("part_size", 0.0))
+        t_lo, t_hi = float(self.times[0]), float(self.times[-1])
+        run = (rejects["time"] > t_lo) & (rejects["time"] <= t_hi)
+        which = tooling(rejects["position"][:, self.axis], rejects["section"], s, size)
+        out = {}
+        for k, name in enumerate(TOOLING):
+            if (name == "side_drop" and not s.has_drop) or (name == "wiper" and not s.has_wiper):
+                out[name] = None
+                continue
+            mine = which == k
+            rate, err = batch_rate(rejects["time"][mine], np.ones(int(mine.sum())), t_a, t_b, freq,
+                                   self.batches)
+            inside = mine & (rejects["time"] >= t_a) & (rejects["time"] < t_b)
+            out[name] = {"per_s": rate, "per_s_error": err, "in_window": int(inside.sum()),
+                         "total": int((mine & run).sum())}
+        return out
 
     # -- views ----------------------------------------------------------------------
     def summary(self) -> dict:

@@ -32,7 +32,9 @@ same way unless ``start``/``end`` are given)
   in-plane angle between the body's x axis and the track, folded by the
   part's symmetry (90° for a square chip) into (-45°, 45°]. Both as the track
   delivers the part: at the last frame at which its centre was still over the
-  track, before it tips over the outlet edge.
+  track, before it tips over the outlet edge. The **orientation yield** is the
+  fraction of the parts delivered that are both face up and aligned: what an
+  orienting feeder passes on to a pick-and-place.
 """
 
 from __future__ import annotations
@@ -59,7 +61,7 @@ SUMMARY_KEYS = ("cv_interarrival", "doubles_rate", "singulated_fraction", "mean_
                 "n_arrivals", "n_doubles", "doubles_per_s", "mean_interarrival", "edge_velocity",
                 "track_singulated_fraction", "steady_from", "steady_to", "gap", "gap_distance",
                 "tolerance", "face_up_fraction", "face_down_fraction", "on_edge_fraction",
-                "aligned_fraction", "reason")
+                "aligned_fraction", "orientation_yield", "reason")
 # Faces: up/down when the thin axis is within this angle of +z/-z, else on edge.
 FACE_ANGLE = 45.0
 # In-plane alignment with the track counted within this angle [deg].
@@ -123,7 +125,8 @@ class Singulation(AnalysisBase):
     Results: the ``SUMMARY_KEYS`` and ``interarrival`` [s], ``gaps`` [m],
     ``doubles`` and ``touching`` (per consecutive pair), ``arrival_times``,
     ``cluster_size_counts`` (sizes of every cluster sampled), ``yaw_deg`` and
-    ``cos_tilt`` of the chips at the outlet (None for spheres).
+    ``cos_tilt`` of the chips at the outlet (None for spheres); ``orientation_yield``
+    (chips: the fraction face up and aligned, per part; None for spheres).
 
     >>> sg = Singulation(result, gap=2e-3).run()
     >>> sg.results.doubles_rate, sg.results.cv_interarrival, sg.results.cluster_sizes
@@ -267,7 +270,8 @@ class Singulation(AnalysisBase):
 
     def _faces(self, ev: dict, before: np.ndarray) -> None:
         r, template = self.results, self.result.body_template
-        keys = ("face_up_fraction", "face_down_fraction", "on_edge_fraction", "aligned_fraction")
+        keys = ("face_up_fraction", "face_down_fraction", "on_edge_fraction", "aligned_fraction",
+                "orientation_yield")
         if template is None or len(ev["time"]) == 0:
             r.cos_tilt, r.yaw_deg = None, None
             for key in keys:
@@ -278,7 +282,11 @@ class Singulation(AnalysisBase):
         r.face_up_fraction = float((r.cos_tilt >= c).mean())
         r.face_down_fraction = float((r.cos_tilt <= -c).mean())
         r.on_edge_fraction = 1.0 - r.face_up_fraction - r.face_down_fraction
-        r.aligned_fraction = float((np.abs(r.yaw_deg) <= ALIGNED_ANGLE).mean())
+        aligned = np.abs(r.yaw_deg) <= ALIGNED_ANGLE
+        r.aligned_fraction = float(aligned.mean())
+        # Per part: face up and aligned together (not the product of the two fractions,
+        # which would take them as independent).
+        r.orientation_yield = float(((r.cos_tilt >= c) & aligned).mean())
 
     def _on_track_orientation(self, ev: dict, before: np.ndarray) -> np.ndarray:
         """Each leaving part's orientation at the last frame at which its centre was still

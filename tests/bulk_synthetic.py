@@ -98,3 +98,113 @@ def poisson_times(rate, t0, t1, rng):
     n = rng.poisson(rate * (t1 - t0) * 1.5 + 20)
     times = t0 + np.cumsum(rng.exponential(1 / rate, n))
     return times[times <= t1]
+
+
+# -- beds whose parts follow given paths: feeder lines, drifting beds ----------------------
+JOINT = 0.006       # a line's section 1: 6 mm
+S2_LENGTH = 0.005   # its section 2: 5 mm, outlet edge at 11 mm
+
+
+def bed(path, frame_times, x_at, enter, leave, rejected=None, reject_seen=True, amp=0.0, freq=100.0,
+        outlet_x=OUTLET_X, lanes=None, radius=RADIUS, variables=None, line=False, joint=None):
+    """Write a result whose parts follow given paths along the track; returns ``path``.
+
+    ``x_at(t)``: (parts,) track x of every part at time t (a closed form); part k is on
+    the track from ``enter[k]`` (-inf: pre-filled) to ``leave[k]`` (inf: stays), when it
+    exits over the edge (an outlet event) or, where ``rejected[k]``, falls off a side
+    there (a reject event at x_at(leave), section 1 before ``joint``, else 2). At the first
+    frame at or after leaving an exited part is seen falling beyond the edge; a rejected
+    one falling where it fell, as far along x as its path goes on (its x-speed kept),
+    unless ``reject_seen[k]`` is False: then it is gone (removed between frames). Gone at
+    the next frame either way. The track vibrates along x as ``amp sin(2 pi freq t)``,
+    every part riding it. ``line``: a feeder line's result (reject table, ``rejected``
+    count); ``variables`` add to the deck's (freq, track_length, part_size). Parts are
+    shuffled at every frame.
+    """
+    import hashlib
+
+    from vibrofeed.results import layout as L
+    from vibrofeed.results.writer import ResultWriter
+
+    rng = np.random.default_rng(0)
+    frame_times = np.asarray(frame_times, dtype=float)
+    enter, leave = np.asarray(enter, dtype=float), np.asarray(leave, dtype=float)
+    n = len(enter)
+    rejected = np.zeros(n, bool) if rejected is None else np.asarray(rejected, bool)
+    seen = np.broadcast_to(np.asarray(reject_seen, bool), (n,))
+    lanes = np.zeros(n) if lanes is None else np.asarray(lanes, dtype=float)
+    joint = outlet_x if joint is None else joint
+    w = 2 * np.pi * freq
+    report = np.searchsorted(frame_times, leave, side="left")
+    t_last = frame_times[-1]
+    base = {"freq": (repr(float(freq)), "Hz", "vibration frequency", "100"),
+            "track_length": (repr(joint if line else outlet_x), "m", "track length", "0.02"),
+            "part_size": (repr(2 * radius), "m", "part diameter", "3e-4")}
+    if line:
+        base.update({"sections": ("2", "-", "sections", "1"),
+                     "s2_length": (repr(outlet_x - joint), "m", "section 2 length", "0.01")})
+    base.update(variables or {})
+    outlet = {"outlet_x": outlet_x, "catch_z": CATCH_Z, "method": "synthetic"}
+    w_ = ResultWriter(path, deck_name="synthetic_bulk", deck_path="synthetic_bulk.liggghts",
+                      deck_text="# synthetic bulk feeder\n", variables=base, derived={"dt_used": 1e-6},
+                      engine_version="LIGGGHTS (Version LIGGGHTS-PUBLIC 3.8.0, synthetic)", seed=1,
+                      run_id=hashlib.sha256(str(path).encode()).hexdigest(), outlet=outlet, line=line)
+    leave_x = np.array([x_at(t)[k] if np.isfinite(t) else np.nan for k, t in enumerate(leave)])
+    for j, t in enumerate(frame_times):
+        x = x_at(t)
+        on = (enter <= t) & (leave > t)
+        falling = (report == j) & (~rejected | seen)
+        present = rng.permutation(np.nonzero(on | falling)[0])
+        fall = falling[present]
+        dt_fall = np.where(fall, t - leave[present], 0.0)
+        px = np.where(fall & ~rejected[present], outlet_x + 1e-3 + dt_fall, x[present] + amp * np.sin(w * t))
+        pz = np.where(fall, CATCH_Z - G / 2 * dt_fall ** 2 - 1e-6, radius)
+        m = len(present)
+        parts = {"id": present + 1, "species": np.ones(m, int), "radius": np.full(m, radius),
+                 "mass": np.full(m, 1e-7), "position": np.column_stack([px, lanes[present], pz]),
+                 "velocity": np.zeros((m, 3)), "angular_velocity": np.zeros((m, 3)),
+                 "force": np.zeros((m, 3))}
+        gone = leave <= t
+        counts = {"inserted": int((enter <= t).sum()), "exited": int((gone & ~rejected).sum()),
+                  "lost": 0}
+        counts["on_track"] = counts["inserted"] - counts["exited"] - int((gone & rejected).sum())
+        if line:
+            counts["rejected"] = int((gone & rejected).sum())
+        if j == len(frame_times) - 1:
+            for table, which in ((L.OUTLET, ~rejected), (L.REJECTS, rejected)):
+                k = np.nonzero(which & (leave <= t_last))[0]
+                if table == L.REJECTS and not line:
+                    continue
+                xs = outlet_x if table == L.OUTLET else leave_x[k]
+                ev = {"time": leave[k], "id": k + 1,
+                      "position": np.column_stack([np.broadcast_to(xs, (len(k),)), lanes[k],
+                                                   np.full(len(k), CATCH_Z)]),
+                      "velocity": np.zeros((len(k), 3)), "orientation": np.tile([1.0, 0, 0, 0], (len(k), 1))}
+                if table == L.REJECTS:
+                    ev["section"] = np.where(leave_x[k] < joint, 1, 2)
+                w_.write_events(ev, table)
+        w_.write_frame(j, float(t), parts, [amp * np.sin(w * t), 0, 0], [amp * w * np.cos(w * t), 0, 0],
+                       counts=counts)
+    w_.finish("complete")
+    return path
+
+
+def line_feeder(path, frame_times, joint_times, v1=0.02, v2=0.04, reject_at=None, **kw):
+    """A feeder line (sections 1 and 2: :data:`JOINT`, :data:`S2_LENGTH`) whose part k
+    crosses the joint at ``joint_times[k]``, conveyed at ``v1`` on section 1 and ``v2`` on
+    section 2 (m/s); it entered at x = 0 at joint_time - JOINT / v1 and leaves over the
+    outlet edge JOINT + S2_LENGTH at joint_time + S2_LENGTH / v2, or falls off at
+    ``reject_at[k]`` (x [m], NaN: not rejected). Other keywords: :func:`bed`."""
+    tj = np.asarray(joint_times, dtype=float)
+    reject_at = np.full(len(tj), np.nan) if reject_at is None else np.asarray(reject_at, dtype=float)
+    rejected = np.isfinite(reject_at)
+
+    def x_at(t):
+        return np.where(t < tj, JOINT - v1 * (tj - t), JOINT + v2 * (t - tj))
+
+    # the time each part reaches its reject point (before or after the joint)
+    reach = np.where(reject_at < JOINT, tj - (JOINT - reject_at) / v1, tj + (reject_at - JOINT) / v2)
+    leave = np.where(rejected, reach, tj + S2_LENGTH / v2)
+    enter = tj - JOINT / v1
+    return bed(path, frame_times, x_at, enter, leave, rejected=rejected, outlet_x=JOINT + S2_LENGTH,
+               line=True, joint=JOINT, **kw)

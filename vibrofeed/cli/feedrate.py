@@ -10,7 +10,10 @@ from .options import add_output_arguments, figures_written, plot_folder, print_f
 DESCRIPTION = ("Feed rate of a bulk-feeder result: parts/s and mass/s leaving the track over the "
                "detected steady window (batch-means error), the mean conveying velocity over whole "
                "vibration periods and its profile along the track, the mass balance, and the "
-               "single-part model's speed for the same vibration (the dilute limit).")
+               "single-part model's speed for the same vibration (the dilute limit). A bed whose "
+               "conveying speed or hold-up still drifts over the window measures no steady rate. "
+               "A feeder line also gets, per section, the flux through its downstream end, its "
+               "speed, line density, hold-up and rejects, and its rejects by tooling.")
 
 
 def add_arguments(p) -> None:
@@ -28,8 +31,70 @@ def add_arguments(p) -> None:
     add_output_arguments(p)
 
 
-# The figures too few exits cannot measure: null in the JSON, "too few exits" in the table.
+# The figures too few exits (or a drifting bed) cannot measure: null in the JSON, the
+# reason in the table.
 RATE_KEYS = ("parts_per_s", "parts_per_s_err", "mass_per_s", "mass_per_s_err")
+# A line's per-section figures that are rates over the window, unmeasured with the rest.
+SECTION_RATE_KEYS = ("joint_flux", "joint_flux_error", "reject_rate", "reject_rate_error")
+TOOLING_NAMES = {"side_drop": "side drop", "wiper": "wiper", "other": "other"}
+
+
+def unmeasured_sections(summary: dict) -> None:
+    """A line's per-section and per-tooling rates set to None when the summary gives a
+    reason for measuring nothing (as :func:`~.options.unmeasured` does for the rate)."""
+    if not summary.get("reason"):
+        return
+    for section in summary.get("sections") or []:
+        section.update(dict.fromkeys(SECTION_RATE_KEYS))
+    for tool in (summary.get("rejects_by_tooling") or {}).values():
+        if tool is not None:
+            tool.update(per_s=None, per_s_error=None)
+
+
+def _pm(value, error, scale: float = 1.0) -> str:
+    return f"{fmt(value, scale)} ± {fmt(error, scale, '.2g')}"
+
+
+def section_table(s: dict) -> list[str]:
+    """A line's lines of the table: one row per section, its rejects by tooling and the
+    continuity at each joint; nothing for a single track. Rates read n/a when the summary
+    gives a reason for measuring none."""
+    sections = s.get("sections")
+    if not sections:
+        return []
+    measured = not s.get("reason")
+    widths = (15, 22, 22, 20, 15)
+    head = ("x [mm]", "out [parts/s]", "speed [mm/s]", "hold-up [parts]", "density [/mm]")
+    lines = ["sections       " + "".join(h.ljust(w) for h, w in zip(head, widths)) + "rejects [/s]"]
+    for k, sec in enumerate(sections):
+        out = "outlet" if k == len(sections) - 1 else "joint"
+        cells = (f"{sec['section']}: {fmt(sec['x_from'], 1e3, '.3g')} .. {fmt(sec['x_to'], 1e3, '.3g')}",
+                 f"{out} " + (_pm(sec["joint_flux"], sec["joint_flux_error"]) if measured else "n/a"),
+                 _pm(sec["speed"], sec["speed_error"], 1e3),
+                 _pm(sec["hold_up"], sec["hold_up_error"]),
+                 fmt(sec["line_density"], 1e-3))
+        rejects = _pm(sec["reject_rate"], sec["reject_rate_error"]) if measured else "n/a"
+        lines.append("  " + " " * 13 + "".join(c.ljust(w) for c, w in zip(cells, widths)) + rejects)
+    told = []
+    for name, tool in (s.get("rejects_by_tooling") or {}).items():
+        label = TOOLING_NAMES.get(name, name)
+        if tool is None:
+            told.append(f"{label}: none on the line")
+            continue
+        rate = _pm(tool["per_s"], tool["per_s_error"]) + " /s" if measured else "n/a"
+        told.append(f"{label} {rate} ({tool['in_window']} in the window, {tool['total']} in all)")
+    if told:
+        lines.append("rejects        " + "; ".join(told))
+    for k in range(len(sections) - 1 if measured else 0):
+        into, nxt = sections[k], sections[k + 1]
+        flows = (into["joint_flux"], nxt["joint_flux"], nxt["reject_rate"])
+        errors = (into["joint_flux_error"], nxt["joint_flux_error"], nxt["reject_rate_error"])
+        gap = flows[0] - flows[1] - flows[2] if None not in flows else None
+        spread = sum(e * e for e in errors) ** 0.5 if None not in errors else None
+        where = "the outlet" if k + 2 == len(sections) else f"joint {k + 2}"
+        lines.append(f"continuity     joint {k + 1}: {fmt(flows[0])} /s in = {fmt(flows[1])} through "
+                     f"{where} + {fmt(flows[2])} rejected /s (in - out {_pm(gap, spread)})")
+    return lines
 
 
 def table(s: dict) -> str:
@@ -42,6 +107,7 @@ def table(s: dict) -> str:
         f"({s['n_events']} exits in the run analysed)",
         f"conveying      {fmt(s['mean_velocity'], 1e3)} ± {fmt(s['mean_velocity_err'], 1e3, '.2g')} "
         f"mm/s (whole-period displacement, {s['velocity_lag']} frames per interval)",
+        *section_table(s),
     ]
     if "model_velocity" in s:
         if s["model_velocity"] is None:
@@ -69,5 +135,6 @@ def run(args) -> int:
         summary = fr.summary()
         figures = figures_written(feedrate_figures(fr, folder)) if folder is not None else []
     reason = unmeasured(summary, RATE_KEYS)
+    unmeasured_sections(summary)
     print_figures(summary, figures, args.json, table)
     return refuse(args.result, reason)

@@ -9,7 +9,8 @@ from .options import add_output_arguments, figures_written, plot_folder, print_f
 DESCRIPTION = ("Singulation of a bulk-feeder result over the steady window: inter-arrival times at "
                "the outlet (coefficient of variation), doubles (parts closer than a gap, or touching), "
                "gaps between consecutive parts, cluster sizes on the track (contact graph), and for "
-               "chips the face-up fraction and the alignment with the track at the outlet.")
+               "chips the face-up fraction, the alignment with the track and the orientation yield "
+               "(face up and aligned) at the outlet.")
 
 
 def add_arguments(p) -> None:
@@ -67,6 +68,9 @@ def table(s: dict) -> str:
                      f"{fmt(s['face_down_fraction'], 100, '.1f')} %, on edge "
                      f"{fmt(s['on_edge_fraction'], 100, '.1f')} %; aligned with the track "
                      f"{fmt(s['aligned_fraction'], 100, '.1f')} %")
+        if s.get("orientation_yield") is not None:
+            lines.append(f"yield          {fmt(s['orientation_yield'], 100, '.1f')} % of the parts "
+                         "delivered face up and aligned with the track (each part both)")
     return "\n".join(lines)
 
 

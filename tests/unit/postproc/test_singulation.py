@@ -160,6 +160,9 @@ def test_chip_faces_and_alignment_at_the_outlet(tmp_path):
     # yaw folded by the square's quarter-turn symmetry into (-45, 45]
     assert sg.yaw_deg[:7] == pytest.approx([0, 30, 10, 40, 5, 5, 2], abs=1e-9)
     assert sg.aligned_fraction == pytest.approx(6 / 10)   # 0, 10, 5, 5, 2 face up; 20 face down
+    # face up and aligned, part by part: the five face-up ones within 10 degrees (the one on
+    # edge is aligned, not face up) -- not the product of the fractions, 0.7 x 0.6 = 0.42
+    assert sg.orientation_yield == pytest.approx(5 / 10, abs=1e-12)
 
 
 def test_chip_faces_are_taken_as_the_track_delivers_them(tmp_path):
@@ -181,6 +184,21 @@ def test_chip_faces_are_taken_as_the_track_delivers_them(tmp_path):
     assert cos_tipped == pytest.approx([np.cos(80 * np.pi / 180)] * n, abs=1e-12)
 
 
+def test_the_orientation_yield_counts_the_parts_both_face_up_and_aligned(tmp_path):
+    # two face up and aligned, one face up at 30 degrees, two face down along the track:
+    # 2 of 5 (the fractions, 3/5 face up and 4/5 aligned, would make 0.48)
+    flip = q_axis([1, 0, 0], np.pi)
+    quats = np.array([yaw_quat(0), yaw_quat(5), yaw_quat(30), flip, q_mul(yaw_quat(3), flip)])
+    exits = 0.1 + 0.08 * np.arange(5)
+    with open_feeder(tmp_path, exits, speed=0.05, orientations=quats, body_template=CHIP,
+                     lanes=np.arange(5) * 1e-3) as r:
+        sg = Singulation(r, start=0.0, end=1.0).run().results
+    assert sg.face_up_fraction == pytest.approx(3 / 5, abs=1e-12)
+    assert sg.aligned_fraction == pytest.approx(4 / 5, abs=1e-12)
+    assert sg.orientation_yield == pytest.approx(2 / 5, abs=1e-12)
+    assert abs(sg.yaw_deg[4]) == pytest.approx(3.0, abs=1e-9)   # face down, along the track
+
+
 def test_thin_axis_and_orientation_of_a_template():
     assert thin_axis(CHIP) == pytest.approx([0, 0, 1])
     tilted = CHIP[:, [2, 0, 1, 3]]           # the same chip lying in the yz plane
@@ -197,6 +215,7 @@ def test_spheres_have_no_face(tmp_path):
     with open_feeder(tmp_path, 0.1 + np.arange(50) / 60) as r:
         sg = Singulation(r).run().results
     assert sg.face_up_fraction is None and sg.yaw_deg is None
+    assert sg.orientation_yield is None
 
 
 def test_settings_are_checked(tmp_path):
@@ -248,6 +267,7 @@ def test_a_chip_past_the_edge_at_the_frame_before_its_exit_is_read_a_frame_earli
     assert sg.cos_tilt == pytest.approx([1.0, 1.0], abs=1e-12)
     assert sg.yaw_deg == pytest.approx([5.0, 20.0], abs=1e-9)
     assert sg.face_up_fraction == 1.0 and sg.aligned_fraction == 0.5
+    assert sg.orientation_yield == 0.5                   # chip 1 (5 degrees), not chip 2 (20)
 
 
 def test_one_chip_arriving_has_a_face(tmp_path):

@@ -1,0 +1,233 @@
+"""Sections and joints of a feeder line: the pieces :class:`.feedrate.FeedRate` puts together.
+
+A line (docs/feeder-lines.md) is section 1 from x = 0 to the joint x = ``track_length``,
+then section 2 from the joint to the outlet edge; a single track is one section. Where a
+part is along the line is its x in the track's frame (x minus section 1's recorded
+displacement, the frame of FeedRate's profile): section 2's own motion is not recorded
+yet, and either drive's amplitude is far below a section's length.
+
+* :func:`section_bounds`: where each section lies; a part is over section 1 when x <
+  the joint (the inlet wall keeps it at x > 0), over section 2 when the joint <= x <= the
+  outlet edge (beyond it, it falls);
+* :func:`bed_pass`: one pass over the frames giving each joint's crossings and the parts
+  over each section at each frame (the hold-up);
+* :func:`tooling`: the rejects sorted by the tool that threw them off;
+* :func:`batch_cuts`, :func:`batch_means`: a quantity in batches of whole periods over
+  the window; :func:`drift`, :func:`trend`, :func:`unsteady`: whether it drifts, and
+  the words that say so.
+
+This module reads frames and parameters only; it imports nothing of the other analyses
+(FeedRate imports it).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..line import section_from
+from ..results import layout as L
+
+# Frames read at once: blocks of at most this many slot values (as feedrate's).
+_BLOCK_VALUES = 1 << 22
+# Rejects: the tools, in the order they are tried (a part falls sideways only where the
+# side drop leaves no wall, so its stretch is tried first).
+TOOLING = ("side_drop", "wiper", "other")
+# A part the wiper sweeps back falls within this many part sizes upstream of its face.
+WIPER_REACH = 3.0
+# A drift counts when the last third's mean differs from the first third's by more than
+# this many combined standard errors.
+DRIFT_SIGMAS = 3.0
+# Fewest batches a drift is judged from: two per third.
+DRIFT_MIN_BATCHES = 6
+
+
+def is_line(parameters) -> bool:
+    """Whether the result is a feeder line (``sections`` > 1)."""
+    return int(float(parameters.get("sections", 1))) > 1
+
+
+def section_bounds(parameters, edge: float) -> list[tuple[float, float]]:
+    """[(x_from, x_to)] of each section in the track's frame [m]: the track from 0 to
+    the outlet ``edge``; a line's section 1 to the joint, section 2 from it to the edge."""
+    if not is_line(parameters):
+        return [(0.0, edge)]
+    joint = section_from(parameters).x0
+    return [(0.0, joint), (joint, edge)]
+
+
+def section_index(track_x, joints, edge: float) -> np.ndarray:
+    """Which section (0-based) a part at ``track_x`` is over; -1 beyond the outlet edge
+    (falling) or for NaN (no part)."""
+    x = np.asarray(track_x, dtype=float)
+    which = np.searchsorted(np.asarray(joints, dtype=float), x, side="right")
+    off = ~(x <= edge) if math.isfinite(edge) else np.isnan(x)
+    return np.where(off, -1, which)
+
+
+def _left_at(ids, gone_ids, gone_times) -> np.ndarray:
+    """When each part of ``ids`` (any shape) left the track: its event's time (outlet or
+    reject, ``gone_ids`` at ``gone_times``), inf for a part without one."""
+    ids = np.asarray(ids)
+    if len(gone_ids) == 0:
+        return np.full(ids.shape, np.inf)
+    order = np.argsort(gone_ids, kind="stable")
+    gid, gt = gone_ids[order], gone_times[order]
+    pos = np.minimum(np.searchsorted(gid, ids), len(gid) - 1)
+    return np.where(gid[pos] == ids, gt[pos], np.inf)
+
+
+def bed_pass(result, frames, joints, edge: float, gone_ids=(), gone_times=(), axis: int = 0):
+    """One pass over ``frames`` (increasing frame indices): (crossings, counts).
+
+    ``crossings[j]`` = (times, ids) of the parts that crossed joint ``j``: a part counts
+    once, at its last crossing from x < joint to x >= joint between two consecutive frames
+    (the time interpolated linearly between them), provided it never comes back below
+    the joint in a later frame; a part first seen beyond the joint, or gone between the
+    frames that would show its crossing, or fallen below the catch plane before it, does
+    not count. ``counts`` (frames, sections): the parts over each section at each frame,
+    those with an event (``gone_ids`` left at ``gone_times``, outlet or reject) at or
+    before it left out.
+    """
+    frames = np.asarray(frames, dtype=np.int64)
+    joints = np.asarray(joints, dtype=float)
+    gone_ids = np.asarray(gone_ids, dtype=np.int64)
+    gone_times = np.asarray(gone_times, dtype=float)
+    counts = np.zeros((len(frames), len(joints) + 1), dtype=np.int64)
+    seen = [[] for _ in joints]  # per joint: (frame position, time, id, +1 up / -1 down) blocks
+    per_block = max(2, _BLOCK_VALUES // max(4 * result.n_slots, 1))
+    # Blocks overlap by one frame, so every consecutive pair is seen once.
+    for a in range(0, max(len(frames) - 1, 1), per_block - 1):
+        block = frames[a:a + per_block]
+        ids = result.read("id", frames=block)
+        x = result.read("position", frames=block)[..., axis]
+        x = x - result.read("surface_position", frames=block)[:, axis][:, None]
+        t = result.time[block]
+        which = section_index(x, joints, edge)
+        # A part below the catch plane, still falling, is no longer on a section.
+        left = _left_at(ids, gone_ids, gone_times)
+        which[(ids == L.ID_FILL) | (left <= t[:, None])] = -1
+        for s in range(len(joints) + 1):
+            counts[a:a + len(block), s] = (which == s).sum(axis=1)
+        same = (ids[:-1] == ids[1:]) & (ids[:-1] != L.ID_FILL)
+        x0, x1 = x[:-1], x[1:]
+        for j, joint in enumerate(joints):
+            up = same & (x0 < joint) & (x1 >= joint)
+            k, slot = np.nonzero(up | (same & (x0 >= joint) & (x1 < joint)))
+            frac = (joint - x0[k, slot]) / (x1[k, slot] - x0[k, slot])
+            when = t[k] + frac * (t[k + 1] - t[k])
+            # A part that had already fallen below the catch plane crosses nothing.
+            live = when < left[k + 1, slot]
+            seen[j].append(((a + k)[live], when[live], ids[k, slot][live],
+                            np.where(up[k, slot], 1, -1)[live]))
+    crossings = []
+    for blocks in seen:
+        pos, when, who, sign = (np.concatenate(c) for c in zip(*blocks)) if blocks else \
+            (np.empty(0, np.int64), np.empty(0), np.empty(0, np.int64), np.empty(0, np.int64))
+        order = np.lexsort((pos, who))       # by part, then in time
+        who, when, sign = who[order], when[order], sign[order]
+        last = np.r_[who[1:] != who[:-1], True] if len(who) else np.empty(0, dtype=bool)
+        keep = last & (sign == 1)            # its last crossing was forward: it stayed
+        times = when[keep]
+        order = np.argsort(times, kind="stable")
+        crossings.append((times[order], who[keep][order]))
+    return crossings, counts
+
+
+def tooling(x, section, s, size: float) -> np.ndarray:
+    """Index into :data:`TOOLING` of each reject at ``x`` [m] (its crossing of the catch
+    plane) fallen from ``section`` (1-based), on a line whose section 2 is ``s``
+    (:class:`vibrofeed.line.Section`), parts ``size`` across: the side drop's stretch
+    widened by a part size either way; else from :data:`WIPER_REACH` part sizes upstream
+    of the wiper's face to its bar's downstream end; else other (section 1's rejects too)."""
+    x = np.asarray(x, dtype=float)
+    on_2 = np.asarray(section) == 2
+    out = np.full(len(x), TOOLING.index("other"))
+    wiper = on_2 & s.has_wiper & (x >= s.wiper_x[0] - WIPER_REACH * size) & (x <= s.wiper_x[1])
+    out[wiper] = TOOLING.index("wiper")
+    drop = on_2 & s.has_drop & (x >= s.drop_x[0] - size) & (x <= s.drop_x[1] + size)
+    out[drop] = TOOLING.index("side_drop")
+    return out
+
+
+def batch_cuts(t_a: float, t_b: float, freq: float, batches: int) -> np.ndarray:
+    """Edges of ``batches`` contiguous batches of whole periods over [t_a, t_b] (lengths
+    differing by at most a period; 200 units without a frequency); fewer when the window
+    holds fewer periods; a single batch when it holds less than two."""
+    units = max(1, int(round((t_b - t_a) * freq))) if freq > 0 else 200
+    b = max(1, min(int(batches), units))
+    sizes = [len(c) for c in np.array_split(np.arange(units), b)]
+    return t_a + (t_b - t_a) * np.r_[0, np.cumsum(sizes)] / units
+
+
+def batch_means(times, values, cuts) -> np.ndarray:
+    """Mean of the ``values`` whose ``times`` fall in each batch [cuts[i], cuts[i+1]) (the
+    last one closed); NaN for a batch holding none."""
+    times, values = np.asarray(times, dtype=float), np.asarray(values, dtype=float)
+    b = len(cuts) - 1
+    which = np.searchsorted(cuts, times, side="right") - 1
+    which[times == cuts[-1]] = b - 1
+    ok = (which >= 0) & (which < b)
+    n = np.bincount(which[ok], minlength=b)
+    total = np.bincount(which[ok], weights=values[ok], minlength=b)
+    return np.where(n > 0, total / np.maximum(n, 1), np.nan)
+
+
+def drift(series) -> tuple[float, float, float] | None:
+    """(first, last, error) of a series of batch values: the means of its first and last
+    thirds and the standard error of their difference; None with fewer than
+    :data:`DRIFT_MIN_BATCHES` values (NaN batches are left out).
+
+    A batch's noise is the scatter about a straight line through the series, not about
+    its mean, so a trend does not inflate the error it is judged by.
+    """
+    y = np.asarray(series, dtype=float)
+    at = np.nonzero(np.isfinite(y))[0]
+    y = y[at]
+    n = len(y)
+    if n < DRIFT_MIN_BATCHES:
+        return None
+    third = n // 3
+    residual = y - np.polyval(np.polyfit(at, y, 1), at)
+    scatter = math.sqrt(float(residual @ residual) / (n - 2))
+    return float(y[:third].mean()), float(y[-third:].mean()), scatter * math.sqrt(2.0 / third)
+
+
+def drifts(first: float, last: float, error: float) -> bool:
+    """Whether the change first -> last exceeds :data:`DRIFT_SIGMAS` errors (and round-off:
+    a series of equal values does not drift)."""
+    change = abs(last - first)
+    return change > DRIFT_SIGMAS * error and change > 1e-9 * max(abs(first), abs(last))
+
+
+def trend(section: int, quantity: str, series) -> list[dict]:
+    """[{section, quantity, first, last, error, drifts}] of a bed's batch series (SI units),
+    as :func:`drift` finds it; [] when there are too few batches to judge."""
+    found = drift(series)
+    if found is None:
+        return []
+    first, last, error = found
+    return [{"section": section, "quantity": quantity, "first": first, "last": last,
+             "error": error, "drifts": drifts(first, last, error)}]
+
+
+# How a drift is told: scale from SI and unit of each quantity.
+_SAID = {"conveying speed": ("the bed's conveying speed", 1e3, "mm/s"),
+         "hold-up": ("the hold-up", 1.0, "parts")}
+
+
+def unsteady(trends) -> str | None:
+    """Why the bed is not steady over the window ("not steady: the bed's conveying speed
+    on section 1 rises 12.0 -> 20.1 mm/s over the window ..."); None when nothing drifts."""
+    said = []
+    for t in trends:
+        if not t["drifts"]:
+            continue
+        name, scale, unit = _SAID[t["quantity"]]
+        way = "rises" if t["last"] > t["first"] else "falls"
+        limit = DRIFT_SIGMAS * t["error"] * scale
+        said.append(f"{name} on section {t['section']} {way} {t['first'] * scale:.1f} -> "
+                    f"{t['last'] * scale:.1f} {unit} over the window (more than {DRIFT_SIGMAS:g} "
+                    f"standard errors: {limit:.2g} {unit})")
+    return "not steady: " + "; ".join(said) if said else None
