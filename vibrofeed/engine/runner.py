@@ -209,13 +209,27 @@ def _frames_in(path: Path) -> tuple[int, int | None, float | None]:
     try:
         import h5py
 
-        with h5py.File(path, "r") as f:
+        # No lock: a rank that outlived its group's kill may still hold the file open.
+        with h5py.File(path, "r", locking=False) as f:
             step = f[f"{L.PARTS}/position/step"]
             if len(step) == 0:
                 return 0, None, None
             return len(step), int(step[-1]), float(f[f"{L.PARTS}/position/time"][-1])
     except (OSError, KeyError):
         return 0, None, None
+
+
+def _unreadable(path: Path) -> bool:
+    """A file that exists but HDF5 cannot open (never deleted: it may hold frames)."""
+    if not path.exists():
+        return False
+    try:
+        import h5py
+
+        with h5py.File(path, "r", locking=False):
+            return False
+    except OSError:
+        return True
 
 
 def run_deck(deck: Deck, params: Mapping[str, str], output, *, ranks: int = 1,
@@ -392,7 +406,7 @@ class _Run:
             from ..results.writer import mark_file_status  # h5py: only when needed
 
             mark_file_status(self.part, L.STATUS_INTERRUPTED, why)
-        else:
+        elif not _unreadable(self.part):
             self.part.unlink(missing_ok=True)
 
     def event(self, kind: str) -> dict | None:
@@ -448,8 +462,8 @@ class _Run:
 
             if mark_file_status(self.part, L.STATUS_FAILED, str(error)):
                 error.partial = (self.part, frames)
-        elif not full:
-            self.part.unlink(missing_ok=True)
+        elif not full and not _unreadable(self.part):
+            self.part.unlink(missing_ok=True)  # nothing in it; a file we cannot read is kept
         raise error
 
     def remove_scratch(self) -> None:
@@ -484,14 +498,30 @@ def _signal_group(proc: subprocess.Popen, sig: int) -> None:
         pass
 
 
-def _stop(proc: subprocess.Popen) -> None:
-    """End the worker: SIGTERM (it flushes its frames and exits), SIGKILL after 10 s."""
-    _signal_group(proc, signal.SIGTERM)
+def _group_ended(proc: subprocess.Popen, seconds: float) -> bool:
+    """Wait up to ``seconds`` for the worker and every process of its group (the MPI
+    ranks can outlive mpirun) to end."""
+    end = time.monotonic() + seconds
     try:
-        proc.wait(timeout=10)
+        proc.wait(timeout=seconds)
     except subprocess.TimeoutExpired:
+        return False
+    while time.monotonic() < end:
+        try:
+            os.killpg(proc.pid, 0)
+        except ProcessLookupError:
+            return True
+        time.sleep(0.05)
+    return False
+
+
+def _stop(proc: subprocess.Popen) -> None:
+    """End the worker and its ranks: SIGTERM (it flushes its frames and exits), SIGKILL
+    after 10 s; returns when none is left that could still write the result."""
+    _signal_group(proc, signal.SIGTERM)
+    if not _group_ended(proc, 10):
         _signal_group(proc, signal.SIGKILL)
-        proc.wait()
+        _group_ended(proc, 10)
 
 
 def _read(path: Path) -> str:
