@@ -91,18 +91,29 @@ def wall_stations(track_length: float, track_width: float, gate_width: float = 0
 
 def track_mesh(track_length: float, track_width: float, wall_height: float,
                gate_width: float = 0.0, gate_x: float | None = None,
-               spacing: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+               spacing: float | None = None, cross_tilt: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """The track: floor, two side walls and the back wall at x = 0, no wall at the
     outlet edge x = track_length. Floor and walls share vertices along their common
-    edges (whole edges: no vertex lies inside another face's edge)."""
+    edges (whole edges: no vertex lies inside another face's edge).
+
+    ``cross_tilt`` [deg] tilts the floor across, down towards the wall at -y (as a
+    single-file track keeps its parts against one wall): the floor is the plane
+    z = -(track_width/2 - y) tan(cross_tilt), at 0 along the +y wall of the full
+    width; the wall tops stay at ``wall_height``."""
     xs, half = wall_stations(track_length, track_width, gate_width, gate_x, spacing)
+    slope = math.tan(math.radians(cross_tilt))
+
+    def z(y):
+        return -(track_width / 2 - y) * slope if slope else 0
+
     b = MeshBuilder()
+    top = wall_height
     for x0, x1, h0, h1 in zip(xs[:-1], xs[1:], half[:-1], half[1:]):
-        b.quad((x0, -h0, 0), (x1, -h1, 0), (x1, h1, 0), (x0, h0, 0))  # floor, normal +z
-        b.quad((x0, h0, 0), (x1, h1, 0), (x1, h1, wall_height), (x0, h0, wall_height))  # y > 0
-        b.quad((x1, -h1, 0), (x0, -h0, 0), (x0, -h0, wall_height), (x1, -h1, wall_height))
+        b.quad((x0, -h0, z(-h0)), (x1, -h1, z(-h1)), (x1, h1, z(h1)), (x0, h0, z(h0)))  # floor, +z
+        b.quad((x0, h0, z(h0)), (x1, h1, z(h1)), (x1, h1, top), (x0, h0, top))  # y > 0
+        b.quad((x1, -h1, z(-h1)), (x0, -h0, z(-h0)), (x0, -h0, top), (x1, -h1, top))
     w = half[0]
-    b.quad((0, -w, 0), (0, w, 0), (0, w, wall_height), (0, -w, wall_height))  # back wall, normal +x
+    b.quad((0, -w, z(-w)), (0, w, z(w)), (0, w, top), (0, -w, top))  # back wall, normal +x
     return b.mesh()
 
 
@@ -215,7 +226,9 @@ def prepare_bulk_feeder(values: Mapping[str, str], folder: str | Path) -> Prepar
     size, thickness = _number(values, "part_size"), _number(values, "part_thickness")
     shape = shape_code(values.get("shape", "0"))
 
-    vertices, triangles = track_mesh(length, width, _number(values, "wall_height"), gate_width, gate_x)
+    tilt = float(values.get("cross_tilt", 0.0))
+    vertices, triangles = track_mesh(length, width, _number(values, "wall_height"), gate_width, gate_x,
+                                     cross_tilt=tilt)
     write_stl(vertices, triangles, folder / "track.stl", "track")
     write_stl(*catch_face(), folder / "catch.stl", "catch")
     templates = {"chip": chip_template(size, thickness), "disc": disc_template(size, thickness)}

@@ -179,6 +179,20 @@ def joint_motion(p: Mapping[str, float]) -> tuple[float, float]:
     return math.sqrt(max(a1 * a1 + a2 * a2 - 2 * a1 * a2 * math.cos(dphi), 0.0)), abs(b1 - b2)
 
 
+def joint_steps(p: Mapping[str, float]) -> tuple[float, float]:
+    """The step down from section 1's floor to section 2's at the joint, at rest, at its
+    least and its most across section 1's exit [m]: both floors are planes tilted down
+    towards -y (``cross_tilt``, ``s2_cross_tilt``), so the step is linear in y and its
+    extremes lie at the exit's two ends."""
+    s = section_from(p)
+    w1 = p.get("track_width", 0.0)
+    exit_width = p["gate_width"] if p.get("gate_width", 0.0) > 0 else w1
+    t1 = math.tan(math.radians(p.get("cross_tilt", 0.0)))
+    t2 = math.tan(math.radians(s.cross_tilt))
+    steps = [s.step + (s.width / 2 - y) * t2 - (w1 / 2 - y) * t1 for y in (-exit_width / 2, exit_width / 2)]
+    return min(steps), max(steps)
+
+
 def check_line(p: Mapping[str, float]) -> None:
     """Relations between a line's parameters (``sections`` > 1), one-line errors; the
     deck refuses the same for runs by hand."""
@@ -196,14 +210,18 @@ def check_line(p: Mapping[str, float]) -> None:
             f"s2_width={s.width:g} m is narrower than section 1's exit ({exit_width:g} m): the "
             "sections do not join (parts would fall at the joint); narrow section 1 with its gate")
     dz, dx = joint_motion(p)
-    if s.step <= dz:
+    low, high = joint_steps(p)
+    if low <= dz:
         raise ParameterError(
             f"s2_step={s.step:g} m: the joint must step down by more than the floors move apart "
             f"normal to them ({dz:.3g} m: amp_n, s2_amp_n, phases), or section 2's floor rises above "
-            "section 1's and parts catch its edge")
-    if s.step >= thickness:
+            "section 1's and parts catch its edge"
+            + (f" (with the cross tilts the step is {low:.3g} m at its least)" if low != s.step else ""))
+    if high >= thickness:
         raise ParameterError(f"s2_step={s.step:g} m is not a small step: keep it below a part's "
-                             f"thickness ({thickness:g} m)")
+                             f"thickness ({thickness:g} m)"
+                             + (f" (with the cross tilts it is {high:.3g} m at its most)"
+                                if high != s.step else ""))
     if dx >= size / 2:
         raise ParameterError(f"the joint opens by up to {dx:.3g} m along the track (amp_t, s2_amp_t), "
                              f"more than half a part ({size / 2:g} m): parts would fall into it")

@@ -21,7 +21,10 @@ A bulk feeder's deck (it defines ``outlet_x``, ``catch_z``, ``n_inserted``,
 ``body_spheres``: ``results.layout.BULK_CONTRACT``) also gets parts as bodies
 (:mod:`.bodies`: one row per multisphere clump, with its orientation), outlet
 events and the mass balance (:mod:`.outlet`), and the track mesh and clump
-template the runner's prepare hook made (``spec["prepared"]``) in the file.
+template the runner's prepare hook made (``spec["prepared"]``) in the file. A
+feeder line's deck (``sections`` > 1) also defines each further section's motion
+(``s2_surface_*``: ``results.layout.surface_variables``), recorded at every frame beside
+section 1's, and the file says which section each track vertex belongs to.
 """
 
 from __future__ import annotations
@@ -233,8 +236,13 @@ class BulkFrames:
         self.outlet = (LineOutlet(*where, (0.0, float(variables["track_length"]))) if self.line
                        else Outlet(*where))
         self.track, self.template = prepared_geometry(spec)
+        # a line's track: which vertices move with section 2 (None: not a line, or not told)
+        self.track_sections = track_sections(self.track, variables) if self.line else None
         self.names = PER_ATOM + (("molecule",) if self.n_spheres > 1 else ())
         self.warnings: list[str] = []
+        if self.line and self.track is not None and self.track_sections is None:
+            self.warnings.append("the line's track mesh does not end with section 2's mesh: the "
+                                 "file cannot say which vertices move with section 2")
         if self.template is not None and self.n_spheres > 1 and len(self.template) != self.n_spheres:
             raise ValueError(f"the body template has {len(self.template)} spheres, the deck's "
                              f"body_spheres is {self.n_spheres}")
@@ -273,10 +281,53 @@ class BulkFrames:
         return parts, events, None, counts
 
 
-def surface_state(lmp) -> tuple[list, list]:
-    pos = [lmp.variable(f"surface_{c}") for c in "xyz"]
-    vel = [lmp.variable(f"surface_v{c}") for c in "xyz"]
-    return pos, vel
+def surface_state(lmp, section: int = 1) -> tuple[list, list]:
+    """(position, velocity) of a section's surface now, from the deck's equal-style variables
+    (section 1: surface_*, section k: s<k>_surface_*); collective, on every rank."""
+    names = L.surface_variables(section)
+    return [lmp.variable(n) for n in names[0]], [lmp.variable(n) for n in names[1]]
+
+
+def recorded_sections(lmp, spec: dict) -> int:
+    """The sections whose motion the deck defines: 1, or a line's 2, 3, ... (s<k>_surface_x
+    defined for k = 2 ... n). A line (``sections`` > 1) whose deck does not define them cannot be
+    recorded as FORMAT.md says: refused before anything runs."""
+    n = 1
+    while lmp.has_variable(L.surface_variables(n + 1)[0][0]):
+        n += 1
+    wanted = int(float(spec.get("variables", {}).get("sections", 1)))
+    if wanted > n:
+        missing = [name for k in range(n + 1, wanted + 1) for group in L.surface_variables(k)
+                   for name in group if not lmp.has_variable(name)]
+        raise DeckError(f"a line of {wanted} sections: the deck does not define the equal-style "
+                        f"variable(s) {', '.join(missing)} of its sections' motion (docs/decks.md)")
+    for k in range(2, n + 1):  # all six, as for section 1 (DECK_CONTRACT)
+        missing = [name for group in L.surface_variables(k) for name in group
+                   if not lmp.has_variable(name)]
+        if missing:
+            raise DeckError(f"the deck defines section {k}'s motion only in part: "
+                            f"{', '.join(missing)} missing")
+    return n
+
+
+def track_sections(track, variables: dict) -> np.ndarray | None:
+    """(V,) the section (1-based) of each vertex of a line's track, or None when it cannot be
+    told. The prepare hook writes section 1's mesh, then appends section 2's
+    (vibrofeed.line.section_mesh of the same parameters), each with its own vertices: the
+    track's last vertices must be that mesh exactly, and only then are they section 2's."""
+    from ..line import section_from, section_mesh
+
+    if track is None:
+        return None
+    vertices = track[0]
+    try:
+        second = section_mesh(section_from(variables))[0]
+    except (KeyError, ValueError):
+        return None
+    n1 = len(vertices) - len(second)
+    if n1 <= 0 or not np.array_equal(vertices[n1:], second):
+        return None
+    return np.repeat(np.array([1, 2], dtype=np.int32), [n1, len(second)])
 
 
 def _includes(spec: dict) -> dict[str, str]:
@@ -336,7 +387,7 @@ def set_up(lmp, spec: dict) -> None:
     lmp.command("variable vibrofeed_time equal time")
 
 
-def open_writer(spec: dict, derived: dict, ranks: int, natoms: int, bulk):
+def open_writer(spec: dict, derived: dict, ranks: int, natoms: int, bulk, sections: int = 1):
     """Rank 0's result writer, flushed also when LIGGGHTS ends the process."""
     from ..results.writer import ResultWriter
 
@@ -347,9 +398,10 @@ def open_writer(spec: dict, derived: dict, ranks: int, natoms: int, bulk):
         derived=derived,
         engine_version=engine_version(spec["log"]), seed=spec.get("seed"),
         ranks=ranks, command=spec.get("command", ""), run_id=spec.get("run_id", ""),
-        capacity_hint=max(natoms // (bulk.n_spheres if bulk else 1), 1),
+        capacity_hint=max(natoms // (bulk.n_spheres if bulk else 1), 1), sections=sections,
         **({} if bulk is None else {"track": bulk.track, "outlet": bulk.outlet.attributes(),
-                                    "body_template": bulk.template, "line": bulk.line}))
+                                    "body_template": bulk.template, "line": bulk.line,
+                                    "track_sections": bulk.track_sections}))
     flush_on_engine_exit(writer)
     return writer
 
@@ -379,8 +431,9 @@ class Frames:
     """Takes the frames: the particles (or a bulk deck's bodies, outlet events and
     mass balance) to rank 0's writer; warns once when parts go missing."""
 
-    def __init__(self, lmp, comm, writer, bulk, report: Reporter):
+    def __init__(self, lmp, comm, writer, bulk, report: Reporter, sections: int = 1):
         self.lmp, self.comm, self.writer, self.bulk, self.report = lmp, comm, writer, bulk, report
+        self.sections = sections  # whose motion is recorded: section 1 and a line's further ones
         self.counts = None  # the mass balance of the last frame (bulk decks, rank 0)
         self._lost_reported = False
 
@@ -388,12 +441,13 @@ class Frames:
         """Write a frame of the engine's state now; its time."""
         lmp = self.lmp
         pos, vel = surface_state(lmp)
+        further = [surface_state(lmp, k) for k in range(2, self.sections + 1)]
         step = int(round(lmp.variable("vibrofeed_step")))
         t = lmp.variable("vibrofeed_time")
         if self.bulk is None:
             parts = gather_parts(lmp, self.comm)
             if self.writer is not None:
-                self.writer.write_frame(step, t, parts, pos, vel)
+                self.writer.write_frame(step, t, parts, pos, vel, section_surfaces=further)
             return t
         got = self.bulk.frame(lmp, self.comm, t)
         if self.writer is not None:
@@ -402,7 +456,7 @@ class Frames:
                 self.writer.write_events(events)
             if rejects is not None:
                 self.writer.write_events(rejects, L.REJECTS)
-            self.writer.write_frame(step, t, parts, pos, vel, counts=counts)
+            self.writer.write_frame(step, t, parts, pos, vel, counts=counts, section_surfaces=further)
             self.counts = counts
             lost = counts["lost"]
             if lost and not self._lost_reported:
@@ -456,6 +510,7 @@ def run(spec: dict, heartbeat: Heartbeat | None = None, on_term: OnTerminate | N
         heartbeat.watch(lmp.step_counter())
     lmp.file(spec["deck"])
     n_steps, every, dt, is_bulk = read_contract(lmp)
+    sections = recorded_sections(lmp, spec)
     derived = derived_constants(lmp, spec["constants"])
 
     report("setup")
@@ -464,7 +519,8 @@ def run(spec: dict, heartbeat: Heartbeat | None = None, on_term: OnTerminate | N
     if is_bulk:
         bulk = BulkFrames(lmp, spec)
         bulk.template_from_first_body(lmp, comm)
-    writer = open_writer(spec, derived, comm.size, lmp.natoms, bulk) if comm.rank == 0 else None
+    writer = (open_writer(spec, derived, comm.size, lmp.natoms, bulk, sections) if comm.rank == 0
+              else None)
     if on_term is not None:
         on_term.writer = writer
 
@@ -473,7 +529,7 @@ def run(spec: dict, heartbeat: Heartbeat | None = None, on_term: OnTerminate | N
     n_frames = 1 + len(segs)
     report("run", n_steps=n_steps, dt=dt, output_every=every, n_frames=n_frames,
            natoms=lmp.natoms)
-    frames = Frames(lmp, comm, writer, bulk, report)
+    frames = Frames(lmp, comm, writer, bulk, report, sections)
     done, wall = run_segments(lmp, frames, segs, report)
 
     for message in bulk_warnings(bulk):

@@ -5,7 +5,8 @@ gives a time series whose every step is a multiblock of
 
 - ``parts`` (``RUN/parts_NNNNNN.vtp``): one point per part with the fields
   ``id``, ``species``, ``radius``, ``diameter``, ``mass``, ``velocity``,
-  ``speed``, ``velocity_rel`` (relative to the track), ``angular_velocity``,
+  ``speed``, ``velocity_rel`` (relative to the track under the part: a feeder line's
+  section 2 from the joint at ``track_length`` on), ``angular_velocity``,
   ``force`` (only where the result records it: not for clumps, whose force
   is NaN by design; an all-NaN array gets NaN ranges that ParaView cannot
   read back), ``orientation`` (quaternion w, x, y, z) and glyph-ready arrays:
@@ -19,7 +20,8 @@ gives a time series whose every step is a multiblock of
   ``velocity`` on their points, ready to colour;
 - ``track`` (``RUN/track_NNNNNN.vtp``): the track mesh at the frame's surface
   position, with the surface velocity and speed on its points (runs without a track mesh
-  have no track block).
+  have no track block); a feeder line's sections each at their own recorded position and
+  velocity, and ``section`` (1-based) on the points.
 
 The active attributes are set so that ParaView colours and draws glyphs
 without picking arrays by hand: scalars ``speed`` in every block (ParaView
@@ -43,7 +45,18 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import OutputError, UsageError
-from .scene import FrameData, body_axes, part_shape, read_frame, shape_mesh, shape_tensors, track_mesh
+from .scene import (
+    FrameData,
+    body_axes,
+    part_sections,
+    part_shape,
+    read_frame,
+    shape_mesh,
+    shape_tensors,
+    track_mesh,
+    track_velocity,
+    vertex_sections,
+)
 
 
 @dataclass(frozen=True)
@@ -111,16 +124,18 @@ def _write_vtp(mesh, path: Path, time: float | None) -> None:
         raise OutputError(f"VTK could not write {path}")
 
 
-def parts_points(frame: FrameData, shape, force: bool = True):
+def parts_points(frame: FrameData, shape, force: bool = True, sections=None):
     """The parts of a frame as points with their fields (see the module's docstring);
-    ``force=False`` leaves out the force (a result that does not record it)."""
+    ``force=False`` leaves out the force (a result that does not record it); ``sections``:
+    (N,) each part's row in ``frame.sections_velocity`` (default: section 1's)."""
     mesh = _polydata(frame.position)
+    under = frame.sections_velocity[np.zeros(len(frame), int) if sections is None else sections]
     normal, axis_x = body_axes(frame, shape)
     fields = {
         "id": frame.ids, "species": frame.species,
         "radius": frame.radius, "diameter": 2 * frame.radius, "mass": frame.mass,
         "velocity": frame.velocity, "speed": frame.speed,
-        "velocity_rel": frame.velocity - frame.surface_velocity,
+        "velocity_rel": frame.velocity - under,
         "angular_velocity": frame.angular_velocity, "force": frame.force,
         "orientation": frame.orientation, "normal": normal, "axis_x": axis_x,
         "shape_tensor": shape_tensors(frame, shape)}
@@ -190,14 +205,17 @@ def export(result, folder, every: int = 1, shapes: bool = True, progress=None) -
     files = 0
     for k in frames:
         frame = read_frame(result, int(k))
-        blocks = [("parts", parts_points(frame, shape, force))]
+        blocks = [("parts", parts_points(frame, shape, force, part_sections(result, frame)))]
         if shapes:
             blocks.append(("shapes", parts_shapes(frame, shape)))
         placed = track_mesh(result, frame)
         if placed is not None:
             track = _polydata(*placed)
-            _add(track, "velocity", np.tile(frame.surface_velocity, (len(placed[0]), 1)))
-            _add(track, "speed", np.full(len(placed[0]), np.linalg.norm(frame.surface_velocity)))
+            velocity = track_velocity(result, frame)  # each vertex its own section's
+            _add(track, "velocity", velocity)
+            _add(track, "speed", np.linalg.norm(velocity, axis=1))
+            if len(frame.sections_velocity) > 1:
+                _add(track, "section", vertex_sections(result) + 1)
             # every block's active scalars are "speed": ParaView colours the whole series by it
             track.GetPointData().SetActiveScalars("speed")
             track.GetPointData().SetActiveVectors("velocity")

@@ -1,6 +1,7 @@
 """Draw a result off-screen with pyvista: a PNG of one frame, an MP4 of many.
 
-The track is drawn at the frame's surface position, the parts with their real
+The track is drawn at the frame's surface position (a feeder line's sections each at
+its own recorded position), the parts with their real
 shapes (:mod:`.scene`), coloured by speed or by the size of the cluster of
 touching parts they belong to (single parts grey), seen from the front and
 above in parallel projection: lengths along the track are true to scale on the
@@ -31,7 +32,7 @@ import numpy as np
 
 from ..errors import OutputError, UsageError
 from .caption import run_caption
-from .scene import FrameData, floor_patch, part_shape, read_frame, shape_mesh, track_mesh
+from .scene import FrameData, floor_patch, part_shape, read_frame, section_motion, shape_mesh, track_mesh
 
 COLORINGS = ("speed", "cluster")
 DEFAULT_SIZE = (1280, 720)   # multiples of 16: what H.264 encoders want
@@ -103,7 +104,8 @@ def _cluster_sizes(result, frame: FrameData) -> np.ndarray:
 
 def on_track(result, position: np.ndarray, surface_position: np.ndarray) -> np.ndarray:
     """(..., N) True for parts over the track: not past its outlet edge along x in the
-    track's frame (every part when the run has no outlet edge)."""
+    track's frame (every part when the run has no outlet edge). ``surface_position`` is the
+    displacement of the section that ends at the outlet edge (a line's last)."""
     from ..postproc.feedrate import outlet_x
 
     edge = outlet_x(result)
@@ -121,8 +123,9 @@ def speed_limit(result, frames: np.ndarray) -> float:
     for k in range(0, len(frames), 256):
         block = frames[k:k + 256]
         speed = np.linalg.norm(result.read("velocity", frames=block), axis=-1)
+        # the outlet edge moves with the last section (a feeder line's section 2)
         track = on_track(result, result.read("position", frames=block),
-                         result.read("surface_position", frames=block))
+                         section_motion(result, block)[0][-1])
         for row, keep in zip(speed, track):
             row = row[keep & np.isfinite(row)]
             if len(row):

@@ -6,8 +6,9 @@ which real shape the parts have (from the deck's ``shape``, ``part_size`` and
 ``part_thickness`` and the body template); :func:`shape_mesh` builds the
 triangles of every part at once (one template shape, rotated by each part's
 quaternion and moved to its centre) and :func:`track_mesh` the track placed at
-the frame's surface position. The renderer and the exporter hand these arrays
-to VTK; nothing here draws.
+the frame's surface position: a feeder line's track section by section, each
+moved by its own recorded motion (:func:`vertex_sections`). The renderer and the
+exporter hand these arrays to VTK; nothing here draws.
 """
 
 from __future__ import annotations
@@ -67,8 +68,13 @@ class FrameData:
     mass: np.ndarray
     species: np.ndarray
     orientation: np.ndarray      # (N, 4) unit quaternions (w, x, y, z)
-    surface_position: np.ndarray  # (3,) [m]
+    surface_position: np.ndarray  # (3,) [m] section 1's (a single track's) displacement
     surface_velocity: np.ndarray  # (3,) [m s-1]
+    # (S, 3) every section's displacement and velocity, row k - 1 for section k (row 0 is
+    # surface_*); a section whose motion the file does not record reads 0 (at rest). None: as
+    # surface_* (one section).
+    section_position: np.ndarray | None = None
+    section_velocity: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.ids)
@@ -77,6 +83,16 @@ class FrameData:
     def speed(self) -> np.ndarray:
         """(N,) |velocity| [m s-1] in the simulation (lab) frame."""
         return np.linalg.norm(self.velocity, axis=1)
+
+    @property
+    def sections_position(self) -> np.ndarray:
+        """(S, 3) every section's displacement [m] (one row for a single track)."""
+        return self.surface_position[None] if self.section_position is None else self.section_position
+
+    @property
+    def sections_velocity(self) -> np.ndarray:
+        """(S, 3) every section's velocity [m s-1] (one row for a single track)."""
+        return self.surface_velocity[None] if self.section_velocity is None else self.section_velocity
 
 
 def _shape_name(value) -> str:
@@ -133,12 +149,30 @@ def read_frame(result, index: int) -> FrameData:
         orientation = result.read("orientation", frames=index, slots=frame.slots)
     except KeyError:  # a result without bodies: every part is a sphere, unrotated
         orientation = np.tile((1.0, 0.0, 0.0, 0.0), (len(frame), 1))
+    position, velocity = section_motion(result, index)
     return FrameData(
         index=index, n_frames=n, time=frame.time, ids=frame.ids,
         orientation=np.asarray(orientation, dtype=float).reshape(len(frame), 4),
-        surface_position=np.asarray(result.read("surface_position", frames=index), dtype=float),
-        surface_velocity=np.asarray(result.read("surface_velocity", frames=index), dtype=float),
+        surface_position=position[0], surface_velocity=velocity[0],
+        section_position=position, section_velocity=velocity,
         **{name: frame[name] for name in FIELDS})
+
+
+def section_motion(result, frames) -> tuple[np.ndarray, np.ndarray]:
+    """(position, velocity) of every section at ``frames`` (an int: (S, 3) each; else
+    (S, frames, 3)): section 1's ``surface_*`` first, then a line's further sections; a section
+    the file does not record (a line of format 1.3) stays at rest (0)."""
+    from ..results import layout as L
+
+    position, velocity = [], []
+    for k in range(1, result.n_sections + 1):
+        if k == 1 or L.surface_path(k) in result.file:
+            p, v = result.section_surface(k, frames=frames)
+        else:
+            p = v = np.zeros_like(position[0])
+        position.append(np.asarray(p, dtype=float))
+        velocity.append(np.asarray(v, dtype=float))
+    return np.stack(position), np.stack(velocity)
 
 
 # -- template shapes: (points (V, 3), triangles (F, 3), normals (V, 3)) in the body frame -----
@@ -249,14 +283,46 @@ def shape_mesh(frame: FrameData, shape: PartShape) -> PartsMesh:
                      np.ascontiguousarray(turned).reshape(-1, 3))
 
 
-def track_mesh(result, frame: FrameData):
-    """(vertices, triangles) of the track at the frame (its rest mesh moved by the surface
-    position), or None when the run has no track mesh (the single-part deck's plane)."""
+def vertex_sections(result) -> np.ndarray | None:
+    """(V,) each track vertex's row in :attr:`FrameData.sections_position` (its section - 1), or
+    None without a track mesh. A file that does not split its track (a single track, a line of
+    format 1.3) moves every vertex with section 1, as the file says the track moves."""
     mesh = result.track_mesh
     if mesh is None:
         return None
-    vertices, triangles = mesh
-    return np.asarray(vertices, dtype=float) + frame.surface_position, np.asarray(triangles)
+    split = result.track_sections
+    if split is None:
+        return np.zeros(len(mesh[0]), dtype=np.int64)
+    return np.asarray(split, dtype=np.int64) - 1
+
+
+def track_mesh(result, frame: FrameData):
+    """(vertices, triangles) of the track at the frame (its rest mesh moved by the surface
+    position: each vertex by its own section's), or None when the run has no track mesh (the
+    single-part deck's plane)."""
+    rows = vertex_sections(result)
+    if rows is None:
+        return None
+    vertices, triangles = result.track_mesh
+    return (np.asarray(vertices, dtype=float) + frame.sections_position[rows],
+            np.asarray(triangles))
+
+
+def track_velocity(result, frame: FrameData) -> np.ndarray | None:
+    """(V, 3) the velocity of each track vertex at the frame [m s-1]: its section's."""
+    rows = vertex_sections(result)
+    return None if rows is None else frame.sections_velocity[rows]
+
+
+def part_sections(result, frame: FrameData) -> np.ndarray:
+    """(N,) each part's row in :attr:`FrameData.sections_velocity`: the section whose stretch
+    of track holds its x (a line's section 2 from the joint at ``track_length`` on, the parts
+    past the outlet edge included); 0 for a single track."""
+    rows = np.zeros(len(frame), dtype=np.int64)
+    if len(frame.sections_velocity) > 1:
+        joint = float(result.parameters.get("track_length", np.inf))
+        rows[frame.position[:, 0] >= joint] = 1
+    return rows
 
 
 def floor_patch(frame: FrameData, xy_range=None, margin: float = 5.0):

@@ -36,12 +36,36 @@ class Report:
         return not any(p.level == "error" for p in self.problems)
 
 
+def numeric_parameters(f: h5py.File) -> dict[str, float]:
+    """The file's deck variables that are numbers (strings of numbers included)."""
+    variables = f.get(L.VARIABLES)
+    out = {}
+    for name, ds in (variables.items() if isinstance(variables, h5py.Group) else ()):
+        try:
+            out[name] = float(_text(ds[()]) if ds.dtype.kind in "SOU" else ds[()])
+        except (TypeError, ValueError):
+            pass
+    return out
+
+
+def format_version(f: h5py.File) -> tuple[int, int]:
+    version = f[L.PARAMETERS].attrs.get("format_version") if L.PARAMETERS in f else None
+    try:
+        return tuple(int(v) for v in np.ravel(version)[:2]) if version is not None else (1, 0)
+    except (TypeError, ValueError):
+        return (1, 0)
+
+
 class _Checker:
     def __init__(self, f: h5py.File, allow_incomplete: bool):
         self.f = f
         self.allow_incomplete = allow_incomplete
         self.problems: list[Problem] = []
         self.frames = 0
+        # a feeder line records each section's motion (format 1.4 on)
+        sections = numeric_parameters(f).get("sections", 1.0)
+        self.sections = max(1, int(round(sections))) if math.isfinite(sections) else 1
+        self.records_sections = format_version(f) >= L.SECTIONS_SINCE
 
     def error(self, where, message):
         self.problems.append(Problem("error", where, message))
@@ -295,6 +319,7 @@ class _Checker:
                     self.error(f"{L.TRACK}/triangles", "index a vertex that does not exist")
                 if _text(v.attrs.get("unit", "")) != "m":
                     self.error(f"{L.TRACK}/vertices", "unit attribute must be 'm'")
+                self.track_sections(v.shape[0])
         if L.BODY_TEMPLATE in self.f:
             b = self.f[L.BODY_TEMPLATE]
             if not isinstance(b, h5py.Dataset) or b.ndim != 2 or b.shape[1] != 4:
@@ -302,9 +327,42 @@ class _Checker:
             elif np.any(~np.isfinite(b[()])) or np.any(b[()][:, 3] <= 0):
                 self.error(L.BODY_TEMPLATE, "non-finite values or radii <= 0")
 
+    def track_sections(self, n_vertices: int):
+        """A line's split of the track into sections (FORMAT.md, "Feeder lines")."""
+        if L.TRACK_SECTION not in self.f:
+            if self.sections > 1 and self.records_sections:
+                self.error(L.TRACK_SECTION, f"missing: a line of {self.sections} sections must say "
+                                            "which section each track vertex belongs to")
+            return
+        ds = self.f[L.TRACK_SECTION]
+        if not isinstance(ds, h5py.Dataset) or ds.shape != (n_vertices,) or ds.dtype.kind not in "iu":
+            self.error(L.TRACK_SECTION, f"must be ({n_vertices},) integers: one section per vertex")
+        elif n_vertices and (ds[()].min() < 1 or ds[()].max() > self.sections):
+            self.error(L.TRACK_SECTION, f"sections must lie in 1..{self.sections}")
+
     def surface(self):
+        """Each section's motion: section 1's in every file, the further ones in a line's."""
+        for k in range(1, self.sections + 1):
+            path = L.surface_path(k)
+            if k > 1 and path not in self.f:
+                message = (f"missing: section {k}'s motion (the line has {self.sections} sections; "
+                           "its sine drive must be recorded)")
+                if self.records_sections:
+                    self.error(path, message)
+                else:  # format 1.3 lines did not record it: they still read
+                    self.warn(path, f"{message}, not recorded before format 1.4")
+                continue
+            self.section_surface(path)
+        observables = self.f.get("observables")
+        for name in (observables if isinstance(observables, h5py.Group) else ()):
+            k = name[len("surface_s"):] if name.startswith("surface_s") else ""
+            if k.isdigit() and not 2 <= int(k) <= self.sections:
+                self.error(f"observables/{name}", f"the motion of a section the run does not have "
+                                                  f"(sections = {self.sections})")
+
+    def section_surface(self, group: str):
         for name, (_, comps, unit) in L.SURFACE_ELEMENTS.items():
-            path = f"{L.SURFACE}/{name}"
+            path = f"{group}/{name}"
             v = self.time_series(path, comps, unit)
             if v is None:
                 continue
@@ -358,6 +416,37 @@ MIN_SPEED_LIMIT = 1.0  # m/s
 G = 9.81  # m/s^2
 # Frames read at once by the physical checks (values of one float element).
 _BLOCK_VALUES = 2_000_000
+# A line's further sections must sit where their sine drive puts them to this fraction of the
+# amplitude (the velocity: of the peak speed): the recorded motion is the engine's closed form
+# of it, to float rounding (~1e-12 of the amplitude over 10^7 steps), so 1e-6 leaves room for
+# rounding and still finds a drive recorded 1e-5 off. Plus an absolute floor for a drive of
+# amplitude 0 (the values are then 0 to rounding).
+DRIVE_RTOL = 1e-6
+DRIVE_ATOL = {"position": 1e-15, "velocity": 1e-12}  # m, m/s
+
+
+def sine_drive(freq, amp_t, amp_n, phase, dt, step, time):
+    """((n, 3) position [m], (n, 3) velocity [m/s]) of a section under LIGGGHTS' sine movers at
+    ``step`` (n,) and ``time`` (n,) [s], from where it was placed at t = 0 (amp_n sin(phi) along
+    z; FORMAT.md, "Feeder lines").
+
+    wiggle (x) and viblin (z) move the mesh by v(t_j) dt at each step j = 1..n, v = A w cos(w t
+    + phi), so x(n) = A w dt sum_j cos(j th + phi), th = w dt, which sums to
+    A w dt sin(n th / 2) cos((n + 1) th / 2 + phi) / sin(th / 2) (as the deck's surface_* of
+    include/surface_motion.liggghts); the velocity is the movers' v(t) itself."""
+    step = np.asarray(step, dtype=float)
+    time = np.asarray(time, dtype=float)
+    w = 2 * math.pi * freq
+    phi = math.radians(phase)
+    half = w * dt / 2
+    gain = w * dt / math.sin(half) if half else 0.0  # 2 (1 + th^2/24 ...): the sum's scale
+    ramp = np.sin(step * half)
+    x = amp_t * gain * ramp * np.cos((step + 1) * half)
+    z = amp_n * math.sin(phi) + amp_n * gain * ramp * np.cos((step + 1) * half + phi)
+    vx = amp_t * w * np.cos(w * time)
+    vz = amp_n * w * np.cos(w * time + phi)
+    zero = np.zeros_like(step)
+    return np.column_stack([x, zero, z]), np.column_stack([vx, zero, vz])
 
 
 class _Physics:
@@ -365,13 +454,17 @@ class _Physics:
 
     def __init__(self, c: _Checker):
         self.c, self.f = c, c.f
-        variables = self.f.get(L.VARIABLES)
-        self.p = {}
-        for name, ds in (variables.items() if variables is not None else ()):
-            try:
-                self.p[name] = float(_text(ds[()]) if ds.dtype.kind in "SOU" else ds[()])
-            except (TypeError, ValueError):
-                pass
+        self.p = numeric_parameters(self.f)
+
+    def _motions(self, element: str) -> list[np.ndarray]:
+        """Every recorded section's ``element`` (position or velocity), (frames, 3) each."""
+        out = []
+        for k in range(1, self.c.sections + 1):
+            path = f"{L.surface_path(k)}/{element}/value"
+            ds = self.f.get(path)
+            if isinstance(ds, h5py.Dataset) and ds.ndim == 2 and ds.shape[0] and ds.shape[1] == 3:
+                out.append(ds[()])
+        return out
 
     def step(self) -> None:
         """A fixed dt beyond the contact's limits (vibrofeed.parameters)."""
@@ -386,18 +479,81 @@ class _Physics:
             self.c.error(f"{L.VARIABLES}/dt", f"{problem}{insisted}: the contacts were not resolved")
 
     def surface_speed(self) -> float:
-        """The surface's peak speed [m/s]: recorded, or of the sine the parameters give."""
-        peak = 2 * math.pi * self.p.get("freq", 0.0) * math.hypot(self.p.get("amp_t", 0.0),
-                                                                 self.p.get("amp_n", 0.0))
-        path = f"{L.SURFACE}/velocity/value"
-        if path in self.f and self.f[path].shape[0]:
-            v = np.linalg.norm(self.f[path][()], axis=-1)
+        """The surface's peak speed [m/s], of the fastest section: recorded, or of the sines
+        the parameters give (section k >= 2 of a line: the s<k>_* drive)."""
+        peak = 0.0
+        for k in range(1, self.c.sections + 1):
+            prefix = "" if k == 1 else f"s{k}_"
+            peak = max(peak, 2 * math.pi * self.p.get(f"{prefix}freq", 0.0) * math.hypot(
+                self.p.get(f"{prefix}amp_t", 0.0), self.p.get(f"{prefix}amp_n", 0.0)))
+        for v in self._motions("velocity"):
+            v = np.linalg.norm(v, axis=-1)
             if np.isfinite(v).all():
                 peak = max(peak, float(v.max()))
         return peak
 
+    def drives(self) -> None:
+        """Each further section of a line moved as its sine drive says (FORMAT.md, "What check
+        checks": Drives). The movers (LIGGGHTS' wiggle along x, viblin along z) add v(t_j) dt
+        at every step j, so after n steps a section is displaced by the Riemann sum of its
+        velocity, whose closed form :func:`sine_drive` gives; it departs from the continuous
+        x = A_t sin(w t), z = A_n sin(w t + phi) by at most A w dt (1 + w dt / 24)."""
+        step = self.f.get(f"{L.PARTS}/position/step")
+        time = self.f.get(f"{L.PARTS}/position/time")
+        if step is None or time is None or len(step) == 0:
+            return
+        step, time = step[()], time[()]
+        dt = self.time_step(step, time)
+        for k in range(2, self.c.sections + 1):
+            motion = [self.f.get(f"{L.surface_path(k)}/{e}/value") for e in ("position", "velocity")]
+            if any(not isinstance(m, h5py.Dataset) or m.shape != (len(step), 3) for m in motion):
+                continue  # missing or misshapen: reported with the layout
+            names = [f"s{k}_{n}" for n in L.SECTION_DRIVE]
+            missing = [n for n in names if n not in self.p]
+            where = L.surface_path(k)
+            if missing:
+                self.c.error(where, f"section {k}'s drive ({', '.join(missing)}) is not among the "
+                                    "recorded parameters: its motion cannot be verified")
+                continue
+            if dt is None:
+                self.c.error(where, "no time step recorded (derived/dt_used): section "
+                                    f"{k}'s motion cannot be verified")
+                continue
+            drive = [self.p[n] for n in names]
+            expected = sine_drive(*drive, dt, step, time)
+            amp = max(abs(drive[1]), abs(drive[2]))
+            omega = 2 * math.pi * drive[0]
+            for element, got, want, scale, unit in (
+                    ("position", motion[0][()], expected[0], amp, "m"),
+                    ("velocity", motion[1][()], expected[1], amp * omega, "m/s")):
+                tol = DRIVE_RTOL * scale + DRIVE_ATOL[element]
+                off = np.abs(got - want).max(axis=1)
+                bad = np.nonzero(~(off <= tol))[0]  # NaN fails too
+                if len(bad):
+                    j = int(bad[0])
+                    self.c.error(f"{where}/{element}/value",
+                                 f"section {k}'s {element} at frame {j} (t = {time[j]:g} s) is "
+                                 f"{np.array2string(got[j], precision=4)} {unit}, its drive gives "
+                                 f"{np.array2string(want[j], precision=4)} {unit} (off by "
+                                 f"{off[j]:.3g}, beyond {tol:.3g} {unit}: {DRIVE_RTOL:g} of the "
+                                 f"amplitude)")
+
+    def time_step(self, step: np.ndarray, time: np.ndarray) -> float | None:
+        """The run's step [s]: derived/dt_used, else time over step."""
+        ds = self.f.get(f"{L.DERIVED}/dt_used")
+        if isinstance(ds, h5py.Dataset) and ds.shape == ():
+            dt = float(ds[()])
+            if math.isfinite(dt) and dt > 0:
+                return dt
+        moved = step > 0
+        if moved.any():
+            dt = float(np.median(time[moved] / step[moved]))
+            return dt if math.isfinite(dt) and dt > 0 else None
+        return None
+
     def run(self) -> None:
         self.step()
+        self.drives()
         if not all(f"{L.PARTS}/{n}/value" in self.f for n in ("id", "position", "velocity", "mass")):
             return
         ids = self.f[f"{L.PARTS}/id/value"]
@@ -444,12 +600,13 @@ class _Physics:
             prev = (ids[b - 1:b], pos[b - 1:b])
 
     def _surface_travel(self) -> float:
-        path = f"{L.SURFACE}/position/value"
-        if path in self.f and self.f[path].shape[0]:
-            d = np.abs(self.f[path][()])
+        """The largest displacement of any section [m]."""
+        travel = 0.0
+        for d in self._motions("position"):
+            d = np.abs(d)
             if np.isfinite(d).all():
-                return float(d.max())
-        return 0.0
+                travel = max(travel, float(d.max()))
+        return travel
 
     def _speeds(self, ids, v, m, live, a, time, limit, found) -> None:
         speed = np.where(live, np.linalg.norm(np.nan_to_num(v, nan=0.0), axis=-1), 0.0)

@@ -14,10 +14,14 @@ FORMAT_NAME = "vibrofeed-result"
 # table moves out of observables/ (H5MD observables are quantities sampled in time, the table is
 # one row per event), the box gets its edges, unit and system become variable-length strings
 # (H5MD units module). Files of 1.0 to 1.2 still read: READ_OUTLETS lists where they keep it.
-FORMAT_VERSION = (1, 3)
+# 1.4: a feeder line records each section's motion (observables/surface_s<k>, k >= 2) and which
+# section each vertex of parameters/track belongs to (parameters/track/section); 1.3 files of
+# a line (section 2's motion unrecorded) still read, and check only warns about them.
+FORMAT_VERSION = (1, 4)
+SECTIONS_SINCE = (1, 4)  # the first format that records a line's sections
 
 PARTS = "particles/parts"
-SURFACE = "observables/surface"
+SURFACE = "observables/surface"  # the (first) section's motion: every run has it
 OUTLET = "vibrofeed/outlet"   # a non-H5MD group: H5MD allows unspecified groups at the root
 OUTLET_BEFORE_1_3 = "observables/outlet"
 REJECTS = "vibrofeed/rejects"  # a feeder line's reject table, beside the outlet's
@@ -100,6 +104,30 @@ SURFACE_ELEMENTS = {
     "position": ("f8", 3, "m"),
     "velocity": ("f8", 3, "m s-1"),
 }
+# A feeder line (parameter `sections` > 1) records each further section's motion as its own
+# observable beside SURFACE, with the same elements: section k >= 2 under surface_s<k> (the
+# s<k>_* names of its parameters). Section 1 stays SURFACE, so what reads a single track reads
+# a line's first section unchanged. parameters/track/section then gives each vertex's section.
+TRACK_SECTION = "parameters/track/section"
+
+
+def surface_path(section: int) -> str:
+    """The observable of section ``section``'s motion (1-based): SURFACE for the first."""
+    if section < 1:
+        raise ValueError(f"sections count from 1, got {section}")
+    return SURFACE if section == 1 else f"{SURFACE}_s{section}"
+
+
+def surface_variables(section: int) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """The deck's equal-style variables of a section's motion: (x, y, z), (vx, vy, vz)."""
+    prefix = "" if section == 1 else f"s{section}_"
+    return (tuple(f"{prefix}surface_{c}" for c in "xyz"),
+            tuple(f"{prefix}surface_v{c}" for c in "xyz"))
+
+
+# The sine drive of section k >= 2 (a line's sections are sine-driven): the parameters
+# s<k>_freq [Hz], s<k>_amp_t, s<k>_amp_n [m], s<k>_phase [deg].
+SECTION_DRIVE = ("freq", "amp_t", "amp_n", "phase")
 
 TIME_UNIT = "s"
 
@@ -123,6 +151,9 @@ DECK_CONTRACT = (
     "surface_vy",
     "surface_vz",
 )
+
+# A feeder line's deck defines each further section's motion too: surface_variables(k) for
+# section k = 2, ... (s2_surface_x ... s2_surface_vz), evaluated at each frame as surface_* are.
 
 # A bulk feeder's deck defines these too (all or none): the outlet edge and the
 # catch plane [m], the parts inserted so far and the spheres per part. The

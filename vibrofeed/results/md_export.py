@@ -19,8 +19,9 @@ what they read, still to the letter of H5MD 1.1:
   the result (``m s-1``, ``rad s-1``, ``N``, ``kg``, ``s``);
 - ``box/pbc``, the periodicity per axis as a time series (all false): not an
   H5MD item, which H5MD allows, for znh5md;
-- the observables of the result (surface motion, mass balance) as time series,
-  and the result's run id and path as attributes of ``parameters``.
+- the observables of the result (surface motion, a feeder line's further sections'
+  motion as ``surface_s<k>``, mass balance) as time series, and the result's run id and
+  path as attributes of ``parameters``.
 
 A per-part element the result holds no value of (the force on clumps, NaN by
 design) is left out.
@@ -142,10 +143,14 @@ def _write(result, path: Path, every: int) -> None:
                 values[name][k0:k1] = block
 
         obs = f.create_group("observables")
-        surface = obs.create_group("surface")
-        for name, (scale, unit) in SURFACE_UNITS.items():
-            ds = _time_series(surface, name, (len(index), 3), "f8", np.nan, unit, step, time)[0]
-            ds[:] = result.read(f"surface_{name}", frames=index) * scale
+        for k in range(1, result.n_sections + 1):
+            if k > 1 and L.surface_path(k) not in result.file:
+                continue  # a line of format 1.3: its further sections' motion is unrecorded
+            surface = obs.create_group(L.surface_path(k).rpartition("/")[2])
+            motion = result.section_surface(k, frames=index)
+            for (name, (scale, unit)), values in zip(SURFACE_UNITS.items(), motion):
+                ds = _time_series(surface, name, (len(index), 3), "f8", np.nan, unit, step, time)[0]
+                ds[:] = values * scale
         counts = result.mass_balance
         if counts is not None:
             balance = obs.create_group("mass_balance")

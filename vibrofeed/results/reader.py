@@ -20,11 +20,14 @@ quaternion for every present part), the outlet events (:attr:`Result.outlet`),
 the mass balance (:attr:`Result.mass_balance`), the track mesh
 (:attr:`Result.track_mesh`) and the clump template (:attr:`Result.body_template`).
 Files of format 1.2 and earlier, which kept the outlet table under
-``observables/``, read alike.
+``observables/``, read alike. A feeder line's file records each section's motion
+(:meth:`Result.section_surface`, :attr:`Result.n_sections`); ``surface_position`` and
+``surface_velocity`` are section 1's, as for a single track.
 """
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -40,6 +43,8 @@ _BLOCK_VALUES = 1 << 22
 # A scattered frame selection is read as its bounding block when it covers at
 # least this fraction of it (one contiguous read), else point by point.
 _DENSE = 0.25
+# read()'s names of a further section's motion: surface_s2_position, surface_s2_velocity, ...
+_SECTION_FIELD = re.compile(r"surface_s(\d+)_(\w+)")
 
 
 def _text(value) -> str:
@@ -217,11 +222,46 @@ class Result:
     def seed(self) -> int:
         return int(self.file[L.PARAMETERS]["seed"][()])
 
+    @property
+    def format_version(self) -> tuple[int, int]:
+        """(major, minor) of the file's format; (1, 0) when unrecorded (the first files)."""
+        version = self.file[L.PARAMETERS].attrs.get("format_version")
+        return (1, 0) if version is None else tuple(int(v) for v in np.ravel(version)[:2])
+
+    # -- sections of a feeder line --------------------------------------------------
+    @cached_property
+    def n_sections(self) -> int:
+        """The track's sections: a feeder line's ``sections`` parameter, else 1."""
+        try:
+            return max(1, int(round(float(self.parameters.get("sections", 1)))))
+        except (TypeError, ValueError):
+            return 1
+
+    def section_surface(self, section: int, frames=None) -> tuple[np.ndarray, np.ndarray]:
+        """(position, velocity) of section ``section``'s motion (1-based) at a frame
+        selection (as for :meth:`read`): (frames, 3) [m], [m s-1], displacement from its
+        place at rest, in the simulation frame. Section 1 is ``surface_position`` and
+        ``surface_velocity``; a further section of a file that does not record it (a line
+        of format 1.3) raises ResultError."""
+        if not 1 <= section <= self.n_sections:
+            raise IndexError(f"section {section} out of range: {self.path} has {self.n_sections} "
+                             f"section{'s' if self.n_sections > 1 else ''} (1 to {self.n_sections})")
+        prefix = "surface" if section == 1 else f"surface_s{section}"
+        return (self.read(f"{prefix}_position", frames), self.read(f"{prefix}_velocity", frames))
+
+    @cached_property
+    def track_sections(self) -> np.ndarray | None:
+        """(V,) the section (1-based) of each vertex of :attr:`track_mesh`, or None when the
+        file does not say (a single track: every vertex moves with ``surface_position``)."""
+        ds = self.file.get(L.TRACK_SECTION)
+        return None if ds is None else ds[()].astype(np.int64)
+
     # -- reading by window ----------------------------------------------------------
     FIELDS = (*L.PART_ELEMENTS, *L.OPTIONAL_PART_ELEMENTS, "surface_position", "surface_velocity",
               "time", "step")
     """Names :meth:`read` knows: the per-part elements (``ids`` is an alias of
-    ``id``), the surface's motion and the frames' time and step."""
+    ``id``), the surface's motion and the frames' time and step; a feeder line's
+    further sections too, as ``surface_s<k>_position`` and ``surface_s<k>_velocity``."""
 
     def _dataset(self, name: str):
         """(dataset, per_part) of a field name; (None, True) for an optional
@@ -234,6 +274,17 @@ class Result:
             return (None if group is None else group["value"]), True
         if name.startswith("surface_") and name[len("surface_"):] in L.SURFACE_ELEMENTS:
             return self.file[L.SURFACE][name[len("surface_"):]]["value"], False
+        section = _SECTION_FIELD.fullmatch(name)
+        if section and int(section[1]) >= 2 and section[2] in L.SURFACE_ELEMENTS:
+            k = int(section[1])
+            group = self.file.get(L.surface_path(k))
+            if group is None:
+                raise ResultError(f"{self.path} records no motion of section {k} ("
+                                  + (f"format {'.'.join(map(str, self.format_version))}: a line's "
+                                     "sections are recorded from format 1.4 on)"
+                                     if k <= self.n_sections else f"it has {self.n_sections} "
+                                     f"section{'s' if self.n_sections > 1 else ''})"))
+            return group[section[2]]["value"], False
         if name in ("time", "step"):
             return self.file[L.PARTS]["position"][name], False
         raise KeyError(f"no field {name!r} in a vibrofeed result; known: {', '.join(self.FIELDS)}")

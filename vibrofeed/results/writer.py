@@ -17,7 +17,9 @@ convention prescribes, and are reused by later particles.
 A bulk feeder's run adds (FORMAT.md, "Bulk feeders"): the parts' orientation,
 the outlet event table (:meth:`ResultWriter.write_events`), the mass balance
 (``counts`` of :meth:`ResultWriter.write_frame`), the track mesh and the body
-template. Each is created only when the run has it, so the files of other decks
+template; a feeder line also each further section's motion (``sections``,
+``section_surfaces`` of :meth:`ResultWriter.write_frame`) and the section of each
+track vertex. Each is created only when the run has it, so the files of other decks
 keep the layout they always had.
 """
 
@@ -160,6 +162,13 @@ class ResultWriter:
     line:
         a feeder line (sections > 1): creates the reject table (``L.REJECTS``, the
         outlet's attributes) and records the ``rejected`` count (``L.LINE_COUNTS``).
+    sections:
+        the sections whose motion is recorded: section 1 in ``L.SURFACE``, each further
+        one in ``L.surface_path(k)``; every frame then gives ``sections - 1``
+        ``section_surfaces``.
+    track_sections:
+        ``(V,)`` the section (1-based) of each vertex of ``track``, stored as
+        ``L.TRACK_SECTION``: at frame k a vertex sits at rest + its section's position.
     """
 
     def __init__(self, path, *, deck_name: str, deck_path: str, deck_text: str,
@@ -168,13 +177,15 @@ class ResultWriter:
                  engine_version: str, seed: int | None, ranks: int = 1,
                  command: str = "", run_id: str = "", capacity_hint: int = 1,
                  max_delay: float = 0.25, track=None, body_template=None,
-                 outlet: Mapping | None = None, line: bool = False):
+                 outlet: Mapping | None = None, line: bool = False, sections: int = 1,
+                 track_sections=None):
         self.path = str(path)
         self.slots = SlotMap()
         self.frames = 0          # frames handed over
         self.written = 0         # frames on disk
         self.max_delay = max_delay
-        self._pending: list = []  # (step, time, {name: row}, surface_pos, surface_vel, counts)
+        # (step, time, {name: row}, surface_pos, surface_vel, counts, further sections' (pos, vel))
+        self._pending: list = []
         self._pending_events: list = []  # (table path, event table) handed over, not yet written
         self.events = 0          # events handed over
         self._pending_since = 0.0
@@ -183,6 +194,9 @@ class ResultWriter:
         n_chunk = int(min(max(capacity_hint, 1), 4096))
         self._chunk_parts = n_chunk
         self._chunk_frames = int(max(1, min(1024, _CHUNK_BYTES // (8 * 3 * n_chunk))))
+        if int(sections) < 1:
+            raise ValueError(f"sections must be >= 1, got {sections}")
+        self.sections = int(sections)
 
         self.file = h5py.File(self.path, "w")
         f = self.file
@@ -192,7 +206,9 @@ class ResultWriter:
         self._create_time_series(f)
         # Dataset handles, looked up once.
         self._values = {name: f[L.PARTS][name]["value"] for name in L.PART_ELEMENTS}
-        self._surface = {name: f[L.SURFACE][name]["value"] for name in L.SURFACE_ELEMENTS}
+        # one {element: value dataset} per section, section 1 first
+        self._surfaces = [{name: f[L.surface_path(k)][name]["value"] for name in L.SURFACE_ELEMENTS}
+                          for k in range(1, self.sections + 1)]
         self._edges = f[L.PARTS]["box/edges/value"]
         self._step = f[L.PARTS]["position/step"]
         self._time = f[L.PARTS]["position/time"]
@@ -201,6 +217,10 @@ class ResultWriter:
         self._tables: dict = {}  # event table path -> its datasets, once created
         if track is not None:
             self._write_track(f, *track)
+            if track_sections is not None:
+                self._write_track_sections(f, track_sections, len(track[0]))
+        elif track_sections is not None:
+            raise ValueError("track_sections without a track")
         if body_template is not None:
             template = np.asarray(body_template, dtype="f8")
             if template.ndim != 2 or template.shape[1] != 4:
@@ -302,13 +322,15 @@ class ResultWriter:
                                       chunks=(max(cf, 256), 3)), "m")
         self._step_time(edges, step, time)
 
-        obs = f.create_group(L.SURFACE)
-        for name, (dtype, comps, unit) in L.SURFACE_ELEMENTS.items():
-            g = obs.create_group(name)
-            value = g.create_dataset("value", shape=(0, comps), maxshape=(None, comps),
-                                     dtype=dtype, chunks=(max(cf, 256), comps))
-            set_unit(value, unit)
-            self._step_time(g, step, time)
+        # each section's motion: H5MD time series sampled with the parts (hard-linked step, time)
+        for k in range(1, self.sections + 1):
+            obs = f.create_group(L.surface_path(k))
+            for name, (dtype, comps, unit) in L.SURFACE_ELEMENTS.items():
+                g = obs.create_group(name)
+                value = g.create_dataset("value", shape=(0, comps), maxshape=(None, comps),
+                                         dtype=dtype, chunks=(max(cf, 256), comps))
+                set_unit(value, unit)
+                self._step_time(g, step, time)
 
     @staticmethod
     def _write_track(f: h5py.File, vertices, triangles) -> None:
@@ -322,6 +344,15 @@ class ResultWriter:
         g = f.create_group(L.TRACK)
         set_unit(g.create_dataset("vertices", data=vertices), "m")
         g.create_dataset("triangles", data=triangles.astype("i4"))
+
+    def _write_track_sections(self, f: h5py.File, sections, n_vertices: int) -> None:
+        sections = np.asarray(sections)
+        if sections.shape != (n_vertices,) or sections.dtype.kind not in "iu":
+            raise ValueError(f"track_sections must be ({n_vertices},) integers, got {sections.shape} "
+                             f"{sections.dtype}")
+        if n_vertices and not (1 <= sections.min() and sections.max() <= self.sections):
+            raise ValueError(f"track_sections must lie in 1..{self.sections} (the sections recorded)")
+        f.create_dataset(L.TRACK_SECTION, data=sections.astype("i4"))
 
     def _create_outlet(self, attrs: Mapping, path: str = L.OUTLET) -> None:
         """An event table (the outlet's, or a line's rejects) with the outlet's attributes."""
@@ -383,8 +414,8 @@ class ResultWriter:
 
     # -- frames -------------------------------------------------------------------
     def write_frame(self, step: int, time: float, parts: Mapping[str, np.ndarray],
-                    surface_position, surface_velocity, counts: Mapping[str, int] | None = None
-                    ) -> None:
+                    surface_position, surface_velocity, counts: Mapping[str, int] | None = None,
+                    section_surfaces=()) -> None:
         """Hand over one frame; it reaches the disk within ``max_delay`` seconds.
 
         ``parts`` holds per-particle arrays with the same row order:
@@ -393,7 +424,15 @@ class ResultWriter:
         ``orientation`` (quaternions w, x, y, z); rows may come in any order.
         ``counts`` is the mass balance at this frame: ``{"inserted", "on_track",
         "exited", "lost"}`` (ints), and ``"rejected"`` for a feeder line.
+        ``surface_position``, ``surface_velocity`` are section 1's motion (3,) [m, m s-1];
+        ``section_surfaces`` the further sections' ``(position, velocity)``, section 2 first,
+        one per section beyond the first the writer records (``sections``).
         """
+        further = [(np.asarray(p, dtype="f8").reshape(3), np.asarray(v, dtype="f8").reshape(3))
+                   for p, v in section_surfaces]
+        if len(further) != self.sections - 1:  # before any state changes: the frame is refused
+            raise ValueError(f"the writer records {self.sections} section(s): give the motion of "
+                             f"{self.sections - 1} further section(s), got {len(further)}")
         slots = self.slots.assign(parts["id"])  # refuses duplicate ids
         # (slots, values) per element, scattered into the batch's block when
         # written: one pass over the values here (a copy: the caller may reuse
@@ -415,7 +454,7 @@ class ResultWriter:
                 self._pending_since = _time.monotonic()
             self._pending.append((int(step), float(time), rows,
                                   np.asarray(surface_position, dtype="f8"),
-                                  np.asarray(surface_velocity, dtype="f8"), counts))
+                                  np.asarray(surface_velocity, dtype="f8"), counts, further))
             self.frames += 1
             due = _time.monotonic() - self._pending_since >= self.max_delay
         if due:
@@ -486,8 +525,10 @@ class ResultWriter:
                                for f in self._pending], dtype=np.int64)
             for j, name in enumerate(self._count_names):
                 self._append(self._counts[name], k0, counts[:, j])
-        self._append(self._surface["position"], k0, np.array([f[3] for f in self._pending]))
-        self._append(self._surface["velocity"], k0, np.array([f[4] for f in self._pending]))
+        for k, surface in enumerate(self._surfaces):
+            motion = [(f[3], f[4]) if k == 0 else f[6][k - 1] for f in self._pending]
+            self._append(surface["position"], k0, np.array([m[0] for m in motion]))
+            self._append(surface["velocity"], k0, np.array([m[1] for m in motion]))
         self._append(self._edges, k0, np.tile(L.BOX_EDGES_PLACEHOLDER, (n, 1)))
         # step/time last: a frame counts once its step is there.
         self._append(self._time, k0, np.array([f[1] for f in self._pending], dtype="f8"))

@@ -15,7 +15,8 @@ from vibrofeed.parameters import resolve
 
 DECK = Deck.find("bulk_feeder")
 _FUNCTIONS = {"sqrt": math.sqrt, "abs": abs, "ceil": math.ceil, "floor": math.floor,
-              "round": round, "sin": math.sin, "cos": math.cos, "pi": math.pi}
+              "round": round, "sin": math.sin, "cos": math.cos, "tan": math.tan,
+              "pi": math.pi}
 
 
 def derived(**given):
@@ -91,12 +92,14 @@ def test_timestep_from_the_hertz_time_with_both_fractions():
 
 
 @pytest.mark.parametrize("given", [{}, {"shape": "chip"}, {"amp_n": "2e-4", "output_dt": "0.02"},
-                                   {"incline": "10"}])
+                                   {"incline": "10"}, {"cross_tilt": "10"}])
 def test_outlet_catch_plane_and_box_floor(given):
     v = derived(**given)
     assert v("outlet_x") == v("track_length")
-    # below catch_z a part's top is under the lowest floor position (-amp_n), with room to spare
-    assert v("catch_z") + v("r_ext") < -v("amp_n")
+    # below catch_z a part's top is under the lowest floor position (-amp_n, and the cross
+    # tilt's drop to the -y wall), with room to spare
+    lowest = -v("amp_n") - v("track_width") * math.tan(math.radians(v("cross_tilt")))
+    assert v("catch_z") + v("r_ext") < lowest
     # the contract's floor rule
     odt, g = v("output_dt"), v("g")
     fall = v("v_max") * odt + g / 2 * odt**2 + 2 * v("part_size")

@@ -14,7 +14,7 @@ from vibrofeed.decks import Deck
 from vibrofeed.engine.outlet import LineOutlet, gravity_vector
 from vibrofeed.errors import ParameterError
 from vibrofeed.geometry import prepare_bulk_feeder, track_mesh
-from vibrofeed.line import Section, combined, joint_motion, section_from, section_mesh
+from vibrofeed.line import Section, combined, joint_motion, joint_steps, section_from, section_mesh
 from vibrofeed.parameters import resolve
 from vibrofeed.results.layout import REJECTS
 
@@ -231,10 +231,14 @@ def write_line_result(path, rejected_counts):
     from vibrofeed.results.writer import ResultWriter
 
     w = ResultWriter(path, deck_name="synthetic_line", deck_path="synthetic_line.liggghts",
-                     deck_text="# synthetic line\n", variables={"sections": ("2", "-", "sections", "1")},
+                     deck_text="# synthetic line\n",
+                     # section 2 stands still (amplitudes 0): its recorded motion is zeros
+                     variables={"sections": ("2", "-", "sections", "1"), "s2_freq": ("100", "Hz", "", "100"),
+                                **{k: ("0", "", "", "0") for k in ("s2_amp_t", "s2_amp_n", "s2_phase")}},
                      derived={"dt_used": 1e-6}, engine_version="LIGGGHTS (synthetic)", seed=1,
                      run_id=hashlib.sha256(str(path).encode()).hexdigest(),
-                     outlet={"outlet_x": 0.018, "catch_z": -5e-4, "method": "synthetic"}, line=True)
+                     outlet={"outlet_x": 0.018, "catch_z": -5e-4, "method": "synthetic"}, line=True,
+                     sections=2)
     o = LineOutlet(0.018, -5e-4, gravity_vector(9.81, 0.0), (0.0, 0.01))
     for k, z2 in enumerate([1e-4, -6e-4]):
         p = parts([1, 2], [[1e-3, 0, 1e-4], [0.012, 2e-4, z2]], radius=1.5e-4)
@@ -242,7 +246,8 @@ def write_line_result(path, rejected_counts):
         if rejects is not None:
             w.write_events(rejects, REJECTS)
         w.write_frame(k, 0.01 * k, p, np.zeros(3), np.zeros(3),
-                      counts={**counts, "rejected": rejected_counts[k]})
+                      counts={**counts, "rejected": rejected_counts[k]},
+                      section_surfaces=[(np.zeros(3), np.zeros(3))])
     w.finish("complete")
     return path
 
@@ -272,3 +277,29 @@ def test_feedrate_reports_a_lines_rejects(tmp_path):
     assert (s["inserted"], s["on_track"], s["exited"], s["rejected"], s["lost"]) == (2, 1, 0, 1, 0)
     s["model_velocity"], s["model_note"] = None, "synthetic"
     assert "exited 0, rejected 1, lost 0" in table(s)
+
+
+def test_joint_steps_with_cross_tilts_closed_forms():
+    w, step, t = 1.2e-3, 5e-5, math.tan(math.radians(10.0))
+    p = {"track_width": w, "gate_width": 0.0, "s2_width": w, "s2_step": step, "track_length": 4e-3,
+         "s2_length": 5e-3, "part_size": 3e-4}
+    # both floors tilted alike across the same width: a uniform step
+    lo, hi = joint_steps({**p, "cross_tilt": 10.0, "s2_cross_tilt": 10.0})
+    assert lo == pytest.approx(step, rel=1e-9) and hi == pytest.approx(step, rel=1e-9)
+    # section 2 level after a tilted section 1: section 1's floor drops w tan(10) below it at -y
+    lo, hi = joint_steps({**p, "cross_tilt": 10.0, "s2_cross_tilt": 0.0})
+    assert lo == pytest.approx(step - w * t, rel=1e-9) and hi == pytest.approx(step, rel=1e-9)
+    # a gate: only its exit meets section 2 (a level section 1 into a tilted section 2)
+    lo, hi = joint_steps({**p, "gate_width": 4e-4, "cross_tilt": 0.0, "s2_cross_tilt": 10.0})
+    assert lo == pytest.approx(step + (w - 4e-4) / 2 * t, rel=1e-9)
+    assert hi == pytest.approx(step + (w + 4e-4) / 2 * t, rel=1e-9)
+
+
+def test_a_tilted_section_one_must_still_step_down_everywhere():
+    deck = Deck(DECKS / "bulk_feeder.liggghts")
+    level = line_values(gate_width=0, s2_width=1.2e-3, s2_cross_tilt=0, cross_tilt=10, n_parts=0,
+                        inlet_rate=30)
+    with pytest.raises(ParameterError) as err:
+        resolve(deck, level)
+    assert "must step down by more than" in str(err.value) and "at its least" in str(err.value)
+    resolve(deck, {**level, "s2_cross_tilt": "10"})  # tilted alike: a uniform 50 um step

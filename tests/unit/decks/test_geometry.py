@@ -3,6 +3,7 @@ surface open only at the outlet and along the wall tops, has the asked dimension
 and the clump templates have the part's outline and thickness."""
 
 import json
+import math
 from collections import Counter
 
 import numpy as np
@@ -178,3 +179,33 @@ def test_prepare_writes_the_files_and_describes_them(tmp_path):
     assert spec["variables"]["mesh_dir"] == p.variables["mesh_dir"]
     sphere = prepare_bulk_feeder({**VALUES, "shape": "0"}, tmp_path / "s")
     assert sphere.body_template is None and sphere.to_spec()["body_template"] is None
+
+
+@pytest.mark.parametrize("gate", [0.0, 8e-4])
+def test_cross_tilt_makes_the_floor_a_plane_down_towards_the_minus_y_wall(gate):
+    tilt = 12.0
+    v, t = track_mesh(L, W, H, gate_width=gate, gate_x=0.7 * L, cross_tilt=tilt)
+    slope = math.tan(math.radians(tilt))
+    walls_top = np.isclose(v[:, 2], H, rtol=0, atol=1e-15)
+    floor = v[~walls_top]
+    # every floor vertex on the plane z = -(W/2 - y) tan(tilt), whatever the gate's width there
+    assert np.abs(floor[:, 2] + (W / 2 - floor[:, 1]) * slope).max() < 1e-12  # the mesh keeps 1 pm
+    assert v[:, 2].min() == pytest.approx(-W * slope, rel=1e-12)  # the reference wall's foot
+    # still one surface: no edge of three faces, and the only floor edge left open is the outlet's
+    counts = edge_counts(t)
+    assert set(counts.values()) <= {1, 2}
+    open_floor = [(p, q) for p, q in open_edges(v, t) if not (np.isclose(p[2], H) and np.isclose(q[2], H))]
+    assert all(np.isclose(p[0], L) and np.isclose(q[0], L) for p, q in open_floor)
+    # the floor's normals lean towards -y by the tilt: downhill, where the parts go
+    tri = v[t]
+    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    n /= np.linalg.norm(n, axis=1)[:, None]
+    is_floor = np.all(~np.isclose(tri[:, :, 2], H), axis=1) & (np.abs(n[:, 2]) > 0.5)
+    assert np.allclose(n[is_floor], [0, -math.sin(math.radians(tilt)), math.cos(math.radians(tilt))],
+                       rtol=0, atol=1e-7)  # unit vectors from vertices kept to 1 pm over 0.1 mm
+
+
+def test_no_cross_tilt_is_the_level_track_bit_for_bit():
+    a = track_mesh(L, W, H, gate_width=8e-4, gate_x=0.7 * L)
+    b = track_mesh(L, W, H, gate_width=8e-4, gate_x=0.7 * L, cross_tilt=0.0)
+    assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])

@@ -62,11 +62,13 @@ BULK = {
     "fill_from": (0, True, 1, True, None),
     "fill_to": (0, True, 1, True, None),
     "inlet_rate": (0, True, INF, False, None),
+    "inlet_batch": (1, True, INF, False, "integers"),
     "track_length": (0, False, INF, False, None),
     "track_width": (0, False, INF, False, None),
     "wall_height": (0, False, INF, False, None),
     "gate_width": (0, True, INF, False, None),
     "gate_at": (0, True, 1, False, None),
+    "cross_tilt": (0, True, 45, True, None),
     "youngs_track": (5e6, False, INF, False, "or zero"),  # 0: the track takes the parts' value
     "poisson_track": (-1, False, 0.5, True, None),
     "restitution_pp": (0.05, False, 1, True, None),
