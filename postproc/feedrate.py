@@ -30,7 +30,8 @@ variance of the kept bins divided by their number squared, i.e. the squared
 standard error of their mean, which falls as bins are kept and rises as
 transient bins are. Both ends are searched together (the run-out of the fill
 is a transient too, and a transient left at one end hides the other from a
-one-sided search), keeping at least half the bins as MSER prescribes.
+one-sided search), keeping at least half the bins as MSER prescribes. A run
+fed by an inlet does not run out: its end is kept, only its start is cut.
 ``start``/``end`` replace the detection.
 
 Uncertainty
@@ -70,7 +71,11 @@ difference (the batch scatter about a straight line, :func:`.line.drift`).
 A store without inflow (section 1 of a pre-filled bed without inlet) drains
 at its out-flux however steadily it feeds, so its hold-up is not judged. A
 drift makes ``unsteady`` (and ``reason``) say which, and how much: the rate is
-then not a steady one. A single track is section 1.
+then not a steady one. A single track is section 1. When the window is found
+(no ``start`` given), it starts no earlier than every fed section is full (the
+MSER start of its hold-up in bins of five periods), and if the bed still drifts
+over it, its start moves later by sixths of it, at most three times, while it
+keeps enough exits: a line still filling is waited for, not reported.
 
 Dilute limit
 ------------
@@ -87,7 +92,7 @@ import math
 import numpy as np
 
 from ..errors import InputError
-from ..line import section_from
+from ..line import section_drive, section_from
 from ..results import layout as L
 from .base import AnalysisBase
 from .line import (
@@ -118,7 +123,7 @@ SUMMARY_KEYS = ("parts_per_s", "parts_per_s_err", "mass_per_s", "mass_per_s_err"
                 "mean_velocity_err", "steady_from", "steady_to", "unsteady", "bed_trends", "n_events",
                 "inserted", "exited", "rejected", "on_track", "lost", "sections", "rejects_by_tooling",
                 "bin_width", "velocity_lag", "profile_x", "profile_velocity", "profile_count",
-                "model_velocity", "model_note", "velocity_ratio", "reason")
+                "model_velocity", "model_note", "velocity_ratio", "shape", "reason")
 # Summary keys of feeder lines only.
 LINE_KEYS = ("rejected", "sections", "rejects_by_tooling")
 # Parameters the single-part model needs from the deck (the rest have defaults).
@@ -230,6 +235,8 @@ def bin_width(t_lo: float, t_hi: float, freq: float, n_events: int = 0) -> float
 # Fewer exits than this in the window measure no rate: their Poisson noise alone is
 # 1/sqrt(N), above 30 %, and a batch-means error needs exits in every batch.
 MIN_EXITS = 10
+# How often the window's start may move later for a drifting bed (by a sixth each time).
+SETTLE_STEPS = 3
 
 
 def too_few_exits(n: int, need: int = MIN_EXITS) -> str | None:
@@ -251,12 +258,13 @@ def check_window(start: float | None, end: float | None, t_lo: float, t_hi: floa
 
 
 def steady_window(times, t_lo: float, t_hi: float, freq: float, start: float | None = None,
-                  end: float | None = None) -> tuple[float, float, float, np.ndarray]:
+                  end: float | None = None, fed: bool = False) -> tuple[float, float, float, np.ndarray]:
     """(t_a, t_b, width, counts) of the steady feeding window (module docstring).
 
     ``counts`` are the events per bin over the whole span, bins of ``width``
     from ``t_lo``; t_a and t_b fall on bin edges unless ``start``/``end`` are given
-    (within the span: see :func:`check_window`).
+    (within the span: see :func:`check_window`). A ``fed`` run (an inlet) has no
+    draining end to cut: it is cut at its start only.
     """
     check_window(start, end, t_lo, t_hi)
     times = np.asarray(times, dtype=float)
@@ -267,7 +275,7 @@ def steady_window(times, t_lo: float, t_hi: float, freq: float, start: float | N
     # Bins cut at the start (d) and at the end (e): detected unless given.
     lo = 0 if start is None else int(np.clip(np.searchsorted(edges, start - 1e-12), 0, n))
     hi = n if end is None else int(np.clip(np.searchsorted(edges, end + 1e-12) - 1, lo, n))
-    d, e = mser(counts[lo:hi], start is None, end is None)
+    d, e = mser(counts[lo:hi], start is None, end is None and not fed)
     d, e = lo + d, n - hi + e
     t_a = edges[d] if start is None else float(start)
     t_b = edges[n - e] if end is None else float(end)
@@ -512,7 +520,11 @@ class FeedRate(AnalysisBase):
         ev = outlet_events(result, t_lo, t_hi)
         times = ev["time"]
         r.event_times, r.n_events = times, len(times)
-        t_a, t_b, width, counts = steady_window(times, t_lo, t_hi, freq, self.start, self.end)
+        fed = float(result.parameters.get("inlet_rate", 0.0)) > 0
+        t_a, t_b, width, counts = steady_window(times, t_lo, t_hi, freq, self.start, self.end, fed)
+        r.parts_per_s = r.parts_per_s_err = math.nan  # the bed's figures before the rate is measured
+        if self.start is None:
+            t_a = self._settled_start(frames, times, t_a, t_b, freq)
         r.steady_from, r.steady_to, r.bin_width, r.counts = t_a, t_b, width, counts
         r.parts_per_s, r.parts_per_s_err = batch_rate(times, np.ones(len(times)), t_a, t_b, freq,
                                                       self.batches)
@@ -537,8 +549,61 @@ class FeedRate(AnalysisBase):
         self._bed(frames, t_a, t_b, freq)
         r.reason = r.reason or r.unsteady  # a drifting bed measures no steady rate either
         if self.model:
+            r.shape = int(float(result.parameters.get("shape", 0)))  # what the model is compared with
             r.model_velocity, r.model_note = dilute_limit(result.parameters)
             r.velocity_ratio = velocity_ratio(r.mean_velocity, r.model_velocity)
+            for k, sec in enumerate(r.get("sections") or (), 1):  # each section's own drive
+                try:
+                    drive = section_drive(result.parameters, k)
+                except KeyError as exc:
+                    sec["model_speed"], sec["model_note"] = None, f"the result lacks {exc.args[0]}"
+                else:
+                    sec["model_speed"], sec["model_note"] = dilute_limit(drive)
+                sec["speed_ratio"] = velocity_ratio(sec["speed"], sec["model_speed"])
+
+    def _filled(self, frames, freq: float) -> float:
+        """When every fed section is full: the latest MSER start (no end cut) of their
+        hold-ups, averaged over bins of 5 periods (MSER-5; 5 frames without a frequency)
+        from the first frame; the first frame's time for a store that only drains (a
+        pre-fill without inlet)."""
+        result = self.result
+        t0 = float(self.times[0])
+        frame_dt = float(np.median(np.diff(self.times))) if len(self.times) > 1 else 1.0
+        width = max(5 / freq if freq > 0 else 0.0, 5 * frame_dt)
+        edge = outlet_x(result)
+        bounds = section_bounds(result.parameters, edge)
+        out, rejects = result.outlet, result.rejects
+        _, counts = bed_pass(result, frames, [lo for lo, _ in bounds[1:]], edge,
+                             np.r_[out["id"], rejects["id"]], np.r_[out["time"], rejects["time"]],
+                             self.axis)
+        fed = float(result.parameters.get("inlet_rate", 0.0)) > 0
+        which = np.floor((self.times - t0) / width + 1e-9).astype(np.int64)
+        n_bins = int(which.max()) + 1
+        start = t0
+        for k in range(counts.shape[1]):
+            if k == 0 and not fed:
+                continue
+            total = np.bincount(which, weights=counts[:, k], minlength=n_bins)
+            held = total / np.maximum(np.bincount(which, minlength=n_bins), 1)
+            start = max(start, t0 + width * mser(held, cut_end=False)[0])
+        return start
+
+    def _settled_start(self, frames, times, t_a: float, t_b: float, freq: float) -> float:
+        """The window's start: not before every fed section is full (:meth:`_filled`), then
+        moved later by sixths of the window (at most three) while the bed drifts over it
+        and enough exits remain (module docstring)."""
+        filled = self._filled(frames, freq)
+        if filled > t_a and ((times >= filled) & (times < t_b)).sum() >= max(MIN_EXITS, self.batches):
+            t_a = filled
+        step = (t_b - t_a) / 6
+        for _ in range(SETTLE_STEPS):
+            self._bed(frames, t_a, t_b, freq)
+            later = t_a + step
+            if self.results.unsteady is None or ((times >= later) & (times < t_b)).sum() < \
+                    max(MIN_EXITS, self.batches):
+                break
+            t_a = later
+        return t_a
 
     def _velocities(self, frames: np.ndarray, t_a: float, t_b: float) -> None:
         r = self.results

@@ -48,6 +48,7 @@ from ..results import layout as L
 from .base import AnalysisBase
 from .clusters import clump_labels, cluster_labels, pairs_touch, quaternion_matrices
 from .feedrate import (
+    FeedRate,
     outlet_events,
     outlet_x,
     period_velocities,
@@ -155,7 +156,11 @@ class Singulation(AnalysisBase):
         t_lo, t_hi = float(self.times[0]), float(self.times[-1])
         freq = float(result.parameters.get("freq", 0.0))
         ev = outlet_events(result, t_lo, t_hi)
-        t_a, t_b, _, _ = steady_window(ev["time"], t_lo, t_hi, freq, self.start, self.end)
+        if self.start is None:  # feed rate's window, moved past a bed still filling
+            fr = FeedRate(result, end=self.end, model=False).run(frames=frames)
+            t_a, t_b = fr.results.steady_from, fr.results.steady_to
+        else:
+            t_a, t_b, _, _ = steady_window(ev["time"], t_lo, t_hi, freq, self.start, self.end)
         r.steady_from, r.steady_to = t_a, t_b
         inside = (ev["time"] >= t_a) & (ev["time"] < t_b)
         ev = {name: values[inside] for name, values in ev.items()}

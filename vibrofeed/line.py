@@ -166,6 +166,16 @@ def section_from(p: Mapping) -> Section:
         wiper_length=WIPER_LENGTH * _get(p, "part_size"))
 
 
+def section_drive(p: Mapping, k: int) -> dict:
+    """The parameters with section ``k``'s drive (1-based) as the deck's ``freq``,
+    ``amp_t``, ``amp_n``, ``phase`` and ``waveform``: what a model of one part alone on
+    that section takes (section 2 runs a sine)."""
+    if k == 1:
+        return dict(p)
+    return {**p, "freq": p["s2_freq"], "amp_t": p["s2_amp_t"], "amp_n": p["s2_amp_n"],
+            "phase": p["s2_phase"], "waveform": 0}
+
+
 def joint_motion(p: Mapping[str, float]) -> tuple[float, float]:
     """How far the floors at the joint move apart at most [m]: normal (dz) and along the
     track (dx). Sines of one frequency: the amplitude of their difference, sqrt(a1^2 + a2^2

@@ -1,9 +1,19 @@
-"""``vibrofeed demo``: the main job — a bulk feeder, its feed rate and its singulation.
+"""``vibrofeed demo``: the main job — a feeder line that delivers one part at a time.
 
-Runs the ``bulk_feeder`` deck at its defaults (hundreds of parts pre-filled
-on a vibrating track, so feeding is steady at once), then prints the
-feed-rate and singulation reports and writes the result, a picture of the
-last frame of the steady feeding window and the plots into one folder.
+Runs a named case of the ``bulk_feeder`` deck, then prints its feed rate (per section
+for a line), its singulation and its rejects, and writes the result, a picture of the
+last frame of the steady feeding window and the plots into one folder. The cases:
+
+``line`` (the default)
+    A feeder line fed continuously by a bulk supply that drops micro-parts in clumps of
+    three: a slow bulk section whose floor tilts towards one wall (the parts gather into
+    a file against it), then a faster single-file section with a side drop (parts beside
+    the file fall off: rejects) and a wiper (stacked parts are swept off). The speed
+    step opens gaps between the parts of the file (continuity: the same parts per
+    second cross the joint, so the line density falls by the speed ratio).
+``track``
+    The same supply, parts and drive on one uniform level track of the line's length
+    and width, without tooling: the feeder the line replaces, for comparison.
 """
 
 from __future__ import annotations
@@ -12,23 +22,52 @@ import shlex
 import sys
 from pathlib import Path
 
-DESCRIPTION = ("Run the default bulk-feeder case (hundreds of micro-parts on a vibrating track), then "
-               "print its feed rate and singulation and write DIR/bulk_feeder.h5, a picture of the "
-               "last frame of the steady feeding window (DIR/bulk_feeder.png) and the plots (DIR/plots/).")
+DESCRIPTION = ("Run the main job: a feeder line (a bulk section, then a faster single-file section "
+               "with a side drop and a wiper) fed with 300 um silicon spheres; print its feed rate "
+               "per section, singulation and rejects and write DIR/CASE.h5, a picture of the last "
+               "frame of the steady feeding window (DIR/CASE.png) and the plots (DIR/plots/). "
+               "--case track runs the single uniform track it replaces.")
 DECK = "bulk_feeder"
+
+# The supply both cases share: 30 parts/s of 300 um silicon spheres dropped in clumps of
+# three above the track start, nothing pre-filled (a line that only drains is a batch,
+# not a feeder), 2.5 s: the line is full after ~0.6 s.
+SUPPLY = {"n_parts": "0", "inlet_rate": "30", "inlet_batch": "3", "t_end": "2.5", "output_dt": "0.005"}
+# Sized by continuity (docs/feeder-lines.md): section 1 (4 mm, its floor tilted 10 deg
+# towards one wall, a short stroke: ~14 mm/s) gathers the clumps into a file; section 2
+# (4 mm, the same tilt, sub-hopping with a long stroke at a 30 deg lag: ~47 mm/s, 3.4
+# times faster) opens gaps of 2.4 diameters between parts that touched in the file.
+# Section 2 does not hop: hopping spheres convey at scattered speeds and catch up with
+# each other. Its side drop keeps only the file against the wall; its wiper passes one
+# sphere and sweeps off a stacked one.
+LINE = {
+    "sections": "2", "track_length": "0.004", "track_width": "1.2e-3", "wall_height": "1e-3",
+    "cross_tilt": "10", "amp_t": "3.5e-5",
+    "s2_length": "0.004", "s2_width": "1.2e-3", "s2_wall_height": "6e-4", "s2_step": "5e-5",
+    "s2_cross_tilt": "10", "s2_amp_t": "1.8e-4", "s2_amp_n": "2e-5", "s2_phase": "-30",
+    "s2_drop_from": "0.2", "s2_drop_to": "0.5", "s2_drop_width": "4e-4",
+    "s2_wiper_height": "4.5e-4", "s2_wiper_at": "0.7",
+}
+# The same supply on one level track of the line's length and width at section 1's
+# default drive, without tooling.
+TRACK = {"track_length": "0.008", "track_width": "1.2e-3", "wall_height": "1e-3"}
+CASES = {"line": ("feeder_line", {**SUPPLY, **LINE}), "track": ("bulk_feeder", {**SUPPLY, **TRACK})}
 
 
 def add_arguments(p) -> None:
     from .options import ranks
 
+    p.add_argument("--case", choices=sorted(CASES), default="line",
+                   help="line (default): the singulating feeder line; track: the uniform track it "
+                        "replaces, with the same supply")
     p.add_argument("-o", "--output", default="results", metavar="DIR",
                    help="folder for the result, the picture and the plots (default: results)")
     p.add_argument("-p", "--param", action="append", metavar="NAME=VALUE",
-                   help="change a parameter of the default case (see `vibrofeed params bulk_feeder`)")
+                   help="change a parameter of the case (see `vibrofeed params bulk_feeder`)")
     p.add_argument("-n", "--ranks", type=ranks, default=1, metavar="RANKS",
                    help="MPI ranks for LIGGGHTS (default 1)")
     p.add_argument("--reuse", action="store_true",
-                   help="keep DIR/bulk_feeder.h5 if it is a complete run of the same case")
+                   help="keep DIR/CASE.h5 if it is a complete run of the same case")
     p.add_argument("--no-pictures", action="store_true", help="skip the picture and the plots")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
 
@@ -43,9 +82,10 @@ def run(args) -> int:
 
     folder = folder_destination("-o", args.output, create=False, parents=True)
     deck = Deck.find(DECK)
-    params = parse_assignments(args.param)
-    output = folder / f"{DECK}.h5"
-    progress = RunProgress(DECK, enabled=False if args.quiet else None)
+    name, case = CASES[args.case]
+    params = {**case, **parse_assignments(args.param)}
+    output = folder / f"{name}.h5"
+    progress = RunProgress(name, enabled=False if args.quiet else None)
     try:
         result = run_deck(deck, params, output, ranks=args.ranks, on_event=progress,
                           reuse=args.reuse, command=shlex.join(["vibrofeed"] + sys.argv[1:]))

@@ -97,6 +97,29 @@ def section_table(s: dict) -> list[str]:
     return lines
 
 
+# What the single-part model is, said where a sphere is compared with it.
+SLIDING_BLOCK = "a sliding block's speed: spheres roll, so for them a reference, not a prediction"
+
+
+def single_part(s: dict) -> str:
+    """The dilute-limit line: the single-part model's speed (each section's for a line)
+    and the measured speed over it, with what the comparison means for spheres."""
+    sphere = s.get("shape", 0) == 0
+    sections = [sec for sec in s.get("sections") or () if "model_speed" in sec]
+    if sections:
+        told = [f"{sec['section']}: {fmt(sec['model_speed'], 1e3)} mm/s (DEM / model "
+                f"{fmt(sec['speed_ratio'], spec='.3f')})" if sec["model_speed"] is not None
+                else f"{sec['section']}: n/a ({sec['model_note']})" for sec in sections]
+        return ("single part    model, dilute limit, each section's drive: " + ", ".join(told)
+                + (f"; {SLIDING_BLOCK}" if sphere else ""))
+    if s["model_velocity"] is None:
+        return f"single part    n/a ({s['model_note']})"
+    return (f"single part    {fmt(s['model_velocity'], 1e3)} mm/s (model, dilute limit); "
+            f"bulk / model = {fmt(s['velocity_ratio'], spec='.3f')}"
+            + (f"; {s['model_note']}" if s["model_note"] else "")
+            + (f"; {SLIDING_BLOCK}" if sphere else ""))
+
+
 def table(s: dict) -> str:
     """The figures as the command prints them."""
     rate = (f"{fmt(s['parts_per_s'])} ± {fmt(s['parts_per_s_err'], spec='.2g')} parts/s, "
@@ -110,12 +133,7 @@ def table(s: dict) -> str:
         *section_table(s),
     ]
     if "model_velocity" in s:
-        if s["model_velocity"] is None:
-            lines.append(f"single part    n/a ({s['model_note']})")
-        else:
-            lines.append(f"single part    {fmt(s['model_velocity'], 1e3)} mm/s (model, dilute limit); "
-                         f"bulk / model = {fmt(s['velocity_ratio'], spec='.3f')}"
-                         + (f"; {s['model_note']}" if s["model_note"] else ""))
+        lines.append(single_part(s))
     if s.get("inserted") is not None:
         rejected = f", rejected {s['rejected']}" if s.get("rejected") is not None else ""
         lines.append(f"mass balance   inserted {s['inserted']}, on track {s['on_track']}, exited "

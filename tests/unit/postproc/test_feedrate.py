@@ -233,4 +233,31 @@ def test_a_result_without_the_models_parameters_says_which_it_lacks(tmp_path):
         fr = FeedRate(r).run()
     assert fr.results.model_velocity is None and fr.results.velocity_ratio is None
     assert fr.results.model_note == "the result lacks mu, restitution"
-    assert list(fr.summary())[-4:-1] == ["model_velocity", "model_note", "velocity_ratio"]
+    assert list(fr.summary())[-5:-2] == ["model_velocity", "model_note", "velocity_ratio"]
+
+
+def test_the_single_part_line_says_what_a_sliding_block_means_for_spheres():
+    from vibrofeed.cli.feedrate import SLIDING_BLOCK, single_part
+
+    base = {"model_velocity": 0.02, "model_note": "", "velocity_ratio": 0.9}
+    assert SLIDING_BLOCK in single_part({**base, "shape": 0})
+    assert SLIDING_BLOCK not in single_part({**base, "shape": 1})  # a chip slides as the model's block
+    line = {**base, "shape": 1, "sections": [
+        {"section": 1, "model_speed": 0.018, "model_note": "", "speed_ratio": 0.75},
+        {"section": 2, "model_speed": 0.051, "model_note": "", "speed_ratio": 0.906}]}
+    text = single_part(line)
+    assert "1: 18 mm/s (DEM / model 0.750)" in text and "2: 51 mm/s (DEM / model 0.906)" in text
+
+
+def test_each_section_is_compared_with_the_model_of_its_own_drive():
+    from vibrofeed.line import section_drive
+    from vibrofeed.models.deck import transport
+
+    p = {"freq": 100.0, "amp_t": 3.5e-5, "amp_n": 5e-5, "phase": 0.0, "mu": 0.5, "restitution": 0.3,
+         "s2_freq": 150.0, "s2_amp_t": 1e-4, "s2_amp_n": 2e-5, "s2_phase": -30.0, "waveform": 0}
+    two = section_drive(p, 2)
+    assert (two["freq"], two["amp_t"], two["amp_n"], two["phase"]) == (150.0, 1e-4, 2e-5, -30.0)
+    assert section_drive(p, 1) == p
+    # the model of section 2's drive is the model of a track driven as section 2 is
+    alone = {**p, "freq": 150.0, "amp_t": 1e-4, "amp_n": 2e-5, "phase": -30.0}
+    assert transport(two).velocity == pytest.approx(transport(alone).velocity, rel=1e-12)

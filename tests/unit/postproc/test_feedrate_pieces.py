@@ -297,3 +297,15 @@ def test_simultaneous_arrivals_have_no_cv_and_no_warning(tmp_path):
             warnings.simplefilter("error")
             sg = Singulation(r, start=0.0, end=0.05).run().results
     assert sg.n_arrivals == 3 and math.isnan(sg.cv_interarrival) and sg.mean_interarrival == 0.0
+
+
+def test_a_fed_run_keeps_its_end_a_draining_one_may_lose_it():
+    from vibrofeed.postproc.feedrate import steady_window
+
+    # 100 exits/s from 0.2 s, halved over the last fifth: a run-out for a drained bed,
+    # noise to be kept for a fed line (it does not run out)
+    times = np.r_[np.arange(0.2, 0.8, 0.01), np.arange(0.8, 1.0, 0.02)]
+    _, t_b, _, _ = steady_window(times, 0.0, 1.0, 100.0)
+    assert t_b < 0.85
+    t_a, t_b, _, _ = steady_window(times, 0.0, 1.0, 100.0, fed=True)
+    assert t_b == pytest.approx(1.0, abs=1e-12) and t_a == pytest.approx(0.2, abs=0.05)
