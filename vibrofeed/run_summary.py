@@ -26,7 +26,13 @@ def run_summary(run) -> str:
     with Result(run.output) as r:
         n = len(r.part_ids)
         bits = [f"{n} part{'s' * (n != 1)}"]
-        if n and r.n_frames > 2:
+        balance = r.mass_balance
+        if balance is not None:  # a feeder: where its parts went (the analyses say how fast)
+            last = {k: int(v[-1]) for k, v in balance.items()}
+            rejected = f", {last['rejected']} rejected" if "rejected" in last else ""
+            bits = [f"{last['inserted']} parts fed: {last['exited']} exited{rejected}, "
+                    f"{last['on_track']} on the track, {last['lost']} lost"]
+        elif n and r.n_frames > 2:
             v = Transport(r).run().results.mean_velocity
             bits.append(f"mean speed {_si(v, 'm/s')} along x" if v == v  # NaN: no part stayed
                         else "no part on the track through the second half (mean speed n/a)")

@@ -37,6 +37,8 @@ from .scene import FrameData, floor_patch, part_shape, read_frame, section_motio
 COLORINGS = ("speed", "cluster")
 DEFAULT_SIZE = (1280, 720)   # multiples of 16: what H.264 encoders want
 TRACK_COLOR = "#9aa3ad"
+# The track is seen through: its walls stand in front of the parts riding against them.
+TRACK_OPACITY = 0.45
 SINGLE_COLOR = "#d0d0d0"     # parts not touching any other (cluster of one)
 BACKGROUND = "white"
 # Parts closer than this fraction of the mean part diameter count as touching for
@@ -282,7 +284,7 @@ class _Painter:
         vertices, triangles = self._floor(frame)
         # render=False everywhere: one render per picture, in image(), not one per actor.
         p.add_mesh(_polydata(self.pv, vertices, triangles), color=TRACK_COLOR, name="track",
-                   smooth_shading=False, show_scalar_bar=False, render=False)
+                   opacity=TRACK_OPACITY, smooth_shading=False, show_scalar_bar=False, render=False)
         # The bar's title changes with the frame (the parts off the scale): one bar, redrawn.
         for title in list(p.scalar_bars.keys()):
             p.remove_scalar_bar(title, render=False)
