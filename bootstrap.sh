@@ -26,8 +26,10 @@ APT_PACKAGES=(liggghts libliggghts-dev openmpi-bin libopenmpi-dev
               libegl1 libgl1-mesa-dri  # off-screen pictures: VTK's EGL window, Mesa software GL
               ffmpeg)                  # movies: vibrofeed render -o RUN.mp4
 # Only for the test suite (jobs test and validate); append what a test needs.
+# pvpython is in python3-paraview, which paraview only recommends (and apt runs with
+# --no-install-recommends): without it the ParaView test would skip (fail on CI).
 TEST_APT_PACKAGES=(cmake
-                   paraview xvfb)  # pvpython under xvfb-run checks the ParaView export
+                   paraview python3-paraview xvfb)  # pvpython under xvfb-run checks the ParaView export
 WITH_TESTS=0
 [[ $JOB == test || $JOB == validate ]] && WITH_TESTS=1
 ((WITH_TESTS)) && APT_PACKAGES+=("${TEST_APT_PACKAGES[@]}")

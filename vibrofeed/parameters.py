@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import difflib
 import math
+import re
 import warnings
 from collections.abc import Callable, Mapping
 
@@ -82,13 +83,14 @@ def _integer(lo=None, choices=None):
     return check
 
 
+_amplitude = _between(0, MAX_AMPLITUDE, lo_open=False, hi_open=False,
+                      why="a feeder's stroke is um to mm; amplitudes are in metres")
+
 # name -> check(value) returning an error text or None
 RULES: dict[str, Callable[[float], str | None]] = {
     "freq": _positive,
-    "amp_t": _between(0, MAX_AMPLITUDE, lo_open=False, hi_open=False,
-                      why="a feeder's stroke is um to mm; amplitudes are in metres"),
-    "amp_n": _between(0, MAX_AMPLITUDE, lo_open=False, hi_open=False,
-                      why="a feeder's stroke is um to mm; amplitudes are in metres"),
+    "amp_t": _amplitude,
+    "amp_n": _amplitude,
     "phase": _finite,
     "incline": _between(-90, 90, lo_open=False, hi_open=False),
     "radius": _positive_up_to(PART_MAX, NO_MICRO_PART),
@@ -123,11 +125,13 @@ RULES: dict[str, Callable[[float], str | None]] = {
     "fill_from": _between(0, 1, lo_open=False, hi_open=False),
     "fill_to": _between(0, 1, lo_open=False, hi_open=False),
     "inlet_rate": _non_negative,
+    "inlet_batch": _integer(lo=1),
     "track_length": _positive,
     "track_width": _positive,
     "wall_height": _positive,
     "gate_width": _non_negative,
     "gate_at": _between(0, 1, lo_open=False),
+    "cross_tilt": _between(0, 45, lo_open=False, hi_open=False),
     "youngs_track": _youngs_or_zero,
     "poisson_track": _between(-1, 0.5, hi_open=False),
     "restitution_pp": _between(0.05, 1, hi_open=False,
@@ -146,25 +150,21 @@ RULES: dict[str, Callable[[float], str | None]] = {
                               why="air is 1.81e-5 Pa s"),
     "face_radius": _positive_up_to(PART_MAX, NO_MICRO_PART, zero=True),
     "dt_unchecked": _integer(choices=(0, 1)),
-    # a feeder line's section 2 (vibrofeed.line; docs/feeder-lines.md)
+    # a feeder line's section 2 (vibrofeed.line; docs/feeder-lines.md); the twins of
+    # section 1's parameters follow below
     "sections": _integer(choices=(1, 2)),
-    "s2_length": _positive,
-    "s2_width": _positive,
-    "s2_wall_height": _positive,
     "s2_step": _positive,
-    "s2_cross_tilt": _between(0, 45, lo_open=False, hi_open=False),
-    "s2_freq": _positive,
-    "s2_amp_t": _between(0, MAX_AMPLITUDE, lo_open=False, hi_open=False,
-                         why="a feeder's stroke is um to mm; amplitudes are in metres"),
-    "s2_amp_n": _between(0, MAX_AMPLITUDE, lo_open=False, hi_open=False,
-                         why="a feeder's stroke is um to mm; amplitudes are in metres"),
-    "s2_phase": _finite,
     "s2_drop_from": _between(0, 1, lo_open=False, hi_open=False),
     "s2_drop_to": _between(0, 1, lo_open=False, hi_open=False),
     "s2_drop_width": _non_negative,
     "s2_wiper_height": _non_negative,
     "s2_wiper_at": _between(0, 1, lo_open=False),
 }
+# Section 2's drive and walls are section 1's kind: the same limits.
+SECTION_2_TWINS = {"s2_length": "track_length", "s2_width": "track_width",
+                   "s2_wall_height": "wall_height", "s2_freq": "freq", "s2_amp_t": "amp_t",
+                   "s2_amp_n": "amp_n", "s2_phase": "phase", "s2_cross_tilt": "cross_tilt"}
+RULES.update({twin: RULES[name] for twin, name in SECTION_2_TWINS.items()})
 
 # Parameters that also take names; a name is replaced by the deck's number.
 NAMED_VALUES: dict[str, dict[str, str]] = {
@@ -232,7 +232,10 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
             slip = UNIT_SLIPS.get(name)
             hint = f"; {slip[1]}" if slip and slip[0](x) else ""
             raise ParameterError(f"parameter {name}={value}{unit} {problem}{hint}")
-    _check_relations(numbers)
+    try:
+        _check_relations(numbers)
+    except ParameterError as exc:
+        raise ParameterError(_with_slips(str(exc), numbers)) from None
     # An idle parameter is worth a word only when the user moved it from the deck's default
     # (callers such as the validation cases pass every value).
     moved = [n for n in given if n in numbers and (not tunables[n].is_numeric
@@ -240,6 +243,13 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
     for line in advice(numbers, moved):
         warnings.warn(line, ParameterWarning, stacklevel=2)
     return values
+
+
+def _with_slips(message: str, p: Mapping[str, float]) -> str:
+    """A refusal, with the likely unit slip of each value it names (:func:`advice`): the
+    warning would not be reached, and a slip is often why the relation fails."""
+    slips = [line for line in advice(p) if re.search(rf"\b{line.split()[1].split('=')[0]}=", message)]
+    return "; ".join([message, *slips])
 
 
 # A run asking for more frames than this is almost always a unit slip (output_dt
@@ -283,6 +293,20 @@ def _check_relations(p: Mapping[str, float]) -> None:
 
 # Random loose packing of a settled pre-fill, to tell whether it stays between the walls.
 FILL_PACKING = 0.6
+
+
+def part_volume(shape: int, size: float, thickness: float | None = None) -> float:
+    """Volume [m^3] of a part: ``shape`` 0 a sphere of diameter ``size``, 1 a chip (``size``
+    x ``size`` x ``thickness``), 2 a disc of diameter ``size`` (``thickness`` defaults to
+    ``size``), as :func:`vibrofeed.models.deck.mass` weighs it."""
+    thickness = size if thickness is None else thickness
+    if shape == 0:
+        return math.pi / 6 * size ** 3
+    if shape == 1:
+        return size ** 2 * thickness
+    if shape == 2:
+        return math.pi / 4 * size ** 2 * thickness
+    raise ParameterError(f"shape={shape} must be one of 0, 1, 2")
 
 
 # The softest contact over which the bulk feeder's feed rate was measured to
@@ -329,11 +353,11 @@ def _check_bulk_feeder(p: Mapping[str, float]) -> None:
             raise ParameterError(f"gate_at={p.get('gate_at', 0.7):g}: the gate's 45 degree taper "
                                  f"(ends {(p['track_width'] - gate) / 2:g} m after it starts) runs "
                                  "past the outlet edge; lower gate_at")
-        if p.get("fill_to", 0.0) > p.get("gate_at", 0.7):
+        if p.get("n_parts", 1) > 0 and p.get("fill_to", 0.0) > p.get("gate_at", 0.7):
             raise ParameterError(f"fill_to={p['fill_to']:g} reaches into the gate (gate_at="
                                  f"{p.get('gate_at', 0.7):g}); lower fill_to")
     fill_from, fill_to = p.get("fill_from", 0.0), p.get("fill_to", 1.0)
-    if fill_from >= fill_to:
+    if p.get("n_parts", 1) > 0 and fill_from >= fill_to:  # (only a pre-fill has a place)
         raise ParameterError(f"fill_from={fill_from:g} must be below fill_to={fill_to:g}")
     radius = size / 2 if shape == 0 else p.get("part_thickness", size) / 2
     if "wall_height" in p and p["wall_height"] <= radius:
@@ -341,9 +365,7 @@ def _check_bulk_feeder(p: Mapping[str, float]) -> None:
                              f"({radius:g} m): parts would leave over the walls")
     n = p.get("n_parts", 0)
     if n > 0 and "wall_height" in p and math.isfinite(length):
-        thickness = p.get("part_thickness", size)
-        volume = {0: math.pi / 6 * size**3, 1: size**2 * thickness,
-                  2: math.pi / 4 * size**2 * thickness}[shape]
+        volume = part_volume(shape, size, p.get("part_thickness", size))
         pile = n * volume / (FILL_PACKING * (fill_to - fill_from) * length * p["track_width"])
         if pile > p["wall_height"]:
             raise ParameterError(f"n_parts={n:g} settle {pile:.3g} m high, above the walls "
@@ -379,7 +401,7 @@ def surface_forces_part(p: Mapping[str, float]) -> dict | None:
     rho = p["density"]
     if "radius" in p:  # single_part
         r, face = p["radius"], p.get("face_radius", 0.0)
-        part = {"mass": 4 / 3 * math.pi * r ** 3 * rho, "radius": r}
+        part = {"mass": part_volume(0, 2 * r) * rho, "radius": r}
         if face > 0:
             part.update(area=math.pi * face ** 2, stefan=1.5 * math.pi * face ** 4, drag=16 * face)
         return part
@@ -387,14 +409,15 @@ def surface_forces_part(p: Mapping[str, float]) -> dict | None:
         return None
     size, shape = p["part_size"], int(p.get("shape", 0))
     if shape == 0:
-        r = size / 2 * (1 - p.get("size_spread", 0.0))
-        return {"mass": 4 / 3 * math.pi * r ** 3 * rho, "radius": r}
+        smallest = size * (1 - p.get("size_spread", 0.0))
+        return {"mass": part_volume(0, smallest) * rho, "radius": smallest / 2}
     thickness = p.get("part_thickness", size)
+    mass = part_volume(shape, size, thickness) * rho
     if shape == 1:
-        return {"mass": size ** 2 * thickness * rho, "radius": thickness / 2, "area": size ** 2,
+        return {"mass": mass, "radius": thickness / 2, "area": size ** 2,
                 "stefan": STEFAN_SQUARE * size ** 4, "drag": 16 * size / math.sqrt(math.pi)}
     face = size / 2
-    return {"mass": math.pi * face ** 2 * thickness * rho, "radius": thickness / 2,
+    return {"mass": mass, "radius": thickness / 2,
             "area": math.pi * face ** 2, "stefan": 1.5 * math.pi * face ** 4, "drag": 16 * face}
 
 
@@ -424,6 +447,9 @@ def surface_forces_step_limit(p: Mapping[str, float]) -> float:
 
 def _check_surface_forces(p: Mapping[str, float]) -> None:
     """The timestep the vdW and air-film forces need (the deck refuses the same by hand)."""
+    if p.get("cross_tilt", 0.0) > 0 and (p.get("hamaker", 0.0) > 0 or p.get("air_viscosity", 0.0) > 0):
+        raise ParameterError("cross_tilt: the surface forces (hamaker, air_viscosity) act on a level "
+                             "floor; set cross_tilt=0 or turn them off")
     limit = surface_forces_step_limit(p)
     if limit < SURFACE_FORCES_MIN_DT:
         raise ParameterError(
@@ -470,7 +496,7 @@ def contact_times(p: Mapping[str, float]) -> dict[str, float] | None:
     speed = max(v_peak, MIN_CONTACT_SPEED)
     if "radius" in p:  # single_part
         r = p["radius"]
-        mass = 4 / 3 * math.pi * r ** 3 * rho
+        mass = part_volume(0, 2 * r) * rho
         hertz = _hertz_time(mass, r, youngs / (2 * (1 - nu ** 2)), speed)
         return {"hertz": hertz, "rayleigh": _rayleigh_time(r, rho, youngs, nu)}
     if "part_size" not in p:
@@ -479,8 +505,7 @@ def contact_times(p: Mapping[str, float]) -> dict[str, float] | None:
     thickness = p.get("part_thickness", size)
     r_sph = size / 2 if shape == 0 else thickness / 2
     r_min = r_sph * (1 - p.get("size_spread", 0.0))
-    mass = {0: 4 / 3 * math.pi * r_sph ** 3, 1: size ** 2 * thickness,
-            2: math.pi / 4 * size ** 2 * thickness}[shape] * rho
+    mass = part_volume(shape, size, thickness) * rho
     spheres = 1
     if shape != 0:  # a clump: its spheres share the mass (vibrofeed.geometry builds them)
         from .geometry import chip_template, disc_template

@@ -24,8 +24,12 @@ DENSITY_MAX = 1e5  # kg/m³: four times osmium; no material
 # A micro-part: microns to a centimetre; a metre is no micro-part.
 PART_PLAUSIBLE = (1e-6, 0.01)  # m
 PART_MAX = 1.0  # m
-# A feeder track: millimetres to a metre or two.
+# A feeder track: millimetres to a metre or two long; its width, walls and tooling are
+# millimetres to centimetres (a width or height "in mm" typed as metres is 0.5 .. 20).
 TRACK_PLAUSIBLE = (1e-4, 2.0)  # m
+ACROSS_PLAUSIBLE = (1e-4, 0.1)  # m, widths
+HEIGHT_PLAUSIBLE = (1e-4, 0.05)  # m, wall heights
+TOOLING_PLAUSIBLE = (0.0, 0.01)  # m, steps and the wiper's height: up to a large part's size
 # Vibratory feeders: tens of Hz (bowls) to kHz (piezo); beyond 10 kHz ultrasonic.
 FREQ_PLAUSIBLE_MAX = 1e4  # Hz
 # Coulomb friction of solids: 0.05 to about 1.5.
@@ -34,8 +38,16 @@ MU_PLAUSIBLE_MAX = 2.0
 SURFACE_ENERGY_PLAUSIBLE_MAX = 10.0  # J/m²
 
 PART_LENGTHS = ("radius", "part_size", "part_thickness", "face_radius")
-TRACK_LENGTHS = ("track_length", "track_width", "wall_height", "gate_width")
-ANGLES = ("phase", "incline")
+# A feeder line's section 2 (s2_*) takes section 1's units: its twins share its limits.
+TRACK_LENGTHS = {
+    "track_length": TRACK_PLAUSIBLE, "s2_length": TRACK_PLAUSIBLE,
+    "track_width": ACROSS_PLAUSIBLE, "gate_width": ACROSS_PLAUSIBLE, "s2_width": ACROSS_PLAUSIBLE,
+    "s2_drop_width": ACROSS_PLAUSIBLE,
+    "wall_height": HEIGHT_PLAUSIBLE, "s2_wall_height": HEIGHT_PLAUSIBLE,
+    "s2_step": TOOLING_PLAUSIBLE, "s2_wiper_height": TOOLING_PLAUSIBLE,
+}
+FREQUENCIES = ("freq", "s2_freq")
+ANGLES = ("phase", "incline", "cross_tilt", "s2_phase", "s2_cross_tilt")
 
 
 def _round_multiple(x: float, step: float, rel: float = 1e-3) -> bool:
@@ -64,18 +76,20 @@ def advice(p: Mapping[str, float], given: Collection[str] = ()) -> list[str]:
             say(name, f"m is {x * 1e3:g} mm: a length in mm or µm? (lengths are in metres)")
         elif 0 < x < PART_PLAUSIBLE[0]:
             say(name, f"m is {x * 1e9:g} nm: smaller than a micro-part (lengths are in metres)")
-    for name in TRACK_LENGTHS:
+    for name, (lo, hi) in TRACK_LENGTHS.items():
         x = p.get(name, 0.0)
-        if x > TRACK_PLAUSIBLE[1]:
-            say(name, f"m is {x:g} metres: a length in mm? (lengths are in metres)")
-        elif 0 < x < TRACK_PLAUSIBLE[0]:
+        if x > hi:
+            size = f"{x:g} metres" if x >= 1 else f"{x * 1e3:g} mm"
+            say(name, f"m is {size}: a length in mm? (lengths are in metres)")
+        elif 0 < x < lo:
             say(name, f"m is {x * 1e6:g} µm: narrower than a feeder's track (lengths are in metres)")
-    freq = p.get("freq", 0.0)
-    if freq > FREQ_PLAUSIBLE_MAX:
-        say("freq", f"Hz is beyond vibratory feeders (up to {FREQ_PLAUSIBLE_MAX:g} Hz): in rad/s?")
-    elif freq > 0 and freq != round(freq) and _round_multiple(freq, 2 * math.pi * 5):
-        say("freq", f"Hz is 2 pi x {freq / (2 * math.pi):.4g}: an angular frequency in rad/s? "
-                    "(freq is in Hz)")
+    for name in FREQUENCIES:
+        freq = p.get(name, 0.0)
+        if freq > FREQ_PLAUSIBLE_MAX:
+            say(name, f"Hz is beyond vibratory feeders (up to {FREQ_PLAUSIBLE_MAX:g} Hz): in rad/s?")
+        elif freq > 0 and freq != round(freq) and _round_multiple(freq, 2 * math.pi * 5):
+            say(name, f"Hz is 2 pi x {freq / (2 * math.pi):.4g}: an angular frequency in rad/s? "
+                      f"({name} is in Hz)")
     for name in ANGLES:
         x = p.get(name, 0.0)
         if x != round(x) and abs(x) <= 2 * math.pi and _round_multiple(x, math.pi / 36):
@@ -96,12 +110,15 @@ def _without_effect(p: Mapping[str, float], given: Collection[str]) -> list[str]
     waveform = int(p.get("waveform", 0))
     if "duty" in p and waveform not in (2, 3):
         idle["duty"] = f"applies to waveforms 2 and 3 (stick-slip, Coulomb pump), not waveform={waveform}"
-    if "phase" in p and waveform == 0 and (p.get("amp_t", 1.0) == 0 or p.get("amp_n", 1.0) == 0):
-        idle["phase"] = "shifts the normal motion against the tangential one: one of them is 0"
+    for phase, amp_t, amp_n in (("phase", "amp_t", "amp_n"), ("s2_phase", "s2_amp_t", "s2_amp_n")):
+        if phase in p and waveform == 0 and (p.get(amp_t, 1.0) == 0 or p.get(amp_n, 1.0) == 0):
+            idle[phase] = "shifts the normal motion against the tangential one: one of them is 0"
     if "part_size" in p and int(p.get("shape", 0)) == 0:
         idle["part_thickness"] = "applies to chips and discs (shape 1, 2), not to spheres"
     if "gate_at" in p and p.get("gate_width", 0.0) == 0:
         idle["gate_at"] = "places the gate: gate_width=0 has none"
+    if p.get("inlet_rate", 1.0) == 0:
+        idle["inlet_batch"] = "groups the inlet's parts: inlet_rate=0 has no inlet"
     if p.get("n_parts", 1.0) == 0:
         for name in ("fill_from", "fill_to"):
             idle[name] = "places the pre-fill: n_parts=0 has none"
@@ -110,5 +127,14 @@ def _without_effect(p: Mapping[str, float], given: Collection[str]) -> list[str]
             idle[name] = "shapes the surface forces: hamaker=0 and air_viscosity=0 turn them off"
     if p.get("dt", 0.0) == 0:
         idle["dt_unchecked"] = "allows a fixed dt beyond the contact's limits: dt=0 is automatic"
+    if p.get("s2_wiper_height", 1.0) == 0:
+        idle["s2_wiper_at"] = "places the wiper: s2_wiper_height=0 has none"
+    if p.get("s2_drop_to", 1.0) <= p.get("s2_drop_from", 0.0):  # (vibrofeed.line: no side drop)
+        for name in ("s2_drop_width", "s2_drop_from", "s2_drop_to"):
+            idle[name] = "shapes the side drop: s2_drop_to <= s2_drop_from has none"
+    if "sections" in p and int(p["sections"]) == 1:  # (last: no section 2 says it all)
+        for name in p:
+            if name.startswith("s2_"):
+                idle[name] = "shapes a feeder line's section 2: sections=1 has none"
     return [f"parameter {name} has no effect: it {why}" for name, why in idle.items()
             if name in given and name in p]

@@ -21,6 +21,21 @@ def test_every_package_folder_is_listed():
     assert found <= listed, f"not in [tool.setuptools] packages: {sorted(found - listed)}"
 
 
+def test_every_data_folder_is_listed_as_a_package():
+    """A folder inside a package is a package to Python (a namespace one) even without
+    __init__.py: setuptools ships its package-data only with a warning ("Package would
+    be ignored", to become an error) unless it is listed."""
+    listed = set(SETUPTOOLS["packages"])
+    folders = set()
+    for package, folder in SETUPTOOLS["package-dir"].items():
+        root = REPO / folder
+        for sub in root.rglob("*"):
+            if sub.is_dir() and "__pycache__" not in sub.parts and any(p.is_file() for p in sub.iterdir()):
+                folders.add(".".join((package, *sub.relative_to(root).parts)))
+    assert {"vibrofeed._decks.include", "vibrofeed._decks.meshes"} <= folders
+    assert folders <= listed, f"not in [tool.setuptools] packages: {sorted(folders - listed)}"
+
+
 def test_every_file_of_the_decks_folder_is_package_data():
     assert SETUPTOOLS["package-dir"]["vibrofeed._decks"] == "decks"
     patterns = SETUPTOOLS["package-data"]["vibrofeed._decks"]

@@ -9,6 +9,9 @@ A command module defines ``DESCRIPTION``, ``add_arguments(parser)`` and
 ``run(args) -> int`` and imports what it needs inside ``run``. Errors of the
 :mod:`vibrofeed.errors` tree are printed as one line (``vibrofeed: error:
 ...``) with their branch's exit status (2 for bad input, 1 for a failed run);
+an :class:`OSError` (a full disk, a folder where a file is written, a file
+that may not be written) is one line too, with exit status 2 for a path that
+cannot be written and 1 otherwise (:func:`vibrofeed.cli.outputs.os_error`);
 anything else is a bug and keeps its traceback (``VIBROFEED_DEBUG=1`` shows
 tracebacks for the user errors too).
 """
@@ -47,6 +50,23 @@ def fail(message: str, code: int) -> int:
     """Print one error line and return the exit status."""
     print(f"vibrofeed: error: {message}", file=sys.stderr)
     return code
+
+
+# The options `vibrofeed` itself takes before COMMAND (argparse also takes their prefixes).
+_TOP_OPTIONS = ("-h", "--help", "--version")
+
+
+def _unknown_top_option(argv: list[str]) -> str | None:
+    """The first word before COMMAND that is an option `vibrofeed` does not take: argparse
+    would only say that COMMAND is missing."""
+    for word in argv:
+        if not word.startswith("-") or word == "--":
+            return None
+        name = word.split("=", 1)[0]
+        if name == "-h" or (len(name) > 2 and any(o.startswith(name) for o in _TOP_OPTIONS[1:])):
+            continue
+        return word
+    return None
 
 
 def _requested(argv: list[str]) -> str | None:
@@ -101,7 +121,11 @@ _python_show_warning = warnings.showwarning
 def main(argv: list[str] | None = None) -> int:
     warnings.showwarning = _show_warning
     argv = sys.argv[1:] if argv is None else list(argv)
-    args = build_parser(argv).parse_args(argv)
+    parser = build_parser(argv)
+    unknown = _unknown_top_option(argv)
+    if unknown is not None:
+        parser.error(f"unrecognized option {unknown}")
+    args = parser.parse_args(argv)
     debug = bool(os.environ.get("VIBROFEED_DEBUG"))
     interrupt.install()  # SIGTERM ends a command as Ctrl-C does
     try:
@@ -117,6 +141,12 @@ def main(argv: list[str] | None = None) -> int:
         # Python flushes stdout at exit (the recipe of the signal module's documentation).
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 1
+    except OSError as exc:  # met while writing: a full disk, a folder where a file goes...
+        if debug:
+            raise
+        from .outputs import os_error
+
+        return fail(*os_error(exc))
     except VibrofeedError as exc:
         if debug:
             raise

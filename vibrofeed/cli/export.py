@@ -32,12 +32,20 @@ def add_arguments(p) -> None:
 
 def run(args) -> int:
     import sys
+    from pathlib import Path
 
     from ..errors import UsageError
     from ..results.reader import Result
-    from .outputs import folder_destination, written
+    from .outputs import folder_destination, names_in, written
 
     folder_destination("-o", args.output, create=False, parents=True)
+    stem = Path(args.result).stem
+    names_in("-o", args.output, [f"{stem}.h5md"] if args.format == "h5md-md" else
+             [f"{stem}.pvd", f"{stem}_outlet.vtp"])
+    frames = Path(args.output) / stem  # the ParaView export's folder of per-frame files
+    if args.format == "paraview" and frames.exists() and not frames.is_dir():
+        raise UsageError(f"-o {args.output}: {frames} is a file; the export writes its frames "
+                         "into a folder of that name")
     if args.format == "h5md-md":
         if args.no_shapes:
             raise UsageError("--no-shapes is for --format paraview: an h5md-md export has no shapes")

@@ -28,6 +28,14 @@ ranks = count("MPI ranks")
 jobs = count("jobs")
 
 
+def no_effect(option: str, why: str) -> None:
+    """One warning line for an option the command was given but will not use (the rest
+    of the request is carried out): ``vibrofeed: warning: OPTION has no effect: WHY``."""
+    import sys
+
+    print(f"vibrofeed: warning: {option} has no effect: {why}", file=sys.stderr)
+
+
 def add_deck_arguments(p, param_help: str) -> None:
     """DECK and -p NAME=VALUE, shared by the commands that run or prepare a deck."""
     p.add_argument("deck", metavar="DECK",

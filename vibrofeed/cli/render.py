@@ -28,16 +28,16 @@ def add_arguments(p) -> None:
     p.add_argument("result", metavar="RUN.h5", help="result file")
     p.add_argument("-o", "--output", metavar="FILE.png|FILE.mp4",
                    help="picture (.png) or movie (.mp4) to write (default: RUN.png here)")
-    p.add_argument("--frame", type=int, default=-1, metavar="K",
+    p.add_argument("--frame", type=int, metavar="K",
                    help="frame to draw in a PNG, from 0; negative counts from the end (default -1)")
     p.add_argument("--color", choices=("speed", "cluster"), default="speed",
                    help="colour the parts by speed [mm/s] or by the size of their cluster of "
                         "touching parts (default speed)")
     p.add_argument("--size", type=size, default=(1280, 720), metavar="WxH",
                    help="picture size in pixels (default 1280x720)")
-    p.add_argument("--every", type=whole(1), default=1, metavar="N",
+    p.add_argument("--every", type=whole(1), metavar="N",
                    help="movie: draw every N-th frame (default 1)")
-    p.add_argument("--fps", type=real(above=0), default=25.0, help="movie: frames per second (default 25)")
+    p.add_argument("--fps", type=real(above=0), help="movie: frames per second (default 25)")
     p.add_argument("--allow-incomplete", action="store_true",
                    help="also draw results of runs that were killed or failed")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar for movies")
@@ -47,29 +47,45 @@ def run(args) -> int:
     import sys
     from pathlib import Path
 
+    from ..errors import OutputError
     from ..pictures.render import render
     from ..results.reader import Result
-    from .outputs import file_destination, written
+    from .options import no_effect
+    from .outputs import file_destination, replaced
 
-    output = str(file_destination("-o", args.output or f"{Path(args.result).stem}.png",
-                                  (".png", ".mp4")))
+    output = file_destination("-o", args.output or f"{Path(args.result).stem}.png", (".png", ".mp4"))
+    movie = output.suffix.lower() == ".mp4"
+    # (given, not defaulted: the options of the other kind of output are named when set)
+    if movie and args.frame is not None:
+        no_effect("--frame", f"a movie ({output.name}) draws every frame; --frame picks a PNG's")
+    for option, value in (("--every", args.every), ("--fps", args.fps)):
+        if not movie and value is not None:
+            no_effect(option, f"a PNG ({output.name}) is one frame; {option} is for a movie (.mp4)")
+    frame = -1 if args.frame is None else args.frame
+    every = 1 if args.every is None else args.every
+    fps = 25.0 if args.fps is None else args.fps
     with Result(args.result, allow_incomplete=args.allow_incomplete) as result:
         bar = None
-        if output.lower().endswith(".mp4") and not args.quiet and sys.stderr.isatty():
+        if movie and not args.quiet and sys.stderr.isatty():
             from tqdm import tqdm
 
-            bar = tqdm(total=len(range(0, result.n_frames, max(args.every, 1))), unit="frame",
+            bar = tqdm(total=len(range(0, result.n_frames, every)), unit="frame",
                        desc="render", leave=False, file=sys.stderr)
         try:
-            done = render(result, output, frame=args.frame, color=args.color, size=args.size,
-                          every=args.every, fps=args.fps, progress=bar.update if bar else None)
+            # written under a temporary name, checked whole, then renamed: a full disk
+            # leaves no cut picture under the name asked for (and keeps an older one)
+            with replaced(output) as tmp:
+                try:
+                    done = render(result, tmp, frame=frame, color=args.color, size=args.size,
+                                  every=every, fps=fps, progress=bar.update if bar else None)
+                except OutputError as exc:  # (named as the user named it)
+                    raise OutputError(str(exc).replace(str(tmp), str(output))) from None
         finally:
             if bar is not None:
                 bar.close()
-    written(done.path)
     w, h = done.size
     what = "1 frame" if done.frames == 1 else f"{done.frames} frames"
-    print(f"wrote {done.path} ({what}, {w}x{h}, {done.seconds:.1f} s)")
+    print(f"wrote {output} ({what}, {w}x{h}, {done.seconds:.1f} s)")
     if done.note:
         print(f"note: {done.note}", file=sys.stderr)
     return 0

@@ -35,10 +35,10 @@ def add_arguments(p) -> None:
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
     p.add_argument("--plot", metavar="FILE.png",
                    help="plot measured and predicted part position (its folder must exist)")
-    p.add_argument("-o", "--output", default="replay-results", metavar="DIR",
+    p.add_argument("-o", "--output", metavar="DIR",
                    help="folder for the DEM engine's result files (default replay-results)")
-    p.add_argument("-n", "--ranks", type=ranks, default=1, metavar="RANKS",
-                   help="MPI ranks (DEM engine)")
+    p.add_argument("-n", "--ranks", type=ranks, metavar="RANKS",
+                   help="MPI ranks (DEM engine; default 1)")
 
 
 def _positive(name: str, value) -> float:
@@ -49,14 +49,37 @@ def _positive(name: str, value) -> float:
     return float(value)
 
 
+def _refuse_with_fit(args) -> None:
+    """What --fit cannot take: the figures it fits (a value given would be silently replaced
+    by the fitted one), a plot, and the DEM engine (the fit is the model's)."""
+    if not args.fit:
+        return
+    for option, value, fitted in (("--mu-k", args.mu_k, "the kinetic friction shared by the trials"),
+                                  ("--normal-force", args.normal_force, "a normal force per trial")):
+        if value is not None:
+            raise UsageError(f"{option}: --fit fits {fitted}; drop {option}, or replay without "
+                             "--fit to use it")
+    if args.engine == "dem":
+        raise UsageError("--engine dem: --fit fits the model of Yako et al.; drop --engine dem (replay "
+                         "the fitted values through the DEM engine without --fit)")
+    if args.plot:
+        raise UsageError("--plot draws a replay; --fit prints the fit only (replay with the fitted "
+                         "--mu-k and --normal-force to plot it)")
+
+
 def run(args) -> int:
     from ..models.constants import G
     from ..validation.replay.trials import read_trial
+    from .options import no_effect
     from .outputs import file_destination, folder_destination
 
-    if args.fit and args.plot:
-        raise UsageError("--plot draws a replay; --fit prints the fit only (replay with the fitted "
-                         "--mu-k and --normal-force to plot it)")
+    _refuse_with_fit(args)
+    for option, value in (("-o", args.output), ("-n", args.ranks)):
+        if value is not None and args.engine == "model":
+            no_effect(option, f"the model engine{' of --fit' if args.fit else ''} runs no LIGGGHTS; "
+                              f"{option} is for --engine dem")
+    args.output = "replay-results" if args.output is None else args.output
+    args.ranks = 1 if args.ranks is None else args.ranks
     plot = None if args.plot is None else file_destination("--plot", args.plot, (".png",))
     if args.engine == "dem":
         folder_destination("-o", args.output, create=False, parents=True)

@@ -16,16 +16,17 @@ def add_arguments(p) -> None:
     from .options import jobs, ranks
 
     p.add_argument("cases", nargs="*", metavar="CASE", help="case names (default: all; see --list)")
-    p.add_argument("-o", "--output", default="validation-results", metavar="DIR",
+    # (no defaults here: run() tells an option given from one left out, see RUN_DEFAULTS)
+    p.add_argument("-o", "--output", metavar="DIR",
                    help="folder for DEM results and figures (default: validation-results)")
     p.add_argument("--list", action="store_true", help="list the cases and exit")
     p.add_argument("--json", action="store_true",
                    help="print the table as JSON rows (case, quantity, model, dem, rel_diff, "
                         "tolerance, passed)")
-    p.add_argument("-j", "--jobs", type=jobs, default=2, metavar="N",
+    p.add_argument("-j", "--jobs", type=jobs, metavar="N",
                    help="DEM runs at once (default 2)")
-    p.add_argument("-n", "--ranks", type=ranks, default=1, metavar="RANKS",
-                   help="MPI ranks per DEM run")
+    p.add_argument("-n", "--ranks", type=ranks, metavar="RANKS",
+                   help="MPI ranks per DEM run (default 1)")
     p.add_argument("--reuse", action="store_true",
                    help="reuse DEM results already in DIR that have the run id of the case's run "
                         "(same deck text, parameters and vibrofeed version)")
@@ -61,10 +62,30 @@ def table(rows) -> list[str]:
     return out
 
 
+# The options only a run of the cases uses: option -> (attribute, default).
+RUN_DEFAULTS = {"-o": ("output", "validation-results"), "-j": ("jobs", 2), "-n": ("ranks", 1),
+                "--reuse": ("reuse", False)}
+
+
+def _run_options(args) -> None:
+    """With --list, a warning line per run option given (a listing runs nothing); then
+    the defaults of those left out."""
+    from .options import no_effect
+
+    if args.list and args.cases:
+        no_effect("CASE", f"--list lists every case; {' '.join(args.cases)} would pick cases to run")
+    for option, (name, default) in RUN_DEFAULTS.items():
+        if getattr(args, name) in (None, False):
+            setattr(args, name, default)
+        elif args.list:
+            no_effect(option, "--list only lists the cases; it runs none")
+
+
 def run(args) -> int:
     from ..validation import cases as C
     from ..validation.crosscheck import CrossCheck
 
+    _run_options(args)
     if args.list:
         cases = [C.find(name) for name in C.available()]
         if args.json:
@@ -75,7 +96,7 @@ def run(args) -> int:
         for case in cases:
             print(f"{case.name:<{width}}  [{case.kind}] {case.title}")
         return 0
-    from .outputs import folder_destination, written
+    from .outputs import folder_destination, os_error, written
 
     selected = [C.find(n) for n in (args.cases or C.available())]
     folder_destination("-o", args.output, create=False, parents=True)
@@ -87,13 +108,15 @@ def run(args) -> int:
                            on_run=lambda label, state, c=case: say(f"   {c.name} [{label}]: {state}"))
         try:
             outcome = check.run()
-        except (RunError, CaseError) as exc:  # one broken case does not stop the others
-            errors.append(f"{case.name}: {exc}")
+            shown = [written(f) for f in outcome.figures]
+        except (RunError, CaseError, OSError) as exc:  # one broken case does not stop the others
+            text = os_error(exc)[0] if isinstance(exc, OSError) else str(exc)
+            errors.append(f"{case.name}: {text}")
             failed.append(case.name)
-            say(f"   {case.name}: error: {exc}")
+            say(f"   {case.name}: error: {text}")
             continue
         rows += outcome.rows
-        figures += [written(f) for f in outcome.figures]
+        figures += shown
         if not outcome.passed:
             failed.append(case.name)
         if not args.json and len(selected) > 1:

@@ -235,8 +235,12 @@ def _run(spec, deck, jobs, folder, ours, parameters, groups, workers, retry_fail
         progress.close()
     rows = list(recorder.rows.values())
     failed = sum(r["status"] != S.DONE for r in rows)
-    print(f"sweep: {len(rows)} of {len(jobs)} jobs finished, {len(rows) - failed} done, {failed} failed "
-          f"-> {folder / S.CSV_NAME}", file=out)
+    # a done job whose analysis measured no feed rate is no rate of zero: counted apart
+    unmeasured = sum(r["status"] == S.DONE and bool(r.get("feedrate_reason")) for r in rows)
+    print(f"sweep: {len(rows)} of {len(jobs)} jobs finished, {len(rows) - failed} done"
+          + (f" ({unmeasured} without a measured feed rate: see vibrofeed sweep-report)"
+             if unmeasured else "")
+          + f", {failed} failed -> {folder / S.CSV_NAME}", file=out)
     if failed:
         raise RunError(f"{failed} of {len(jobs)} jobs failed (their errors are in "
                        f"{folder / S.CSV_NAME}); rerun with --retry-failed to run them again")

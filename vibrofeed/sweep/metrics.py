@@ -9,6 +9,18 @@ the single-part model's speed for the same vibration (the dilute limit of Khan
 & Sarma, §2.3.2, as ``vibrofeed feedrate`` reports it) and the measured /
 model ratio. Lists and tables (the velocity profile, the cluster sizes) stay
 in the result file; the row keeps scalars, NaN turned into None.
+
+What an analysis could not measure is missing, never a number: with too few
+exits in the window, or a bed still drifting (the feed-rate analysis'
+``reason``), the rates are None and ``feedrate_reason`` says why (as
+``vibrofeed feedrate`` prints n/a and the reason); with too few arrivals, the
+arrival statistics are None and ``singulation_reason`` says why. A feeder
+line (``sections`` = 2) adds its sections' figures, flattened with the
+section's number: ``joint_flux_K`` and ``joint_flux_K_err`` (through the joint
+after section K: the last section's is ``parts_per_s``), ``speed_K``,
+``hold_up_K`` (every section) and ``reject_rate_K`` (sections past the first,
+where the tooling is); the rates among them are missing with the feed rate.
+Chips and discs get their ``orientation_yield`` (face up and aligned).
 """
 
 from __future__ import annotations
@@ -20,8 +32,21 @@ FEEDRATE = ("parts_per_s", "parts_per_s_err", "mass_per_s", "mass_per_s_err", "m
             "on_track", "lost")
 SINGULATION = ("cv_interarrival", "doubles_rate", "singulated_fraction", "mean_gap", "n_arrivals",
                "doubles_per_s", "mean_interarrival", "edge_velocity", "track_singulated_fraction",
-               "face_up_fraction", "aligned_fraction")
+               "face_up_fraction", "aligned_fraction", "orientation_yield")
 MODEL = ("model_velocity", "velocity_ratio")
+# What a reason for measuring nothing voids (the commands void the same: vibrofeed.cli.feedrate
+# RATE_KEYS and SECTION_RATE_KEYS, vibrofeed.cli.singulation ARRIVAL_KEYS).
+FEEDRATE_UNMEASURED = ("parts_per_s", "parts_per_s_err", "mass_per_s", "mass_per_s_err")
+SINGULATION_UNMEASURED = ("mean_interarrival", "cv_interarrival", "mean_gap", "doubles_rate",
+                          "doubles_per_s", "singulated_fraction")
+# A line's per-section figures: column stem -> (key in FeedRate's sections, key of its error
+# or None, a rate over the window (voided with the feed rate), which sections have it).
+SECTIONS = {
+    "joint_flux": ("joint_flux", "joint_flux_error", True, "joints"),
+    "speed": ("speed", None, False, "all"),
+    "hold_up": ("hold_up", None, False, "all"),
+    "reject_rate": ("reject_rate", None, True, "downstream"),
+}
 
 
 def _scalar(value):
@@ -29,6 +54,23 @@ def _scalar(value):
     if isinstance(value, bool):
         return int(value)
     return value if isinstance(value, int | float) or value is None else None
+
+
+def section_columns(sections: list[dict], measured: bool) -> dict:
+    """A line's ``sections`` (FeedRate.summary()) as flat columns (module docstring); the
+    rates None when the feed rate is not ``measured``."""
+    out = {}
+    last = len(sections)
+    for s in sections:
+        k = int(s["section"])
+        for stem, (key, err_key, rate, which) in SECTIONS.items():
+            if (which == "joints" and k == last) or (which == "downstream" and k == 1):
+                continue
+            keep = measured or not rate
+            out[f"{stem}_{k}"] = _scalar(s.get(key)) if keep else None
+            if err_key is not None:
+                out[f"{stem}_{k}_err"] = _scalar(s.get(err_key)) if keep else None
+    return out
 
 
 def metrics(path) -> dict:
@@ -43,8 +85,15 @@ def metrics(path) -> dict:
         if r.outlet_plane is not None:
             fr = FeedRate(r).run().summary()
             out.update({k: _scalar(fr.get(k)) for k in FEEDRATE})
+            out["feedrate_reason"] = fr.get("reason") or None
+            if out["feedrate_reason"]:
+                out.update(dict.fromkeys(FEEDRATE_UNMEASURED))
+            out.update(section_columns(fr.get("sections") or [], not out["feedrate_reason"]))
             sg = Singulation(r).run().summary()
             out.update({k: _scalar(sg.get(k)) for k in SINGULATION})
+            out["singulation_reason"] = sg.get("reason") or None
+            if out["singulation_reason"]:
+                out.update(dict.fromkeys(SINGULATION_UNMEASURED))
             out.update({k: _scalar(fr.get(k)) for k in MODEL})
         else:
             out["n_parts"] = len(r.part_ids)

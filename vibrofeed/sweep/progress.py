@@ -75,8 +75,13 @@ class SweepProgress:
             self.failed += 1
         if not self.enabled:
             return
-        what = "done" if row.get("status") == "done" else f"FAILED: {row.get('error')}"
-        line = f"sweep: {self.label(job)}: {what} ({wall:.1f} s)"
+        if row.get("status") != "done":
+            what = f"FAILED: {row.get('error')} ({wall:.1f} s)"
+        elif computed:
+            what = f"done ({wall:.1f} s)"
+        else:  # its complete result was there already: only analysed, not run
+            what = f"reused (an earlier complete result, analysed in {wall:.1f} s)"
+        line = f"sweep: {self.label(job)}: {what}"
         if self.bar is not None:
             if row.get("status") != "done":
                 self.bar.write(line, file=self.stream)

@@ -4,10 +4,15 @@ Settings are the summary's rows grouped over their replicates (same
 parameters, different seeds). A setting's figure is the mean over its done
 replicates; its uncertainty is the standard error of that mean over the
 replicates (independent seeds: the honest spread, run-to-run noise included)
-when there are two or more, else the run's own batch-means error.
+when there are two or more, else the run's own batch-means error. A figure
+that one of the done replicates could not measure (too few exits, a bed still
+drifting: the row's ``feedrate_reason`` or ``singulation_reason``) is
+*unmeasured* for the setting, with that reason: the replicates that did
+measure it would give a mean biased towards them.
 
 The figure of merit is the feed rate (``parts_per_s``) of a bulk-feeder deck,
-else the mean conveying velocity. **Best setting**: among the settings whose
+else the mean conveying velocity. **Best setting**: among the settings with a
+measured figure (an unmeasured one is never best), those whose
 figure is within one combined standard error (sqrt(err_best^2 + err^2)) of the
 highest, the one with the largest singulated fraction (a feeder that delivers
 as much and singulates better is the better feeder); without singulation
@@ -41,6 +46,11 @@ FIGURES = {
 }
 
 
+# figure -> the row's column saying why it was not measured (vibrofeed.sweep.metrics)
+REASONS = {"parts_per_s": "feedrate_reason", "singulated_fraction": "singulation_reason",
+           "doubles_rate": "singulation_reason"}
+
+
 def heading(name: str) -> str:
     title, unit, _, _ = FIGURES[name]
     return f"{title} [{unit}]"
@@ -71,16 +81,29 @@ def settings(rows: list[dict], varied: list[str], merit: str) -> list[dict]:
         entry = {"parameters": dict(zip(varied, key)), "runs": len(members), "done": len(done),
                  "jobs": [r["job"] for r in members]}
         for name in FIGURES:
-            mean, err = mean_err([r.get(name) for r in done], [r.get(f"{name}_err") for r in done])
+            values = [r.get(name) for r in done]
+            mean, err = (None, None) if None in values else mean_err(
+                values, [r.get(f"{name}_err") for r in done])
             entry[name], entry[f"{name}_err"] = mean, err
+            entry[f"{name}_unmeasured"] = _unmeasured(done, REASONS.get(name))
         entry["merit"], entry["merit_err"] = entry[merit], entry[f"{merit}_err"]
+        entry["merit_unmeasured"] = entry[f"{merit}_unmeasured"]
         out.append(entry)
     return out
 
 
+def _unmeasured(done: list[dict], column: str | None) -> str | None:
+    """Why the done runs ``done`` measured no value of a figure (its reason ``column``):
+    the reason, preceded by how many of them gave one; None when every run measured it."""
+    reasons = [r[column] for r in done if column and r.get(column)]
+    if not reasons:
+        return None
+    return reasons[0] if len(done) == 1 else f"{len(reasons)} of {len(done)} runs: {reasons[0]}"
+
+
 def best(entries: list[dict]) -> dict | None:
-    """The best setting (module docstring), or None when none has a figure."""
-    scored = [e for e in entries if e["merit"] is not None]
+    """The best setting (module docstring), or None when none has a measured figure."""
+    scored = [e for e in entries if e["merit"] is not None and not e.get("merit_unmeasured")]
     if not scored:
         return None
     top = max(scored, key=lambda e: e["merit"])
@@ -97,7 +120,7 @@ def _with_err(entry, name) -> str:
     _, _, scale, spec = FIGURES[name]
     value, err = entry[name], entry[f"{name}_err"]
     if value is None:
-        return "n/a"
+        return "unmeasured" if entry.get(f"{name}_unmeasured") else "n/a"
     return fmt(value, scale, spec) + ("" if err is None else f" ± {fmt(err, scale, '.2g')}")
 
 
@@ -125,7 +148,10 @@ def report(folder, plot_folder=None) -> dict:
     """Everything ``vibrofeed sweep-report`` shows, JSON-ready."""
     rows, meta = load(folder)
     varied = [p for p in meta["varied"] if p != "seed"]
-    merit = "parts_per_s" if any(r.get("parts_per_s") is not None for r in rows) else "mean_velocity"
+    # A bulk feeder's merit is its feed rate even when no run measured one (the feeder's
+    # rows have its exits counted): the conveying speed is no stand-in for it.
+    bulk = any(r.get("n_events") is not None or r.get("parts_per_s") is not None for r in rows)
+    merit = "parts_per_s" if bulk else "mean_velocity"
     entries = settings(rows, varied, merit)
     chosen = best(entries)
     failed = [{"job": r["job"], "error": r["error"], "file": r["file"]}
@@ -143,20 +169,33 @@ def report(folder, plot_folder=None) -> dict:
     return out
 
 
+def _setting(entry: dict) -> str:
+    return " ".join(f"{k}={fmt(v, spec='g') if isinstance(v, float) else v}"
+                    for k, v in entry["parameters"].items()) or "(the only setting)"
+
+
 def text(rep: dict) -> str:
     shown = [rep["merit"]] + [n for n in ("singulated_fraction", "doubles_rate")
-                              if any(e[n] is not None for e in rep["settings"])]
+                              if any(e[n] is not None or e[f"{n}_unmeasured"] for e in rep["settings"])]
     if rep["merit"] == "parts_per_s":
         shown.append("mean_velocity")
     lines = [f"sweep {rep['folder']}: deck {rep['deck']}, {rep['jobs_finished']} of "
              f"{rep['jobs_planned']} jobs finished: {rep['done']} done, {len(rep['failed'])} failed",
              "", table(rep["settings"], rep["varied"], shown), ""]
+    for e in rep["settings"]:  # why each "unmeasured" of the table (figures of one reason together)
+        said: dict[str, list[str]] = {}
+        for name in shown:
+            if e[name] is None and e.get(f"{name}_unmeasured"):
+                said.setdefault(e[f"{name}_unmeasured"], []).append(FIGURES[name][0])
+        for why, names in said.items():
+            lines.append(f"unmeasured: {_setting(e)}: {', '.join(names)}: {why}")
     b = rep["best"]
     if b is None:
-        lines.append("best: none (no job finished with a figure)")
+        unmeasured = any(e["merit_unmeasured"] for e in rep["settings"])
+        lines.append(f"best: none (no setting has a measured {FIGURES[rep['merit']][0]})" if unmeasured
+                     else "best: none (no job finished with a figure)")
     else:
-        setting = " ".join(f"{k}={fmt(v, spec='g') if isinstance(v, float) else v}"
-                           for k, v in b["parameters"].items()) or "(the only setting)"
+        setting = _setting(b)
         title, unit, _, _ = FIGURES[rep["merit"]]
         lines.append(f"best: {setting}: {title} {_with_err(b, rep['merit'])} {unit}"
                      + (f", singulated {_with_err(b, 'singulated_fraction')} %"

@@ -91,21 +91,6 @@ def test_every_command_refuses_a_destination_it_cannot_write_before_any_work(tmp
             assert not proc.stdout, (name, proc.stdout)
 
 
-def test_a_file_reported_is_a_file_that_holds_something(tmp_path):
-    from vibrofeed.cli.outputs import written
-    from vibrofeed.errors import OutputError
-
-    with pytest.raises(OutputError, match="was not written"):
-        written(tmp_path / "none.png")
-    with pytest.raises(OutputError, match="was not written"):
-        written(tmp_path)
-    (tmp_path / "empty.png").write_bytes(b"")
-    with pytest.raises(OutputError, match="written empty"):
-        written(tmp_path / "empty.png")
-    (tmp_path / "full.png").write_bytes(b"\x89PNG")
-    assert written(tmp_path / "full.png") == tmp_path / "full.png"
-
-
 def _feeder(tmp_path, exits, name="feed.h5"):
     from bulk_synthetic import feeder
 

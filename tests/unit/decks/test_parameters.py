@@ -91,3 +91,49 @@ def test_parse_assignments():
     for bad in (["a"], ["=1"], ["a="]):
         with pytest.raises(ParameterError, match="name=value"):
             parse_assignments(bad)
+
+
+# -- one volume by shape, one rule for section 1 and section 2 --------------------------------
+@pytest.mark.parametrize("shape, size, thickness, volume", [
+    (0, 3e-4, None, 4 / 3 * 3.141592653589793 * 1.5e-4 ** 3),   # a sphere of radius 150 um
+    (1, 5e-4, 1e-4, 5e-4 * 5e-4 * 1e-4),                       # a chip: its box
+    (2, 5e-4, 1e-4, 3.141592653589793 * 2.5e-4 ** 2 * 1e-4),    # a disc: its cylinder
+])
+def test_part_volume_by_shape_and_the_mass_the_models_weigh(shape, size, thickness, volume):
+    from vibrofeed.models.deck import mass
+    from vibrofeed.parameters import part_volume
+
+    assert part_volume(shape, size, thickness) == pytest.approx(volume, rel=1e-12)
+    p = {"shape": shape, "part_size": size, "part_thickness": thickness or size, "density": 2330.0}
+    assert part_volume(shape, size, thickness) * 2330.0 == pytest.approx(mass(p), rel=1e-12)
+    with pytest.raises(ParameterError, match="shape=3"):
+        part_volume(3, size, thickness)
+
+
+def test_the_pile_check_takes_the_parts_volume():
+    """n_parts settle into n V / (0.6 fill length width): just under the walls passes, just
+    over is refused, for chips (the volume their box, not a sphere's)."""
+    from vibrofeed.decks import Deck
+
+    bulk = Deck.find("bulk_feeder")
+    size, thickness, width, length, walls = 4e-4, 1e-4, 2e-3, 0.02, 1e-3
+    fill = 0.9  # fill_to - fill_from
+    per_part = size * size * thickness / (0.6 * fill * length * width)  # m of pile per part
+    fits = int(walls / per_part)
+    given = {"shape": "chip", "part_size": repr(size), "part_thickness": repr(thickness),
+             "track_width": repr(width), "track_length": repr(length), "wall_height": repr(walls),
+             "fill_from": "0", "fill_to": repr(fill), "gate_width": "0"}
+    resolve(bulk, {**given, "n_parts": str(fits)})
+    with pytest.raises(ParameterError, match=f"n_parts={fits + 1} settle"):
+        resolve(bulk, {**given, "n_parts": str(fits + 1)})
+
+
+@pytest.mark.parametrize("twin, value", [
+    ("amp_t", "0.02"), ("amp_n", "-1e-6"), ("freq", "0"), ("track_length", "0"), ("track_width", "-1"),
+    ("wall_height", "0"), ("cross_tilt", "46"),
+])
+def test_section_2_takes_the_limits_of_its_section_1_twin(twin, value):
+    from vibrofeed.parameters import RULES
+
+    twin_2 = "s2_" + ({"track_length": "length", "track_width": "width"}.get(twin, twin))
+    assert RULES[twin_2](float(value)) == RULES[twin](float(value)) is not None

@@ -12,6 +12,8 @@ from vibrofeed.decks import Deck
 from vibrofeed.parameters import ParameterError, ParameterWarning, resolve
 
 SINGLE, BULK = Deck.find("single_part"), Deck.find("bulk_feeder")
+LINE = {"sections": "2"}  # a feeder line with the deck's section 2
+STEP = {"s2_step": "1.5e-4"}  # a joint for drives of two frequencies (the floors part by 0.1 mm)
 
 
 def said(deck, given) -> list[str]:
@@ -44,6 +46,30 @@ def said(deck, given) -> list[str]:
     (SINGLE, {"roughness": "1e-8"}, "roughness has no effect"),
     (SINGLE, {"face_radius": "1e-4"}, "face_radius has no effect"),
     (SINGLE, {"dt_unchecked": "1"}, "dt_unchecked has no effect"),
+    # a width or a wall typed in mm, which a track length would allow
+    (BULK, {"track_width": "2"}, "track_width=2 m is 2 metres: a length in mm?"),
+    (BULK, {"wall_height": "1"}, "wall_height=1 m is 1 metres: a length in mm?"),
+    # a feeder line's section 2 as its section-1 twins
+    (BULK, {**LINE, **STEP, "s2_freq": "314.159"},
+     "s2_freq=314.159 Hz is 2 pi x 50: an angular frequency in rad/s? (s2_freq is in Hz)"),
+    (BULK, {**LINE, **STEP, "s2_freq": "2e4", "s2_amp_t": "1e-6", "s2_amp_n": "1e-6"},
+     "s2_freq=20000 Hz is beyond vibratory feeders"),
+    (BULK, {**LINE, "s2_phase": "1.5708"}, "s2_phase=1.5708 deg is 0.5 pi: an angle in radians?"),
+    (BULK, {**LINE, "s2_cross_tilt": "0.0872665"}, "s2_cross_tilt=0.0872665 deg is 0.02778 pi"),
+    (BULK, {"cross_tilt": "0.0872665"}, "cross_tilt=0.0872665 deg is 0.02778 pi"),
+    (BULK, {**LINE, "s2_length": "10"}, "s2_length=10 m is 10 metres: a length in mm?"),
+    (BULK, {**LINE, "s2_width": "2"}, "s2_width=2 m is 2 metres: a length in mm?"),
+    (BULK, {**LINE, "s2_wall_height": "1"}, "s2_wall_height=1 m is 1 metres: a length in mm?"),
+    (BULK, {**LINE, "s2_phase": "30", "s2_amp_t": "0"}, "s2_phase has no effect: it shifts the normal"),
+    # section 2's parameters without a section 2, its tooling's without the tool
+    (BULK, {"s2_freq": "150"}, "s2_freq has no effect: it shapes a feeder line's section 2: sections=1 "
+                               "has none"),
+    (BULK, {"s2_wiper_at": "0.3"}, "s2_wiper_at has no effect: it shapes a feeder line's section 2"),
+    (BULK, {**LINE, "s2_wiper_at": "0.3"}, "s2_wiper_at has no effect: it places the wiper: "
+                                           "s2_wiper_height=0 has none"),
+    (BULK, {**LINE, "s2_drop_width": "1e-3"}, "s2_drop_width has no effect: it shapes the side drop: "
+                                              "s2_drop_to <= s2_drop_from has none"),
+    (BULK, {**LINE, "s2_drop_from": "0.2"}, "s2_drop_from has no effect: it shapes the side drop"),
 ])
 def test_an_implausible_value_is_named_with_its_likely_slip(deck, given, words):
     lines = said(deck, given)
@@ -58,6 +84,11 @@ def test_an_implausible_value_is_named_with_its_likely_slip(deck, given, words):
     (SINGLE, {"roughness": "1e-8", "hamaker": "1e-19"}),
     (SINGLE, {"duty": "0.7"}),  # the default, as callers that pass every value give it
     (SINGLE, {"freq": "62.5"}), (SINGLE, {"phase": "22.5"}),
+    # a line with its tooling in effect, in metres and degrees
+    (BULK, {**LINE, **STEP, "s2_freq": "150", "s2_phase": "45", "s2_cross_tilt": "2", "s2_length": "0.015",
+            "s2_width": "3e-3", "s2_wall_height": "1.5e-3", "track_width": "3e-3"}),
+    (BULK, {**LINE, "s2_wiper_height": "6e-4", "s2_wiper_at": "0.8"}),
+    (BULK, {**LINE, "s2_drop_from": "0.2", "s2_drop_to": "0.6", "s2_drop_width": "1.5e-3"}),
 ])
 def test_plausible_values_and_options_in_effect_say_nothing(deck, given):
     assert said(deck, given) == []
@@ -72,6 +103,20 @@ def test_plausible_values_and_options_in_effect_say_nothing(deck, given):
 def test_an_impossible_value_is_refused(deck, given, words):
     with pytest.raises(ParameterError, match=words.replace("?", r"\?")):
         resolve(deck, given)
+
+
+@pytest.mark.parametrize("given, words", [
+    ({**LINE, "s2_step": "0.05"}, "s2_step=0.05 m is not a small step"),
+    ({**LINE, "s2_wiper_height": "0.5"}, "s2_wiper_height=0.5 m is not below the walls"),
+])
+def test_a_refusal_caused_by_a_unit_slip_names_the_slip(given, words):
+    # the relation refuses the value before the warning would be reached: it says it
+    name = next(iter(k for k in given if k != "sections"))
+    with pytest.raises(ParameterError) as err:
+        resolve(BULK, given)
+    assert words in str(err.value)
+    assert f"parameter {name}={float(given[name]):g} m is {float(given[name]) * 1e3:g} mm: a length in mm?" \
+        in str(err.value)
 
 
 def test_the_command_line_prints_a_warning_as_one_line(tmp_path):
