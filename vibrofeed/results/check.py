@@ -9,6 +9,7 @@ from dataclasses import dataclass
 import h5py
 import numpy as np
 
+from ..models.constants import G
 from . import layout as L
 from .reader import _text
 
@@ -413,7 +414,6 @@ class _Checker:
 # fall from the height of the scene, nor than MIN_SPEED_LIMIT whatever the drive.
 SPEED_FACTOR = 100.0
 MIN_SPEED_LIMIT = 1.0  # m/s
-G = 9.81  # m/s^2
 # Frames read at once by the physical checks (values of one float element).
 _BLOCK_VALUES = 2_000_000
 # A line's further sections must sit where their sine drive puts them to this fraction of the
