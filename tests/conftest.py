@@ -6,6 +6,7 @@ Shared helpers live in tests/helpers.py.
 """
 
 import os
+import subprocess
 
 import pytest
 from hypothesis import settings
@@ -50,3 +51,16 @@ def result_reads(monkeypatch):
 
     monkeypatch.setattr(Result, "read", spy)
     return reads
+
+
+@pytest.fixture
+def small_disk(tmp_path):
+    """A 2 MB tmpfs: a disk that fills up (skipped where mounting is not allowed)."""
+    disk = tmp_path / "disk"
+    disk.mkdir()
+    mount = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=2m", "tmpfs", str(disk)],
+                           capture_output=True, text=True)
+    if mount.returncode != 0:
+        pytest.skip(f"cannot mount a 2 MB tmpfs here: {mount.stderr.strip()}")
+    yield disk
+    subprocess.run(["umount", "-l", str(disk)], check=False)

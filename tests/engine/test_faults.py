@@ -205,17 +205,6 @@ def test_a_hung_mpi_rank_is_found_by_the_steps_that_stop(tmp_path):
     assert not any(Path(f"/proc/{r}").exists() for r in ranks)
 
 
-@pytest.fixture
-def small_disk(tmp_path):
-    disk = tmp_path / "disk"
-    disk.mkdir()
-    mount = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=2m", "tmpfs", str(disk)],
-                           capture_output=True, text=True)
-    if mount.returncode != 0:
-        pytest.skip(f"cannot mount a 2 MB tmpfs here: {mount.stderr.strip()}")
-    yield disk
-    subprocess.run(["umount", "-l", str(disk)], check=False)
-
 
 def test_a_full_disk_keeps_what_was_written_and_says_so(small_disk):
     proc = vibrofeed("run", "single_part", "-q", "-o", small_disk / "f.h5", *LONG, timeout=300)

@@ -37,18 +37,6 @@ def last_line_error(proc, code: int, *words: str) -> str:
     return line
 
 
-@pytest.fixture
-def small_disk(tmp_path):
-    """A 2 MB tmpfs: a disk that fills up."""
-    disk = tmp_path / "disk"
-    disk.mkdir()
-    mount = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=2m", "tmpfs", str(disk)],
-                           capture_output=True, text=True)
-    if mount.returncode != 0:
-        pytest.skip(f"cannot mount a 2 MB tmpfs here: {mount.stderr.strip()}")
-    yield disk
-    subprocess.run(["umount", "-l", str(disk)], check=False)
-
 
 def fill(disk, leave: int) -> None:
     """Fill ``disk`` until ``leave`` bytes (rounded down to its blocks) are free."""

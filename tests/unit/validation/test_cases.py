@@ -16,6 +16,8 @@ QUANTITIES = {"flights": {"landing_time", "flight_duration"}, "transport": {"mea
               "period": {"period"}, "vertical": {"net_speed"},
               "replay": {"mean_difference_mm", "mean_abs_error_mm", "final_displacement_mm"},
               "pulloff": {"pulloff"}, "reference": {"parts_per_s"},
+              "line_transport": {"section_speed"},
+              "line_continuity": {"joint_flux", "little_flux", "feed_flux", "density_ratio"},
               "vdw_pulloff": {"pulloff"}, "sticking": {"leaves"}, "squeeze_launch": {"deficit", "max_gap"}}
 
 
