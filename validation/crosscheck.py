@@ -25,7 +25,18 @@ case's ``kind``:
     DEM against DEM: the bulk feeder's feed rate and conveying velocity at
     each sweep point against those of the point ``[compare] reference`` names
     (e.g. the default stiffness), within a multiple of their combined
-    batch-means errors (tolerance ``sigma``).
+    batch-means errors (tolerance ``sigma``);
+``line_transport``
+    a feeder line (``sections=2``) carrying a few parts far apart: each
+    section's whole-period speed against the single-part model of that
+    section's own drive (``section_speed``);
+``line_continuity``
+    a feeder line fed steadily: in the steady window the outlet flux against
+    the joint's (``joint_flux``), each section's line density times its speed
+    against the flux through its end (``little_flux``, Little's law) and
+    against the inlet's rate (``feed_flux``), and the density ratio against
+    the speed ratio (``density_ratio``), DEM against DEM within a multiple of
+    the combined errors.
 """
 
 from __future__ import annotations
@@ -37,8 +48,10 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import CaseError
+from ..line import section_drive
 from ..models import deck as dm
 from ..models.constants import G
+from ..results import layout as L
 from . import micro_checks
 from .cases import DERIVED_SWEEP_KEYS, Case
 from .outcome import Outcome, Run, label, row
@@ -433,6 +446,214 @@ def _reference(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None
                                       fig_dir / "reference.png"))
 
 
+# ------------------------------------------------------------ kinds: feeder lines
+def drive_freqs(p: dict, sections: int) -> list[float]:
+    """The drive frequencies [Hz] of a line's sections: freq, s2_freq, ..."""
+    return [float(p["freq"])] + [float(p[f"s{k}_freq"]) for k in range(2, sections + 1)]
+
+
+def whole_period_stride(frame_dt: float, freqs, tol: float = 1e-4, max_stride: int = 1000) -> int:
+    """Fewest frame spacings ``frame_dt`` spanning a whole number of periods of every drive
+    (``freqs``, to ``tol`` of a period): a displacement over them cancels the oscillation of
+    whichever section a part is on (frames every 10 ms, 100 and 150 Hz: 2 frames, 2 and 3
+    periods)."""
+    f = np.asarray(freqs, dtype=float)
+    for k in range(1, max_stride + 1):
+        cycles = k * frame_dt * f
+        if np.all(np.abs(cycles - np.round(cycles)) <= tol) and np.all(np.round(cycles) >= 1):
+            return k
+    raise CaseError(f"no lag of up to {max_stride} frames of {frame_dt:g} s spans whole periods of "
+                    f"{', '.join(f'{x:g}' for x in f)} Hz: choose output_dt accordingly")
+
+
+def part_span(p: dict) -> float:
+    """Diameter [m] of the sphere around a bulk-deck part: two parts whose centres are
+    farther apart cannot touch (sphere, chip box, disc cylinder)."""
+    shape, size = int(float(p.get("shape", 0))), float(p["part_size"])
+    if shape == 0:
+        return size * (1 + float(p.get("size_spread", 0.0)))
+    t = float(p["part_thickness"])
+    return math.sqrt(2 * size ** 2 + t ** 2) if shape == 1 else math.hypot(size, t)
+
+
+def closest_approach(result, edge: float) -> float:
+    """Smallest distance [m] between the centres of two parts on the line (track x up to the
+    outlet ``edge``) at any frame; inf when no frame holds two."""
+    ids = result.read("id")
+    x = result.read("position")
+    track_x = x[..., 0] - result.read("surface_position")[:, 0][:, None]
+    best = math.inf
+    for k in range(len(ids)):
+        here = x[k][(ids[k] != L.ID_FILL) & (track_x[k] <= edge)]
+        if len(here) >= 2:
+            d = np.linalg.norm(here[:, None, :] - here[None, :, :], axis=-1)
+            best = min(best, float(d[np.triu_indices(len(here), 1)].min()))
+    return best
+
+
+def section_speeds(result, t_from: float, joint_margin: float, edge_margin: float):
+    """[(speed, samples)] per section of a line: the mean whole-period speed [m/s] of the
+    parts over it after ``t_from`` (section 1's start-up) and the number of (part, interval)
+    samples. Section 1 counts up to ``edge_margin`` before the joint, section 2 from
+    ``joint_margin`` past it (a part landing on it is still speeding up) to ``edge_margin``
+    before the outlet edge. The intervals span whole periods of every section's drive."""
+    from vibrofeed.postproc.feedrate import outlet_x, period_velocities
+    from vibrofeed.postproc.line import section_bounds
+
+    p = result.parameters
+    edge = outlet_x(result)
+    bounds = section_bounds(p, edge)
+    time = result.time
+    stride = whole_period_stride(float(np.median(np.diff(time))), drive_freqs(p, len(bounds)))
+    frames = np.nonzero(time >= t_from - 1e-12)[0][::stride]
+    out = []
+    for k, (lo, hi) in enumerate(bounds):
+        x_min = -math.inf if k == 0 else lo + joint_margin
+        _, v, _, _ = period_velocities(result, frames, 0, hi - edge_margin, x_min)
+        out.append((float(v.mean()) if len(v) else math.nan, len(v)))
+    return out
+
+
+def _line_transport(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
+    from vibrofeed.postproc.feedrate import outlet_x, period_velocities
+    from vibrofeed.results.reader import Result
+
+    from .plots import plot_line_speeds
+
+    transient = float(case.compare.get("transient_periods", 10))
+    joint_margin = float(case.compare["joint_margin"])
+    panels = []
+    for run in runs:
+        p = dict(run.params)
+        size = run.number("part_size")
+        with Result(run.output) as r:
+            edge = outlet_x(r)
+            closest = closest_approach(r, edge)
+            t_from = transient / run.number("freq")
+            speeds = section_speeds(r, t_from, joint_margin, size)
+            # every interval after the start-up, for the figure
+            step = whole_period_stride(float(np.median(np.diff(r.time))), drive_freqs(p, 2))
+            x_all, v_all, _, _ = period_velocities(r, np.nonzero(r.time >= t_from)[0][::step], 0, edge)
+        if closest < part_span(p):  # they may have touched: not one part alone
+            raise CaseError(f"case {case.name} [{run.label}]: not dilute: two parts came within "
+                            f"{closest:.3g} m of each other (they can touch below {part_span(p):.3g} m)")
+        models = []
+        for k, (dem, n) in enumerate(speeds, start=1):
+            if n == 0:
+                raise CaseError(f"case {case.name} [{run.label}]: no part was measured on section "
+                                f"{k} (lengthen t_end or move the pre-fill towards the joint)")
+            models.append(dm.transport(section_drive(p, k)).velocity)
+            out.rows.append(row(case, "section_speed", f"{run.label},s{k}", models[-1], dem, "m/s"))
+        joint = run.number("track_length")
+        panels.append(dict(label=run.label, x=x_all, v=v_all, model=models, dem=[s for s, _ in speeds],
+                           bounds=[(0.0, joint), (joint, edge)],
+                           stretches=[(0.0, joint - size), (joint + joint_margin, edge - size)]))
+    out.figures.append(plot_line_speeds(case, panels, fig_dir / "section_speeds.png"))
+
+
+def little_flows(result, fr, x_from: float, batches: int) -> list[dict]:
+    """Per section of a line, over the feed rate's steady window (``fr``: FeedRate results):
+    ``hold_up`` [parts] (mean over the window's frames) and ``speed`` [m/s] (mean whole-period
+    speed), each with its batch-means error (``batches`` batches of whole periods, as FeedRate's),
+    the line density ``rho`` [1/m] and ``flow`` = rho x speed [1/s] with its error (the two
+    combined as independent). Section 1 is taken from ``x_from`` on: a part dropped by the inlet
+    travels only from where it lands, so over the whole section rho v is the flux times
+    (joint - landing x) / joint; Little's law holds on a stretch every part crosses entirely."""
+    from vibrofeed.postproc.feedrate import outlet_x, period_velocities
+    from vibrofeed.postproc.line import batch_cuts, batch_means, bed_pass, section_bounds
+
+    p, time = result.parameters, result.time
+    edge = outlet_x(result)
+    joint = section_bounds(p, edge)[1][0]
+    t_a, t_b = fr.steady_from, fr.steady_to
+    window = np.nonzero((time >= t_a - 1e-12) & (time <= t_b + 1e-12))[0]
+    gone = result.outlet, result.rejects
+    _, counts = bed_pass(result, window, [x_from, joint], edge, np.r_[gone[0]["id"], gone[1]["id"]],
+                         np.r_[gone[0]["time"], gone[1]["time"]])
+    cuts = batch_cuts(t_a, t_b, float(p["freq"]), batches)
+    out = []
+    for k, (lo, hi) in enumerate([(x_from, joint), (joint, edge)]):
+        x_max = float(np.nextafter(hi, -math.inf)) if k == 0 else hi  # the joint is section 2's
+        _, v, interval, (m, _) = period_velocities(result, window, 0, x_max, lo)
+        chain_t = time[window[::m]]
+        mid_t = 0.5 * (chain_t[interval] + chain_t[interval + 1])
+        n = counts[:, k + 1].astype(float)  # bed_pass's stretch 0 lies before x_from
+        held, speed = float(n.mean()), float(v.mean()) if len(v) else math.nan
+        err_n = batch_error(batch_means(time[window], n, cuts))
+        err_v = batch_error(batch_means(mid_t, v, cuts))
+        flow = held / (hi - lo) * speed
+        rel = math.hypot(err_n / held, err_v / speed) if held > 0 and speed else math.nan
+        out.append({"hold_up": held, "hold_up_error": err_n, "speed": speed, "speed_error": err_v,
+                    "rho": held / (hi - lo), "flow": flow, "flow_error": abs(flow) * rel})
+    return out
+
+
+def inlet_flux(result, t_a: float, t_b: float) -> tuple[float, float]:
+    """(rate, error) [1/s] of the parts the inlet inserted between the frames at the ends of
+    the window [t_a, t_b] (the mass balance's ``inserted``). The inlet inserts ``inlet_batch``
+    parts every so many steps, so the count is exact to one insertion at either end: error
+    inlet_batch / window."""
+    time = result.time
+    k = np.nonzero((time >= t_a - 1e-12) & (time <= t_b + 1e-12))[0]
+    inserted = result.mass_balance["inserted"]
+    span = float(time[k[-1]] - time[k[0]])
+    batch = float(result.parameters.get("inlet_batch", 1))
+    return float(inserted[k[-1]] - inserted[k[0]]) / span, batch / span
+
+
+def batch_error(series) -> float:
+    """Standard error of the mean of batch values (NaN batches, which saw nothing, left
+    out); NaN with fewer than two."""
+    y = np.asarray(series, dtype=float)
+    y = y[np.isfinite(y)]
+    return float(y.std(ddof=1) / math.sqrt(len(y))) if len(y) >= 2 else math.nan
+
+
+def _line_continuity(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
+    from vibrofeed.postproc.feedrate import FeedRate
+    from vibrofeed.results.reader import Result
+
+    from .plots import plot_line_continuity
+
+    x_from = float(case.compare["section1_from"])
+    batches = int(case.compare.get("batches", 10))
+    panels = []
+    for run in runs:
+        with Result(run.output) as r:
+            fr = FeedRate(r, batches=batches, model=False).run().results
+            if fr.reason:  # what follows holds in steady feeding only
+                raise CaseError(f"case {case.name} [{run.label}]: no steady feeding to compare: "
+                                f"{fr.reason}")
+            flows = little_flows(r, fr, x_from, batches)
+            feed, feed_error = inlet_flux(r, fr.steady_from, fr.steady_to)
+        (j1, e1), (j2, e2) = [(s["joint_flux"], s["joint_flux_error"]) for s in fr.sections]
+        # what crosses the joint leaves through the outlet or over section 2's sides
+        r2, er2 = fr.sections[1]["reject_rate"], fr.sections[1]["reject_rate_error"]
+        out.rows.append(row(case, "joint_flux", run.label, j1, j2 + r2, "1/s",
+                            error=math.sqrt(e1 ** 2 + e2 ** 2 + er2 ** 2)))
+        for k, (flux, err) in enumerate([(j1, e1), (j2, e2)]):
+            f = flows[k]
+            out.rows.append(row(case, "little_flux", f"{run.label},s{k + 1}", flux, f["flow"], "1/s",
+                                error=math.hypot(err, f["flow_error"])))
+            out.rows.append(row(case, "feed_flux", f"{run.label},s{k + 1}", feed, f["flow"], "1/s",
+                                error=math.hypot(feed_error, f["flow_error"])))
+        a, b = flows
+        speed_ratio = b["speed"] / a["speed"]
+        density_ratio = a["rho"] / b["rho"]
+        error = math.hypot(speed_ratio * math.hypot(a["speed_error"] / a["speed"],
+                                                    b["speed_error"] / b["speed"]),
+                           density_ratio * math.hypot(a["hold_up_error"] / a["hold_up"],
+                                                      b["hold_up_error"] / b["hold_up"]))
+        out.rows.append(row(case, "density_ratio", run.label, speed_ratio, density_ratio, "",
+                            error=error))
+        panels.append(dict(label=run.label, feed=(feed, feed_error),
+                           fluxes=[(j1, e1), (j2 + r2, math.hypot(e2, er2))],
+                           flows=[(f["flow"], f["flow_error"]) for f in flows],
+                           window=(fr.steady_from, fr.steady_to)))
+    out.figures.append(plot_line_continuity(case, panels, fig_dir / "continuity.png"))
+
+
 KINDS = {"flights": _flights, "transport": _transport, "period": _period, "vertical": _vertical,
          "replay": _replay, "pulloff": _pulloff, "reference": _reference,
+         "line_transport": _line_transport, "line_continuity": _line_continuity,
          **micro_checks.KINDS}

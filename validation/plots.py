@@ -238,3 +238,45 @@ def plot_launch(case, panels: list[dict], path: Path) -> Path:
         ax.set_ylabel("gap [um]")
         ax.set_title(q["label"], fontsize=9, loc="left")
     return _finish(fig, axes, "(t - t_lift-off) / T", heading(case), path, dict(fontsize=8), title_size=9)
+
+
+# ----------------------------------------------------------------- feeder lines
+def plot_line_speeds(case, panels: list[dict], path: Path) -> Path:
+    """Per run, the whole-period speed of every part interval against where it was along the
+    line; each section's model speed over its length and the stretch measured (shaded)."""
+    fig, axes = _column(len(panels), 8, 2.6)
+    for ax, q in zip(axes, panels):
+        ax.plot(q["x"] * 1e3, q["v"] * 1e3, ".", ms=3, color=DEM_STYLE["color"],
+                label="DEM: a part over one interval")
+        for k, ((lo, hi), (a, b), model, dem) in enumerate(zip(q["bounds"], q["stretches"], q["model"],
+                                                                q["dem"])):
+            ax.axvspan(a * 1e3, b * 1e3, color="gray", alpha=0.15,
+                       label="measured stretch" if k == 0 else None)
+            ax.hlines(model * 1e3, lo * 1e3, hi * 1e3, colors="black", linestyles="--", lw=1,
+                      label="model of the section's drive" if k == 0 else None)
+            ax.text(0.5 * (lo + hi) * 1e3, model * 1e3, f"s{k + 1}: DEM {dem * 1e3:.3g}, "
+                    f"model {model * 1e3:.3g} mm/s", ha="center", va="bottom", fontsize=7)
+        ax.axvline(q["bounds"][1][0] * 1e3, color="tab:blue", lw=0.8)
+        ax.set_ylabel("speed [mm/s]")
+        ax.set_title(q["label"], fontsize=9, loc="left")
+    return _finish(fig, axes, "x along the line [mm] (joint: blue)", heading(case), path,
+                   dict(fontsize=7, loc="upper left"), title_size=9)
+
+
+def plot_line_continuity(case, panels: list[dict], path: Path) -> Path:
+    """Per run, the fluxes through the joint and the outlet and each section's rho v (Little's
+    law), with their 1-sigma errors, against the inlet's rate (its band: 1 sigma)."""
+    fig, axes = _column(len(panels), 6, 2.4)
+    names = ["J1 joint", "J2 outlet", "rho1 v1", "rho2 v2"]
+    for ax, q in zip(axes, panels):
+        values = [*q["fluxes"], *q["flows"]]
+        ax.errorbar(range(4), [v for v, _ in values], yerr=[e for _, e in values], fmt="o",
+                    color=DEM_STYLE["color"], capsize=3, label="DEM ± 1 sigma")
+        feed, err = q["feed"]
+        ax.axhspan(feed - err, feed + err, color="gray", alpha=0.2)
+        ax.axhline(feed, color="black", lw=0.8, ls="--", label="inlet")
+        ax.set_xticks(range(4), names, fontsize=8)
+        ax.set_ylabel("parts/s")
+        ax.set_title(f"{q['label']}: window {q['window'][0]:.2f} .. {q['window'][1]:.2f} s",
+                     fontsize=9, loc="left")
+    return _finish(fig, axes, None, heading(case), path, dict(fontsize=7), title_size=9)
