@@ -45,6 +45,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import OutputError, UsageError
+from .render import write_whole
 from .scene import (
     FrameData,
     body_axes,
@@ -110,18 +111,23 @@ def _add(data, name: str, values, field: bool = False) -> None:
 
 
 def _write_vtp(mesh, path: Path, time: float | None) -> None:
-    """Binary, zlib-compressed VTK XML PolyData with the time (if any) as field ``TimeValue``."""
+    """Binary, zlib-compressed VTK XML PolyData with the time (if any) as field ``TimeValue``.
+
+    VTK writes into a string and Python writes it to the file (:func:`.render.write_whole`):
+    VTK's XML writer writing to a file crashes the process on a full disk (a segfault)."""
     from vtkmodules.vtkIOXML import vtkXMLPolyDataWriter
 
     if time is not None:
         _add(mesh, "TimeValue", np.array([time]), field=True)
     writer = vtkXMLPolyDataWriter()
-    writer.SetFileName(str(path))
+    writer.WriteToOutputStringOn()
     writer.SetInputData(mesh)
-    writer.SetDataModeToBinary()
+    writer.SetDataModeToBinary()  # inline base64: the string is text
     writer.SetCompressorTypeToZLib()
     if writer.Write() != 1:
         raise OutputError(f"VTK could not write {path}")
+    text = writer.GetOutputString()
+    write_whole(path, text if isinstance(text, bytes) else text.encode("ascii"))
 
 
 def parts_points(frame: FrameData, shape, force: bool = True, sections=None):
@@ -193,10 +199,41 @@ def export(result, folder, every: int = 1, shapes: bool = True, progress=None) -
     start = _time.perf_counter()
     folder = Path(folder)
     stem = Path(result.path).stem
+    # The folders and files this export adds: one that fails (a full disk) removes them
+    # again, rather than leave a series without its .pvd filling the disk.
+    made = [d for d in (folder / stem, *(folder / stem).parents) if not d.exists()]
+    added: list[Path] = []
     try:
         (folder / stem).mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise OutputError(f"cannot create {folder / stem}: {exc}") from exc
+    try:
+        pvd, frames, files = _export(result, folder, stem, every, shapes, progress, added)
+    except BaseException:
+        for path in added:
+            path.unlink(missing_ok=True)
+        for d in made:  # deepest first; one that holds other files stays
+            try:
+                d.rmdir()
+            except OSError:
+                break
+        raise
+    return Exported(pvd, frames, files, _time.perf_counter() - start)
+
+
+def _export(result, folder: Path, stem: str, every: int, shapes: bool, progress,
+            added: list[Path]) -> tuple[Path, int, int]:
+    """:func:`export`'s writing: (the .pvd, frames, files written); ``added`` gets each file
+    written where there was none."""
+
+    def put(path: Path, write, *args):
+        """``write(*args)``, which writes ``path``."""
+        fresh = not path.exists()
+        done = write(*args)
+        if fresh and path.exists():
+            added.append(path)
+        return done
+
     shape = part_shape(result.parameters, result.body_template)
     root = ET.Element("VTKFile", type="Collection", version="0.1", byte_order="LittleEndian")
     collection = ET.SubElement(root, "Collection")
@@ -222,14 +259,16 @@ def export(result, folder, every: int = 1, shapes: bool = True, progress=None) -
             blocks.append(("track", track))
         for part, (name, mesh) in enumerate(blocks):
             relative = f"{stem}/{name}_{int(k):06d}.vtp"
-            _write_vtp(mesh, folder / relative, frame.time)
+            put(folder / relative, _write_vtp, mesh, folder / relative, frame.time)
             _dataset(collection, frame.time, part, name, relative)
             files += 1
         if progress:
             progress(1)
-    if _write_outlet(result, folder / f"{stem}_outlet.vtp"):
+    outlet = folder / f"{stem}_outlet.vtp"
+    if put(outlet, _write_outlet, result, outlet):
         files += 1
     ET.indent(root)
     pvd = folder / f"{stem}.pvd"
-    ET.ElementTree(root).write(pvd, encoding="utf-8", xml_declaration=True)
-    return Exported(pvd, len(frames), files + 1, _time.perf_counter() - start)
+    # written last, whole or not at all: the series is there once its .pvd is
+    put(pvd, write_whole, pvd, ET.tostring(root, encoding="utf-8", xml_declaration=True))
+    return pvd, len(frames), files + 1

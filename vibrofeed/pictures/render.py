@@ -23,6 +23,8 @@ ffmpeg on the PATH (Debian package ``ffmpeg``).
 from __future__ import annotations
 
 import os
+import re
+import secrets
 import shutil
 import time as _time
 from dataclasses import dataclass
@@ -349,9 +351,28 @@ def _ffmpeg() -> str:
     return found
 
 
+def write_whole(path, data) -> Path:
+    """Write ``data`` (bytes) to ``path`` through a temporary name beside it, renamed once
+    written: a full disk is an :class:`OSError` from Python (errno ENOSPC) and leaves neither
+    a cut file under ``path`` nor the temporary one; an older file at ``path`` is kept."""
+    path = Path(path)
+    tmp = path.with_name(f".{path.name}.{secrets.token_hex(4)}.part")
+    try:
+        with open(tmp, "wb") as f:
+            f.write(data)  # (close flushes: its ENOSPC is raised too)
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    return path
+
+
 def _write_png(image: np.ndarray, path: Path) -> None:
-    """Write an RGB image as PNG through VTK (already loaded for the drawing)."""
-    from vtkmodules.util.numpy_support import numpy_to_vtk
+    """Write an RGB image as PNG through VTK (already loaded for the drawing).
+
+    VTK encodes into memory and Python writes the bytes: VTK's own file writing meets a
+    full disk by printing libpng's "Write Error" on stderr and leaving a cut file."""
+    from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
     from vtkmodules.vtkCommonDataModel import vtkImageData
     from vtkmodules.vtkIOImage import vtkPNGWriter
 
@@ -361,9 +382,25 @@ def _write_png(image: np.ndarray, path: Path) -> None:
     pixels = numpy_to_vtk(np.ascontiguousarray(image[::-1]).reshape(-1, c), deep=True)
     data.GetPointData().SetScalars(pixels)
     writer = vtkPNGWriter()
-    writer.SetFileName(str(path))
+    writer.WriteToMemoryOn()
     writer.SetInputData(data)
     writer.Write()
+    encoded = writer.GetResult()
+    if encoded is None or encoded.GetNumberOfTuples() == 0:
+        raise OutputError(f"VTK could not encode the picture for {path}")
+    write_whole(path, vtk_to_numpy(encoded).tobytes())
+
+
+def ffmpeg_error(stderr: str) -> str:
+    """The line of ffmpeg's error output that says what went wrong: the first one (ffmpeg
+    names the cause first, then its consequences, down to "Error initializing output
+    stream 0:0 --" or "Conversion failed!"), without ffmpeg's guess "(incorrect codec
+    parameters ?)" where the line names the real cause after it."""
+    for line in stderr.splitlines():
+        line = " ".join(line.split())
+        if line:
+            return re.sub(r" \([^()]*\?\)(?=:)", "", line)
+    return "?"
 
 
 def _write_mp4(painter: _Painter, frames: np.ndarray, path: Path, fps: float, size, progress) -> None:
@@ -389,9 +426,9 @@ def _write_mp4(painter: _Painter, frames: np.ndarray, path: Path, fps: float, si
         proc.stdin.close()
     except BrokenPipeError:
         pass
-    err = proc.stderr.read().decode(errors="replace").strip()
+    err = proc.stderr.read().decode(errors="replace")
     if proc.wait() != 0:
-        raise OutputError(f"ffmpeg could not write {path}: {err.splitlines()[-1] if err else '?'}")
+        raise OutputError(f"ffmpeg could not write {path}: {ffmpeg_error(err)}")
 
 
 def _size(size) -> tuple[int, int]:

@@ -25,16 +25,24 @@ what they read, still to the letter of H5MD 1.1:
 
 A per-part element the result holds no value of (the force on clumps, NaN by
 design) is left out.
+
+HDF5 writes through a file object of vibrofeed's (:class:`_Sink`), never to the disk
+itself: HDF5 meeting a full disk floods stderr with error stacks and crashes the
+process when h5py closes the file; through the sink a full disk is one error
+(:class:`~vibrofeed.errors.OutputError`) and no file.
 """
 
 from __future__ import annotations
 
+import errno
+import os
 from pathlib import Path
 
 import h5py
 import numpy as np
 
 from .. import __version__
+from ..errors import OutputError
 from . import layout as L
 from .writer import _ascii, _fixed, set_unit
 
@@ -76,11 +84,25 @@ def export_md(result, path, every: int = 1) -> Path:
     """Write every ``every``-th frame of a Result to ``path`` (see the module's docstring).
 
     The file is written as ``path.part`` and renamed when complete, so ``path`` is never a
-    partial export."""
+    partial export. A full disk is an :class:`OutputError` naming it, before any writing
+    when the folder has less room than the particle data alone."""
     path = Path(path)
     part = path.with_name(path.name + ".part")
+    index = np.arange(0, result.n_frames, every)
+    n_rows = int(result.present(index).max()) if len(index) else 0
+    names = [name for name in ELEMENTS if result.recorded(ELEMENTS[name][0], index)]
+    need = len(index) * n_rows * sum(_row_bytes(name) for name in names)
+    free = _free_bytes(path.parent)
+    if free is not None and free < need:
+        raise OutputError(f"cannot write {path}: no space left on {_mount(path.parent)} (the export "
+                          f"needs at least {need / 1e6:.3g} MB, {free / 1e6:.3g} MB free)")
     try:
-        _write(result, part, every)
+        with _Sink(part) as sink:
+            _write(result, sink, index, n_rows, names, every)
+        if sink.error is not None:
+            why = (f"no space left on {_mount(path.parent)}" if sink.error.errno == errno.ENOSPC
+                   else sink.error.strerror or str(sink.error))
+            raise OutputError(f"cannot write {path}: {why}")
         part.replace(path)
     except BaseException:
         part.unlink(missing_ok=True)
@@ -88,11 +110,112 @@ def export_md(result, path, every: int = 1) -> Path:
     return path
 
 
-def _write(result, path: Path, every: int) -> None:
-    index = np.arange(0, result.n_frames, every)
-    n_rows = int(result.present(index).max()) if len(index) else 0
-    names = [name for name in ELEMENTS if result.recorded(ELEMENTS[name][0], index)]
-    with h5py.File(path, "w") as f:
+def _row_bytes(name: str) -> int:
+    """Bytes of one row (one part at one frame) of element ``name``."""
+    source = ELEMENTS[name][0]
+    dtype, comps, _ = L.PART_ELEMENTS.get(source) or L.OPTIONAL_PART_ELEMENTS[source]
+    return np.dtype(dtype).itemsize * max(comps, 1)
+
+
+def _free_bytes(folder) -> int | None:
+    """Bytes this process may still write in ``folder``; None when the file system does not say."""
+    try:
+        st = os.statvfs(folder)
+    except OSError:
+        return None
+    if st.f_blocks == 0:
+        return None
+    return (st.f_bfree if os.geteuid() == 0 else st.f_bavail) * st.f_frsize
+
+
+def _mount(folder) -> str:
+    """The mount point of the file system holding ``folder``."""
+    folder = Path(folder).resolve()
+    while not os.path.ismount(folder):
+        folder = folder.parent
+    return str(folder)
+
+
+class _Sink:
+    """The export's file as h5py's "fileobj" driver sees it: HDF5 never meets a failed write.
+
+    HDF5 writing to a full disk itself prints error stacks and crashes the process (a
+    segfault) when h5py closes the file. Building the file in memory avoids that but needs
+    as much memory as the export (gigabytes for a long run of thousands of parts); the sink
+    writes to the disk as HDF5 goes, memory stays at the exporter's blocks. The first
+    write the disk refuses becomes :attr:`error`; it and every later write are kept in
+    memory (reads see them), so HDF5 goes on and closes the file cleanly, the exporter
+    stops at its next block (:func:`_write`) and :func:`export_md` reports the error and
+    removes the file. Memory then holds only what HDF5 wrote after the disk filled.
+    """
+
+    def __init__(self, path: Path):
+        self.fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_TRUNC, 0o666)
+        self.pos = self.size = 0
+        self.error: OSError | None = None
+        self.kept: list[tuple[int, bytes]] = []  # (offset, data) written after the error
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        os.close(self.fd)
+
+    def seek(self, offset: int, whence: int = os.SEEK_SET) -> int:
+        self.pos = offset + {os.SEEK_SET: 0, os.SEEK_CUR: self.pos, os.SEEK_END: self.size}[whence]
+        return self.pos
+
+    def tell(self) -> int:
+        return self.pos
+
+    def write(self, data) -> int:
+        data = memoryview(data).cast("B")
+        if self.error is None:
+            try:
+                done = 0
+                while done < len(data):
+                    done += os.pwrite(self.fd, data[done:], self.pos + done)
+            except OSError as exc:
+                self.error = exc
+        if self.error is not None:
+            self.kept.append((self.pos, bytes(data)))
+        self.pos += len(data)
+        self.size = max(self.size, self.pos)
+        return len(data)
+
+    def read(self, n: int = -1) -> bytes:
+        n = self.size - self.pos if n < 0 else n
+        out = bytearray(n)  # what the disk does not hold reads as zeros (HDF5's own drivers')
+        try:
+            got = os.pread(self.fd, n, self.pos)
+            out[:len(got)] = got
+        except OSError as exc:
+            self.error = self.error or exc
+        for at, data in self.kept:  # in the order written: later writes win
+            lo, hi = max(at, self.pos), min(at + len(data), self.pos + n)
+            if lo < hi:
+                out[lo - self.pos:hi - self.pos] = data[lo - at:hi - at]
+        self.pos += n
+        return bytes(out)
+
+    def truncate(self, size: int) -> int:
+        if self.error is None:
+            try:
+                os.ftruncate(self.fd, size)
+            except OSError as exc:
+                self.error = exc
+        self.size = size
+        return size
+
+    def flush(self) -> None:
+        pass
+
+
+def _write(result, sink: _Sink, index: np.ndarray, n_rows: int, names: list[str],
+           every: int) -> None:
+    """Write the export through ``sink``; stop early once it met an error (the file is dropped)."""
+    # h5py's "fileobj" driver: HDF5 reads and writes through the sink
+    with h5py.File(sink, "w") as f:
         h5md = f.create_group("h5md")
         h5md.attrs["version"] = np.array(L.H5MD_VERSION, dtype="i4")
         for group, attrs in (("author", {"name": _text_attr(result.file["h5md/author"], "name")}),
@@ -140,6 +263,8 @@ def _write(result, path: Path, every: int) -> None:
                     rows = frame[source][order]
                     blocks[name][k, :len(order)] = rows if scale is None else rows * scale
             for name, block in blocks.items():
+                if sink.error is not None:  # the disk is full: the rest would only fill memory
+                    return
                 values[name][k0:k1] = block
 
         obs = f.create_group("observables")

@@ -25,19 +25,6 @@ def one_line_error(proc, code: int, *words: str) -> None:
         assert word in proc.stderr, proc.stderr
 
 
-def last_line_error(proc, code: int, *words: str) -> str:
-    """The error line a command ends with (a C library may have written its own lines
-    before it: libpng's "Write Error"), never a traceback."""
-    assert proc.returncode == code, proc.stderr
-    assert "Traceback" not in proc.stderr, proc.stderr
-    line = proc.stderr.strip().splitlines()[-1]
-    assert line.startswith("vibrofeed: error: "), proc.stderr
-    for word in words:
-        assert word in line, line
-    return line
-
-
-
 def fill(disk, leave: int) -> None:
     """Fill ``disk`` until ``leave`` bytes (rounded down to its blocks) are free."""
     st = os.statvfs(disk)
@@ -174,6 +161,11 @@ def test_the_command_line_prints_an_oserror_as_one_line(monkeypatch, capsys, exc
 
 
 # ----------------------------------------------------------------- a full disk
+def no_library_noise(proc) -> None:
+    for noise in ("Traceback", "libpng", "HDF5", "Segmentation"):
+        assert noise not in proc.stderr, proc.stderr
+
+
 def test_render_on_a_full_disk_writes_no_picture_and_keeps_the_old_one(run_file, tmp_path, small_disk):
     sample = tmp_path / "sample.png"
     vibrofeed("render", run_file, "-o", sample, check=True)
@@ -184,16 +176,18 @@ def test_render_on_a_full_disk_writes_no_picture_and_keeps_the_old_one(run_file,
     proc = vibrofeed("render", run_file, "-o", out, check=True)
     assert proc.stdout.startswith(f"wrote {out} ") and incomplete(out) is None
     before = out.read_bytes()
-    # room for part of a picture: VTK's writer stops where the disk ends and says nothing;
-    # the command must: exit 1, the name asked for, the full disk
+    # room for part of a picture: one line (no libpng "Write Error" before it), exit 1,
+    # the name asked for, the full disk
     fill(small_disk, 4096)
     proc = vibrofeed("render", run_file, "-o", out)
-    last_line_error(proc, 1, f"{out} is incomplete", f"no space left on {small_disk}")
+    one_line_error(proc, 1, f"writing into {out}: no space left on {small_disk}")
+    no_library_noise(proc)
     assert "wrote" not in proc.stdout
     assert out.read_bytes() == before                     # the older picture is kept whole
     assert sorted(p.name for p in small_disk.iterdir()) == ["filler", "r.png"]  # nothing else
     proc = vibrofeed("render", run_file, "-o", small_disk / "new.png")
-    last_line_error(proc, 1, "new.png", f"no space left on {small_disk}")
+    one_line_error(proc, 1, "new.png", f"no space left on {small_disk}")
+    no_library_noise(proc)
     assert not (small_disk / "new.png").exists()
     # no room at all: refused before drawing, one line
     fill(small_disk, 0)
@@ -205,7 +199,7 @@ def test_render_on_a_full_disk_writes_no_picture_and_keeps_the_old_one(run_file,
 def test_a_movie_cut_by_a_full_disk_is_not_reported(run_file, small_disk):
     fill(small_disk, 8192)
     proc = vibrofeed("render", run_file, "-o", small_disk / "m.mp4", "--every", "4")
-    last_line_error(proc, 1, "m.mp4", f"no space left on {small_disk}")
+    one_line_error(proc, 1, "m.mp4", f"no space left on {small_disk}")  # (ffmpeg's stderr is read)
     assert "wrote" not in proc.stdout and not (small_disk / "m.mp4").exists()
 
 
@@ -215,6 +209,53 @@ def test_plots_on_a_full_disk_are_one_line_naming_the_folder(run_file, small_dis
     proc = vibrofeed("feedrate", run_file, "--plot", plots)
     one_line_error(proc, 1, f"writing into {plots}: no space left on {small_disk}")
     assert proc.stdout == ""
+
+
+@pytest.mark.parametrize("leave", [64 * 1024, 1024 * 1024])
+def test_a_paraview_export_on_a_full_disk_is_one_line_and_leaves_nothing(run_file, small_disk, leave):
+    # 64 kB: room for one frame's file; 1 MB: for more than half of the series (1.6 MB)
+    fill(small_disk, leave)
+    out = small_disk / "pv"
+    proc = vibrofeed("export", run_file, "-o", out)
+    one_line_error(proc, 1, f"writing into {out}: no space left on {small_disk}")
+    no_library_noise(proc)
+    assert proc.stdout == ""
+    # no .pvd, no series without its .pvd: the files and folders the export made are gone
+    assert sorted(p.name for p in small_disk.iterdir()) == ["filler"]
+
+
+def test_a_paraview_export_that_fits_is_written_whole(run_file, small_disk):
+    proc = vibrofeed("export", run_file, "-o", small_disk / "pv", check=True)
+    assert proc.stdout.startswith(f"wrote {small_disk / 'pv' / 'run.pvd'} ")
+    for path in (small_disk / "pv").rglob("*.*"):
+        assert incomplete(path) is None, path
+    assert not [p for p in (small_disk / "pv").rglob(".*")]  # no temporary file left
+
+
+@pytest.fixture(scope="module")
+def md_size(run_file, tmp_path_factory):
+    """Bytes of run_file's h5md-md export."""
+    folder = tmp_path_factory.mktemp("md")
+    vibrofeed("export", run_file, "--format", "h5md-md", "-o", folder, check=True)
+    return (folder / "run.h5md").stat().st_size
+
+
+@pytest.mark.parametrize("room", [0.05, 0.85])
+def test_an_h5md_md_export_on_a_full_disk_is_one_line_and_leaves_nothing(run_file, small_disk, md_size,
+                                                                          room):
+    # 5 %: less than the parts' data, refused before writing; 85 %: more, HDF5 is writing when
+    # the disk fills (HDF5's own writing: error stacks on stderr, then a segfault)
+    fill(small_disk, int(room * md_size))
+    out = small_disk / "md"
+    proc = vibrofeed("export", run_file, "--format", "h5md-md", "-o", out)
+    one_line_error(proc, 1, f"cannot write {out / 'run.h5md'}: no space left on {small_disk}")
+    no_library_noise(proc)
+    assert ("needs at least" in proc.stderr) == (room < 0.5)
+    assert proc.stdout == "" and list(out.iterdir()) == []  # neither run.h5md nor its .part
+    # with room again, the same command writes it whole
+    (small_disk / "filler").unlink()
+    proc = vibrofeed("export", run_file, "--format", "h5md-md", "-o", out, check=True)
+    assert incomplete(out / "run.h5md") is None and [p.name for p in out.iterdir()] == ["run.h5md"]
 
 
 # ----------------------------------------------------------------- names taken by folders

@@ -179,3 +179,42 @@ def test_command_line(tmp_path):
     proc = vibrofeed("export", path, "-o", tmp_path / "pv", check=True)
     assert "wrote" in proc.stdout and (tmp_path / "pv" / "run.pvd").is_file()
     assert len(list((tmp_path / "pv" / "run").glob("*.vtp"))) == 2 * 3
+
+
+@pytest.mark.parametrize("fail_at", [1, 4, 8])
+def test_a_failed_export_removes_what_it_added(tmp_path, monkeypatch, fail_at):
+    """A full disk at the first file, mid-series or at the .pvd (the 8th file: 2 frames x 3
+    blocks, the outlet, the .pvd): the files and folders the export made are removed, what was
+    in the folder before stays."""
+    import errno
+
+    from vibrofeed.pictures import export as E
+
+    path = chip_run(tmp_path / "run.h5", n_frames=2)
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "notes.txt").write_text("mine")
+    real, calls = E.write_whole, []
+
+    def write_whole(target, data):
+        calls.append(target)
+        if len(calls) == fail_at:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return real(target, data)
+
+    monkeypatch.setattr(E, "write_whole", write_whole)
+    with pytest.raises(OSError, match="No space left"):
+        E.export(Result(path), out / "pv")
+    assert [p.name for p in out.iterdir()] == ["notes.txt"]
+    assert len(calls) == fail_at and (calls[-1].name == "run.pvd") == (fail_at == 8)
+    # into a folder that already held the series: the older files stay, the new ones go
+    monkeypatch.setattr(E, "write_whole", real)
+    E.export(Result(path), out)
+    before = sorted(p.relative_to(out) for p in out.rglob("*"))
+    (out / "run" / "parts_000001.vtp").unlink()
+    calls.clear()
+    monkeypatch.setattr(E, "write_whole", write_whole)
+    with pytest.raises(OSError):
+        E.export(Result(path), out)
+    after = sorted(p.relative_to(out) for p in out.rglob("*"))
+    assert set(after) <= set(before) and (out / "run.pvd").exists() and (out / "run").is_dir()

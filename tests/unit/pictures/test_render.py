@@ -236,6 +236,48 @@ def test_movie_has_every_frame(tmp_path, render):
     assert len(video) == 4 and video[0].std() > 10
 
 
+def test_a_png_is_written_whole_or_not_at_all(tmp_path, render):
+    """VTK encodes into memory, Python writes the file (a full disk: an OSError, no libpng
+    noise); a failed write keeps an older file and leaves no temporary one."""
+    from vibrofeed.pictures.render import render as render_file
+    from vibrofeed.pictures.render import write_whole
+
+    out = tmp_path / "p.png"
+    with Result(bulk_file(tmp_path / "p.h5", [0.005, 0.01])) as r:
+        render_file(r, out, size=(160, 96))
+    data = out.read_bytes()
+    assert data.startswith(b"\x89PNG\r\n\x1a\n") and data[-8:-4] == b"IEND"
+    with pytest.raises(TypeError):  # a write that fails half-way
+        write_whole(out, "not bytes")
+    assert out.read_bytes() == data and sorted(p.name for p in tmp_path.iterdir()) == ["p.h5", "p.png"]
+
+
+def test_ffmpeg_failing_is_named_by_its_first_error_line(tmp_path, monkeypatch, render):
+    """ffmpeg names the cause first and its consequences after: the last line ("Error
+    initializing output stream 0:0 --") says nothing."""
+    from vibrofeed.errors import OutputError
+    from vibrofeed.pictures.render import ffmpeg_error
+    from vibrofeed.pictures.render import render as render_file
+
+    stderr = ("Could not write header for output file #0 (incorrect codec parameters ?): "
+              "No space left on device\nError initializing output stream 0:0 -- \n")
+    assert ffmpeg_error(stderr) == "Could not write header for output file #0: No space left on device"
+    assert ffmpeg_error("\n[libx264 @ 0x1] broken   pipe\nConversion failed!\n") == \
+        "[libx264 @ 0x1] broken pipe"
+    assert ffmpeg_error("") == "?"
+    fake = tmp_path / "bin" / "ffmpeg"  # an ffmpeg that fails as on a full disk
+    fake.parent.mkdir()
+    fake.write_text("#!/bin/sh\ncat > /dev/null\nprintf '%s' \"$FFMPEG_ERR\" >&2\nexit 1\n")
+    fake.chmod(0o755)
+    monkeypatch.setenv("PATH", f"{fake.parent}:/usr/bin:/bin")
+    monkeypatch.setenv("FFMPEG_ERR", stderr)
+    out = tmp_path / "m.mp4"
+    with Result(bulk_file(tmp_path / "m.h5", [0.005, 0.01], n_frames=2)) as r:
+        with pytest.raises(OutputError, match=f"^ffmpeg could not write {out}: Could not write header "
+                                              "for output file #0: No space left on device$"):
+            render_file(r, out, size=(160, 96))
+
+
 def test_command_line(tmp_path, capsys):
     from vibrofeed.cli import main
 

@@ -216,3 +216,67 @@ def test_export_refuses_options_of_the_other_format(bulk, tmp_path):
     proc = vibrofeed("export", bulk, "--format", "h5md-md", "--no-shapes", "-o", tmp_path / "x")
     assert proc.returncode == 2 and "--no-shapes" in proc.stderr
     assert not (tmp_path / "x").exists()
+
+
+# -- a disk that fills while the export is written ------------------------------------------
+def disk_of(monkeypatch, room: int, errno_=None):
+    """The export's writes (os.pwrite) meet a full disk after ``room`` bytes, as the kernel
+    does: a write cut at the limit, then ENOSPC (``errno_``: another error instead)."""
+    import errno
+    import os
+
+    real = os.pwrite
+    written = [0]
+
+    def pwrite(fd, data, offset):
+        allowed = room - written[0]
+        if allowed <= 0:
+            code = errno_ or errno.ENOSPC
+            raise OSError(code, os.strerror(code))
+        n = real(fd, memoryview(data)[:allowed], offset)
+        written[0] += n
+        return n
+
+    monkeypatch.setattr(os, "pwrite", pwrite)
+
+
+@pytest.mark.parametrize("share", [0.0, 0.01, 0.3, 0.9, 0.999])
+def test_an_export_meeting_a_full_disk_is_one_error_and_no_file(bulk, tmp_path, monkeypatch, share):
+    """Wherever HDF5 is when the disk fills (its superblock, the parts' blocks, the metadata
+    written at closing), the export is an OutputError and no file: HDF5 writing to the disk
+    itself prints error stacks and then crashes the process."""
+    from vibrofeed.cli.outputs import mount_point
+    from vibrofeed.errors import OutputError
+
+    with Result(bulk) as r:
+        size = export_md(r, tmp_path / "whole.h5md").stat().st_size
+        disk_of(monkeypatch, int(share * size))
+        out = tmp_path / "cut.h5md"
+        with pytest.raises(OutputError, match=f"cannot write {out}: no space left on "
+                                              f"{mount_point(tmp_path)}$"):
+            export_md(r, out)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["feed.h5", "whole.h5md"]
+
+
+def test_an_export_meeting_another_disk_error_names_it(bulk, tmp_path, monkeypatch):
+    import errno
+
+    from vibrofeed.errors import OutputError
+
+    disk_of(monkeypatch, 50_000, errno.EIO)
+    with Result(bulk) as r, pytest.raises(OutputError, match="cut.h5md: Input/output error"):
+        export_md(r, tmp_path / "cut.h5md")
+    assert not (tmp_path / "cut.h5md").exists() and not (tmp_path / "cut.h5md.part").exists()
+
+
+def test_an_export_is_refused_before_writing_when_the_parts_data_cannot_fit(bulk, tmp_path,
+                                                                             monkeypatch):
+    from vibrofeed.errors import OutputError
+    from vibrofeed.results import md_export
+
+    monkeypatch.setattr(md_export, "_free_bytes", lambda folder: 1000)
+    monkeypatch.setattr(md_export, "_Sink", None)  # (must not be reached)
+    with Result(bulk) as r, pytest.raises(OutputError, match=r"no space left on .* \(the export needs "
+                                                              r"at least 0\.\d+ MB, 0\.001 MB free\)"):
+        export_md(r, tmp_path / "x.h5md")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["feed.h5"]
