@@ -176,11 +176,11 @@ def plot_reference(case, runs, figures: dict, ref, quantities: dict, path: Path)
     includes its own, see the table). ``quantities``: name -> (key of its error, unit)."""
     plt = pyplot()
     axis = next(iter(case.sweep))
-    quantities = list(case.tolerance)
-    fig, axes = plt.subplots(1, len(quantities), figsize=(5 * len(quantities), 3.8), squeeze=False,
+    names = list(case.tolerance)
+    fig, axes = plt.subplots(1, len(names), figsize=(5 * len(names), 3.8), squeeze=False,
                              layout="constrained")
     xs = np.array([float(r.values[axis]) for r in runs])
-    for ax, q in zip(axes[0], quantities):
+    for ax, q in zip(axes[0], names):
         err_key, unit = quantities[q]
         scale, unit = (1e3, "mm/s") if unit == "m/s" else (1.0, unit)
         ys = np.array([figures[r.label][q] for r in runs]) * scale

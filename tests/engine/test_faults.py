@@ -70,9 +70,8 @@ def test_sigterm_ends_a_run_as_ctrl_c_does(tmp_path, command):
         proc = start(["run", "single_part", "-q", "-o", "t.h5", *LONG], tmp_path)
         part = tmp_path / "t.h5.part"
     else:
-        proc = start(["demo", "-q", "-o", ".", "--no-pictures", "-p", "n_parts=20", "-p", "t_end=5"],
-                     tmp_path)
-        part = tmp_path / "bulk_feeder.h5.part"
+        proc = start(["demo", "-q", "-o", ".", "--no-pictures", "-p", "t_end=5"], tmp_path)
+        part = tmp_path / "feeder_line.h5.part"
     seen = wait_until(lambda: frames_now(part) >= 3 and frames_now(part), proc)
     proc.send_signal(signal.SIGTERM)  # what timeout, Slurm and preemption send
     _, err = proc.communicate(timeout=60)
