@@ -429,10 +429,15 @@ def _reference(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None
         raise CaseError(f"case {case.name}: [compare] reference {wanted} matches {len(ref)} sweep "
                         "points, not one")
     ref = ref[0]
+    # One window for all, the reference's: a pre-filled bed drains, its speed and rate move
+    # with the window, and each run's own window would compare different moments.
+    with Result(ref.output) as r:
+        base = FeedRate(r, model=False).run().summary()
+    window = {"start": base["steady_from"], "end": base["steady_to"]}
     figures = {}
     for run in runs:
         with Result(run.output) as r:
-            figures[run.label] = FeedRate(r, model=False).run().summary()
+            figures[run.label] = FeedRate(r, model=False, **window).run().summary()
     base = figures[ref.label]
     for run in runs:
         if run is ref:
