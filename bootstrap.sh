@@ -102,7 +102,7 @@ fi
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 case "$JOB" in
   demo)
-    say "running the main job: a bulk feeder (300 micro-parts on a vibrating track), its feed rate and singulation"
+    say "running the main job: a feeder line delivering 300 um parts one at a time (its feed rate, singulation, rejects)"
     .venv/bin/vibrofeed demo -o results ;;
   test)
     say "running the default test suite (ctest -LE slow)"
