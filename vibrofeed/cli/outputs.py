@@ -30,6 +30,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
+from ..disk import free_bytes, mount_point
 from ..errors import EXIT_FAILED, EXIT_USAGE, OutputError, UsageError
 
 # errno of an OSError -> exit status: a path the user gave that cannot be written is
@@ -44,29 +45,9 @@ _FULL = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG}
 _destinations: list[Path] = []
 
 
-def mount_point(path) -> str:
-    """The mount point of the file system holding ``path`` (an existing file or folder)."""
-    path = Path(path).resolve()
-    while not os.path.ismount(path):
-        path = path.parent
-    return str(path)
-
-
-def _free_bytes(folder) -> int | None:
-    """Bytes this process may still write in ``folder`` (root may use the reserved blocks);
-    None when the file system does not say (some virtual ones report no blocks at all)."""
-    try:
-        st = os.statvfs(folder)
-    except OSError:
-        return None
-    if st.f_blocks == 0:
-        return None
-    return (st.f_bfree if os.geteuid() == 0 else st.f_bavail) * st.f_frsize
-
-
 def _full(folder) -> str:
     """``; no space left on MOUNT`` when ``folder``'s file system is full, else ''."""
-    return f"; no space left on {mount_point(folder)}" if _free_bytes(folder) == 0 else ""
+    return f"; no space left on {mount_point(folder)}" if free_bytes(folder) == 0 else ""
 
 
 def os_error(exc: OSError) -> tuple[str, int]:
@@ -98,7 +79,7 @@ def _writable(option: str, given, folder: Path) -> None:
             pass
     except OSError as exc:
         raise UsageError(f"{option} {given}: cannot write in {folder} ({exc.strerror or exc})") from None
-    if _free_bytes(folder) == 0:  # a file could be created, but not one byte written into it
+    if free_bytes(folder) == 0:  # a file could be created, but not one byte written into it
         raise OutputError(f"{option} {given}: no space left on {mount_point(folder)}")
 
 

@@ -33,6 +33,7 @@ from pathlib import Path
 
 from .. import __version__, interrupt
 from ..decks import Deck
+from ..disk import mount_point
 from ..errors import EngineError, OutputError, RunError, UsageError
 from ..parameters import resolve
 from ..results import layout as L
@@ -313,7 +314,7 @@ class _Run:
         except OSError as exc:
             if exc.errno != errno.ENOSPC:
                 raise
-            raise OutputError(f"no space left on {_mount_point(self.out)} for the run's scratch "
+            raise OutputError(f"no space left on {mount_point(self.out.parent)} for the run's scratch "
                               f"folder in {self.out.parent}") from None
 
     def _write_spec(self, command: str, before_run, schedule) -> None:
@@ -447,7 +448,7 @@ class _Run:
         own = self.event("error")
         if own is not None and own.get("no_space"):
             where = f"{self.part} ({frames} frames)" if frames else str(self.part)
-            return OutputError(f"no space left on {_mount_point(self.part)} while writing {where}")
+            return OutputError(f"no space left on {mount_point(self.part.parent)} while writing {where}")
         return _diagnose(self.rc, self.events, self.deck, self.log, self.screen, self.stderr_path,
                          last_step, last_time)
 
@@ -481,13 +482,6 @@ def _mass_balance_problem(counts: dict | None) -> str | None:
     return (f"{what}: the mass balance does not close (inserted {inserted}, on the track "
             f"{counts['on_track']}, exited {counts['exited']}"
             + (f", rejected {counts['rejected']})" if "rejected" in counts else ")"))
-
-
-def _mount_point(path: Path) -> str:
-    path = Path(path).resolve().parent
-    while not os.path.ismount(path):
-        path = path.parent
-    return str(path)
 
 
 def _signal_group(proc: subprocess.Popen, sig: int) -> None:

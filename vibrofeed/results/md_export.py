@@ -42,6 +42,7 @@ import h5py
 import numpy as np
 
 from .. import __version__
+from ..disk import free_bytes, mount_point
 from ..errors import OutputError
 from . import layout as L
 from .writer import _ascii, _fixed, set_unit
@@ -92,15 +93,15 @@ def export_md(result, path, every: int = 1) -> Path:
     n_rows = int(result.present(index).max()) if len(index) else 0
     names = [name for name in ELEMENTS if result.recorded(ELEMENTS[name][0], index)]
     need = len(index) * n_rows * sum(_row_bytes(name) for name in names)
-    free = _free_bytes(path.parent)
+    free = free_bytes(path.parent)
     if free is not None and free < need:
-        raise OutputError(f"cannot write {path}: no space left on {_mount(path.parent)} (the export "
+        raise OutputError(f"cannot write {path}: no space left on {mount_point(path.parent)} (the export "
                           f"needs at least {need / 1e6:.3g} MB, {free / 1e6:.3g} MB free)")
     try:
         with _Sink(part) as sink:
             _write(result, sink, index, n_rows, names, every)
         if sink.error is not None:
-            why = (f"no space left on {_mount(path.parent)}" if sink.error.errno == errno.ENOSPC
+            why = (f"no space left on {mount_point(path.parent)}" if sink.error.errno == errno.ENOSPC
                    else sink.error.strerror or str(sink.error))
             raise OutputError(f"cannot write {path}: {why}")
         part.replace(path)
@@ -115,25 +116,6 @@ def _row_bytes(name: str) -> int:
     source = ELEMENTS[name][0]
     dtype, comps, _ = L.PART_ELEMENTS.get(source) or L.OPTIONAL_PART_ELEMENTS[source]
     return np.dtype(dtype).itemsize * max(comps, 1)
-
-
-def _free_bytes(folder) -> int | None:
-    """Bytes this process may still write in ``folder``; None when the file system does not say."""
-    try:
-        st = os.statvfs(folder)
-    except OSError:
-        return None
-    if st.f_blocks == 0:
-        return None
-    return (st.f_bfree if os.geteuid() == 0 else st.f_bavail) * st.f_frsize
-
-
-def _mount(folder) -> str:
-    """The mount point of the file system holding ``folder``."""
-    folder = Path(folder).resolve()
-    while not os.path.ismount(folder):
-        folder = folder.parent
-    return str(folder)
 
 
 class _Sink:

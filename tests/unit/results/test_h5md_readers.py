@@ -274,7 +274,7 @@ def test_an_export_is_refused_before_writing_when_the_parts_data_cannot_fit(bulk
     from vibrofeed.errors import OutputError
     from vibrofeed.results import md_export
 
-    monkeypatch.setattr(md_export, "_free_bytes", lambda folder: 1000)
+    monkeypatch.setattr(md_export, "free_bytes", lambda folder: 1000)
     monkeypatch.setattr(md_export, "_Sink", None)  # (must not be reached)
     with Result(bulk) as r, pytest.raises(OutputError, match=r"no space left on .* \(the export needs "
                                                               r"at least 0\.\d+ MB, 0\.001 MB free\)"):
