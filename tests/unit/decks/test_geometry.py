@@ -194,13 +194,15 @@ def test_cross_tilt_makes_the_floor_a_plane_down_towards_the_minus_y_wall(gate):
     # still one surface: no edge of three faces, and the only floor edge left open is the outlet's
     counts = edge_counts(t)
     assert set(counts.values()) <= {1, 2}
-    open_floor = [(p, q) for p, q in open_edges(v, t) if not (np.isclose(p[2], H) and np.isclose(q[2], H))]
-    assert all(np.isclose(p[0], L) and np.isclose(q[0], L) for p, q in open_floor)
+    pm = dict(rtol=0, atol=1e-12)  # the mesh keeps its vertices to 1 pm
+    open_floor = [(p, q) for p, q in open_edges(v, t)
+                  if not (np.isclose(p[2], H, **pm) and np.isclose(q[2], H, **pm))]
+    assert all(np.isclose(p[0], L, **pm) and np.isclose(q[0], L, **pm) for p, q in open_floor)
     # the floor's normals lean towards -y by the tilt: downhill, where the parts go
     tri = v[t]
     n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
     n /= np.linalg.norm(n, axis=1)[:, None]
-    is_floor = np.all(~np.isclose(tri[:, :, 2], H), axis=1) & (np.abs(n[:, 2]) > 0.5)
+    is_floor = np.all(~np.isclose(tri[:, :, 2], H, **pm), axis=1) & (np.abs(n[:, 2]) > 0.5)
     assert np.allclose(n[is_floor], [0, -math.sin(math.radians(tilt)), math.cos(math.radians(tilt))],
                        rtol=0, atol=1e-7)  # unit vectors from vertices kept to 1 pm over 0.1 mm
 
