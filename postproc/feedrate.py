@@ -561,6 +561,22 @@ class FeedRate(AnalysisBase):
                     sec["model_speed"], sec["model_note"] = dilute_limit(drive)
                 sec["speed_ratio"] = velocity_ratio(sec["speed"], sec["model_speed"])
 
+    def _bed_pass(self, frames):
+        """:func:`.line.bed_pass` over ``frames``, read once per run of the analysis: the
+        window's search (:meth:`_filled`, :meth:`_settled_start`) and the final figures all
+        ask for the same pass over every frame."""
+        key = np.asarray(frames, dtype=np.int64).tobytes()
+        if getattr(self, "_pass_key", None) != key:
+            result = self.result
+            edge = outlet_x(result)
+            bounds = section_bounds(result.parameters, edge)
+            out, rejects = result.outlet, result.rejects
+            self._pass = bed_pass(result, frames, [lo for lo, _ in bounds[1:]], edge,
+                                  np.r_[out["id"], rejects["id"]], np.r_[out["time"], rejects["time"]],
+                                  self.axis)
+            self._pass_key = key
+        return self._pass
+
     def _filled(self, frames, freq: float) -> float:
         """When every fed section is full: the latest MSER start (no end cut) of their
         hold-ups, averaged over bins of 5 periods (MSER-5; 5 frames without a frequency)
@@ -570,12 +586,7 @@ class FeedRate(AnalysisBase):
         t0 = float(self.times[0])
         frame_dt = float(np.median(np.diff(self.times))) if len(self.times) > 1 else 1.0
         width = max(5 / freq if freq > 0 else 0.0, 5 * frame_dt)
-        edge = outlet_x(result)
-        bounds = section_bounds(result.parameters, edge)
-        out, rejects = result.outlet, result.rejects
-        _, counts = bed_pass(result, frames, [lo for lo, _ in bounds[1:]], edge,
-                             np.r_[out["id"], rejects["id"]], np.r_[out["time"], rejects["time"]],
-                             self.axis)
+        _, counts = self._bed_pass(frames)
         fed = float(result.parameters.get("inlet_rate", 0.0)) > 0
         which = np.floor((self.times - t0) / width + 1e-9).astype(np.int64)
         n_bins = int(which.max()) + 1
@@ -640,10 +651,8 @@ class FeedRate(AnalysisBase):
         r, result = self.results, self.result
         edge = outlet_x(result)
         bounds = section_bounds(result.parameters, edge)
-        out, rejects = result.outlet, result.rejects
-        crossings, counts = bed_pass(result, frames, [lo for lo, _ in bounds[1:]], edge,
-                                     np.r_[out["id"], rejects["id"]],
-                                     np.r_[out["time"], rejects["time"]], self.axis)
+        rejects = result.rejects
+        crossings, counts = self._bed_pass(frames)
         inside = (self.times >= t_a - 1e-12) & (self.times <= t_b + 1e-12)
         window, window_t = frames[inside], self.times[inside]
         span = (t_a, t_b, freq)
