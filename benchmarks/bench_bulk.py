@@ -66,8 +66,8 @@ def analyses(path: Path) -> float:
 
     t0 = time.perf_counter()
     with Result(path) as r:
-        FeedRate(r).run().summary()
-        Singulation(r).run().summary()
+        fr = FeedRate(r).run().summary()
+        Singulation(r, start=fr["steady_from"], end=fr["steady_to"]).run().summary()  # as the demo
     return time.perf_counter() - t0
 
 

@@ -239,6 +239,11 @@ MIN_EXITS = 10
 SETTLE_STEPS = 3
 
 
+def is_fed(parameters) -> bool:
+    """Whether an inlet feeds the run: it does not drain, its hold-up must hold, its end is kept."""
+    return float(parameters.get("inlet_rate", 0.0)) > 0
+
+
 def too_few_exits(n: int, need: int = MIN_EXITS) -> str | None:
     """Why ``n`` exits in the window measure nothing; None when they do."""
     return None if n >= need else f"too few exits to measure ({n} in the window; need ≥ {need})"
@@ -520,7 +525,7 @@ class FeedRate(AnalysisBase):
         ev = outlet_events(result, t_lo, t_hi)
         times = ev["time"]
         r.event_times, r.n_events = times, len(times)
-        fed = float(result.parameters.get("inlet_rate", 0.0)) > 0
+        fed = is_fed(result.parameters)
         t_a, t_b, width, counts = steady_window(times, t_lo, t_hi, freq, self.start, self.end, fed)
         r.parts_per_s = r.parts_per_s_err = math.nan  # the bed's figures before the rate is measured
         if self.start is None:
@@ -587,7 +592,7 @@ class FeedRate(AnalysisBase):
         frame_dt = float(np.median(np.diff(self.times))) if len(self.times) > 1 else 1.0
         width = max(5 / freq if freq > 0 else 0.0, 5 * frame_dt)
         _, counts = self._bed_pass(frames)
-        fed = float(result.parameters.get("inlet_rate", 0.0)) > 0
+        fed = is_fed(result.parameters)
         which = np.floor((self.times - t0) / width + 1e-9).astype(np.int64)
         n_bins = int(which.max()) + 1
         start = t0
@@ -659,7 +664,7 @@ class FeedRate(AnalysisBase):
         cuts = batch_cuts(t_a, t_b, freq, max(self.batches, DRIFT_MIN_BATCHES))
         # A store without inflow (section 1 of a pre-filled bed, no inlet) drains at its
         # out-flux however steadily it feeds: only a fed section's hold-up must hold.
-        fed = float(result.parameters.get("inlet_rate", 0.0)) > 0
+        fed = is_fed(result.parameters)
         sections, speeds, held, trends = [], [], [], []
         for k, (lo, hi) in enumerate(bounds):
             last = k == len(bounds) - 1

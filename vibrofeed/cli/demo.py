@@ -117,7 +117,8 @@ def report(path, folder: Path | None = None) -> tuple[str, str | None]:
         fr = FeedRate(result).run()
         summary = fr.summary()
         reason = unmeasured(summary, F.RATE_KEYS)
-        sg = Singulation(result).run()
+        # over feed rate's window, found once (Singulation would search it again)
+        sg = Singulation(result, start=summary["steady_from"], end=summary["steady_to"]).run()
         singulation = sg.summary()
         reason = reason or unmeasured(singulation, S.ARRIVAL_KEYS)
         lines += ["", "Feed rate", F.table(summary), "", "Singulation", S.table(singulation)]

@@ -89,7 +89,8 @@ def metrics(path) -> dict:
             if out["feedrate_reason"]:
                 out.update(dict.fromkeys(FEEDRATE_UNMEASURED))
             out.update(section_columns(fr.get("sections") or [], not out["feedrate_reason"]))
-            sg = Singulation(r).run().summary()
+            # over feed rate's window, found once (Singulation would search it again)
+            sg = Singulation(r, start=fr["steady_from"], end=fr["steady_to"]).run().summary()
             out.update({k: _scalar(sg.get(k)) for k in SINGULATION})
             out["singulation_reason"] = sg.get("reason") or None
             if out["singulation_reason"]:
