@@ -121,11 +121,11 @@ _MAX_LAG = 1000
 # Keys of the command's summary (JSON and table), in order.
 SUMMARY_KEYS = ("parts_per_s", "parts_per_s_err", "mass_per_s", "mass_per_s_err", "mean_velocity",
                 "mean_velocity_err", "steady_from", "steady_to", "unsteady", "bed_trends", "n_events",
-                "inserted", "exited", "rejected", "on_track", "lost", "sections", "rejects_by_tooling",
-                "bin_width", "velocity_lag", "profile_x", "profile_velocity", "profile_count",
-                "model_velocity", "model_note", "velocity_ratio", "shape", "reason")
-# Summary keys of feeder lines only.
-LINE_KEYS = ("rejected", "sections", "rejects_by_tooling")
+                "inserted", "exited", "rejected", "returned", "on_track", "lost", "sections",
+                "rejects_by_tooling", "bin_width", "velocity_lag", "profile_x", "profile_velocity",
+                "profile_count", "model_velocity", "model_note", "velocity_ratio", "shape", "reason")
+# Summary keys of feeder lines only (returned: of one that recirculates its rejects).
+LINE_KEYS = ("rejected", "returned", "sections", "rejects_by_tooling")
 # Parameters the single-part model needs from the deck (the rest have defaults).
 MODEL_NEEDS = ("freq", "mu", "restitution")
 
@@ -478,7 +478,8 @@ class FeedRate(AnalysisBase):
     ``profile_velocity``, ``profile_velocity_err`` (batch means per bin, NaN in a bin
     seen by fewer than two batches), ``profile_count``; the mass balance at the last frame
     analysed: ``inserted``, ``on_track``, ``exited``, ``lost`` (None without one),
-    and ``rejected`` for a feeder line;
+    ``rejected`` for a feeder line and ``returned`` (rejects put back at the inlet, part of
+    ``inserted``) for one that recirculates;
     with ``model``: ``model_velocity`` [m/s] (None when the model does not
     apply), ``model_note`` (why not, or that it did not converge; else empty)
     and ``velocity_ratio`` (mean_velocity / model_velocity).
@@ -646,8 +647,9 @@ class FeedRate(AnalysisBase):
         for name in L.MASS_BALANCE_COUNTS:
             value = None if balance is None or name not in balance else int(balance[name][last])
             self.results[name] = value
-        if balance is not None and "rejected" in balance:  # a feeder line's
-            self.results["rejected"] = int(balance["rejected"][last])
+        for name in ("rejected", "returned"):  # a feeder line's; returned if it recirculates
+            if balance is not None and name in balance:
+                self.results[name] = int(balance[name][last])
 
     def _bed(self, frames: np.ndarray, t_a: float, t_b: float, freq: float) -> None:
         """The bed section by section (module docstring, "Sections and joints"): ``sections``

@@ -206,7 +206,16 @@ def joint_steps(p: Mapping[str, float]) -> tuple[float, float]:
 def check_line(p: Mapping[str, float]) -> None:
     """Relations between a line's parameters (``sections`` > 1), one-line errors; the
     deck refuses the same for runs by hand."""
+    recirculate = p.get("recirculate", 0.0)
+    if recirculate not in (0, 1):
+        raise ParameterError(f"recirculate={recirculate:g} must be 0 (rejects removed) or 1 "
+                             "(returned to the inlet)")
+    if p.get("return_delay", 0.0) < 0:
+        raise ParameterError(f"return_delay={p['return_delay']:g} s must be >= 0")
     if int(p.get("sections", 1)) <= 1:
+        if recirculate:
+            raise ParameterError("recirculate=1: a single track has no rejects to return; "
+                                 "a line (sections=2) has")
         return
     size, shape = p["part_size"], int(p.get("shape", 0))
     widest = size * (1 + p.get("size_spread", 0.0)) if shape == 0 else size

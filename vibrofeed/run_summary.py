@@ -30,7 +30,10 @@ def run_summary(run) -> str:
         if balance is not None:  # a feeder: where its parts went (the analyses say how fast)
             last = {k: int(v[-1]) for k, v in balance.items()}
             rejected = f", {last['rejected']} rejected" if "rejected" in last else ""
-            bits = [f"{last['inserted']} parts fed: {last['exited']} exited{rejected}, "
+            returned = last.get("returned")
+            fed = (f"{last['inserted'] - returned} parts fed + {returned} returned"
+                   if returned is not None else f"{last['inserted']} parts fed")
+            bits = [f"{fed}: {last['exited']} exited{rejected}, "
                     f"{last['on_track']} on the track, {last['lost']} lost"]
         elif n and r.n_frames > 2:
             v = Transport(r).run().results.mean_velocity

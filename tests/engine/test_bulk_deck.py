@@ -42,13 +42,20 @@ def test_by_hand_after_prepare(tmp_path):
     assert (tmp_path / "outlet.txt").exists() and (tmp_path / "bulk_feeder.dump").exists()
 
 
-def test_a_bad_combination_is_refused_in_one_line_by_hand(tmp_path):
-    vibrofeed("prepare", "bulk_feeder", "-o", tmp_path / "m", check=True)
+@pytest.mark.parametrize("given, says", [
+    ({"gate_width": "1e-4"}, "Invalid gate: gate_width is narrower than a part"),
+    # the returns are the driver's: by hand, a run that would silently drop them is refused
+    ({"sections": "2", "recirculate": "1"}, "Invalid recirculate: vibrofeed run returns the rejects"),
+])
+def test_a_bad_combination_is_refused_in_one_line_by_hand(tmp_path, given, says):
+    line = [a for k, v in given.items() if k == "sections" for a in ("-p", f"{k}={v}")]
+    vibrofeed("prepare", "bulk_feeder", "-o", tmp_path / "m", *line, check=True)
+    args = [a for k, v in given.items() for a in ("-var", k, v)]
     proc = subprocess.run(["liggghts", "-in", str(DECKS / "bulk_feeder.liggghts"), "-var", "deck_dir",
-                           str(DECKS), "-var", "mesh_dir", str(tmp_path / "m"), "-var", "gate_width",
-                           "1e-4", "-log", "none", "-nocite"],
+                           str(DECKS), "-var", "mesh_dir", str(tmp_path / "m"), *args,
+                           "-log", "none", "-nocite"],
                           cwd=tmp_path, capture_output=True, text=True, timeout=60)
-    assert "Invalid gate: gate_width is narrower than a part" in proc.stdout
+    assert says in proc.stdout
     assert "Loop time" not in proc.stdout
 
 

@@ -155,3 +155,39 @@ def test_section_2s_mesh_is_where_its_motion_is_recorded(tmp_path):
     z = mover_sum(3e-5, w, math.radians(-30), dt, int(steps[-1]))[steps]
     assert np.abs(recorded[:, 1] - x).max() <= 1e-9 * 8e-5
     assert np.abs(recorded[:, 3] - z).max() <= 1e-9 * 8e-5
+
+
+@pytest.mark.parametrize("ranks", [1, 2])
+def test_recirculated_rejects_come_back_at_the_inlet(tmp_path, ranks):
+    """recirculate=1: each reject is dropped into the inlet block again return_delay after it
+    crossed the catch plane, at the first frame at or after that time (inserted in the next
+    step, so counted from the frame after): ``returned`` at frame k is exactly the rejects
+    with crossing + delay <= t(k-1); each returned part is a new one that appears at the track
+    start; and the balance, now with the returns in ``inserted``, is exact at every frame."""
+    out, delay = tmp_path / "returns.h5", 0.02
+    params = {**LINE, "recirculate": 1, "return_delay": delay, "t_end": 0.3}
+    vibrofeed("run", "bulk_feeder", "-q", "-o", out, "-n", ranks,
+              *[a for k, v in params.items() for a in ("-p", f"{k}={v}")], check=True)
+    report = check_file(out)
+    assert report.ok, [str(p) for p in report.problems]
+    with Result(out) as r:
+        mb, rej, t = r.mass_balance, r.rejects, r.time
+        assert (mb["lost"] == 0).all() and mb["rejected"][-1] >= 10  # the drop throws many off
+        assert (mb["inserted"] == 30 + mb["returned"]).all()
+        assert (mb["inserted"] == mb["on_track"] + mb["exited"] + mb["rejected"]).all()
+        due = np.array([0] + [int(np.sum(rej["time"] + delay <= tk)) for tk in t[:-1]])
+        np.testing.assert_array_equal(mb["returned"], due)
+        assert mb["returned"][-1] >= 10
+        # the new parts, frame by frame: as many as were returned, new ids, in or just below
+        # the inlet block (x from r_ext to r_ext + 3 part sizes, r_ext 150 um; at rest there
+        # a frame (4 ms) before, they have fallen or slid far less than a part since)
+        seen = set()
+        for frame in r.iter_frames():
+            new = np.isin(frame.ids, list(seen), invert=True)
+            if frame.index:
+                k = frame.index
+                assert new.sum() == mb["returned"][k] - mb["returned"][k - 1]
+                assert (frame.ids[new] > 30).all()
+                x = frame["position"][new]
+                assert ((x[:, 0] > 1.5e-4) & (x[:, 0] < 1.5e-4 + 3 * 3e-4)).all()
+            seen |= set(frame.ids.tolist())

@@ -136,6 +136,8 @@ def table(s: dict) -> str:
         lines.append(single_part(s))
     if s.get("inserted") is not None:
         rejected = f", rejected {s['rejected']}" if s.get("rejected") is not None else ""
+        if s.get("returned") is not None:
+            rejected += f" (returned to the inlet {s['returned']}, counted in inserted)"
         lines.append(f"mass balance   inserted {s['inserted']}, on track {s['on_track']}, exited "
                      f"{s['exited']}{rejected}, lost {s['lost']} (last frame)")
     return "\n".join(lines)

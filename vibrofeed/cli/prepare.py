@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import shlex
+import sys
 
 from .options import add_deck_arguments
 
@@ -54,4 +55,8 @@ def run(args) -> int:
             written(folder / name)
         print(f"vibrofeed: wrote {', '.join(new)} in {folder}")
     print(liggghts_line(deck, given, values, extra))
+    if float(values.get("recirculate", 0) or 0):  # a line's returns are the driver's
+        print("vibrofeed: note: recirculate=1 is done by `vibrofeed run` (it returns the rejects "
+              "to the inlet); by hand the deck refuses it: run with -var recirculate 0 (rejects "
+              "removed)", file=sys.stderr)
     return 0

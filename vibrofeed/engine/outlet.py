@@ -117,6 +117,7 @@ class LineOutlet(Outlet):
         super().__init__(outlet_x, catch_z, gravity)
         self.section_x = np.asarray(section_x, dtype=float)
         self.rejected = np.empty(0, dtype=np.int64)  # ids with a reject event, sorted
+        self.reject_times = np.empty(0)  # their catch-plane crossings, for the returns
 
     def step(self, time: float, parts: dict, inserted: int):
         ids = np.asarray(parts["id"], dtype=np.int64)
@@ -128,6 +129,7 @@ class LineOutlet(Outlet):
         if rejects is not None:  # the section it fell from: where it crossed the plane
             rejects["section"] = np.searchsorted(self.section_x, rejects["position"][:, 0],
                                                  side="right").clip(1, len(self.section_x))
+            self.reject_times = np.concatenate([self.reject_times, rejects["time"]])
         self.exited = np.union1d(self.exited, ids[out])
         self.rejected = np.union1d(self.rejected, ids[fell])
         on_track = int(len(ids) - reported.sum() - below.sum())

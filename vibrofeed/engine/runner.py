@@ -481,7 +481,8 @@ def _mass_balance_problem(counts: dict | None) -> str | None:
             if lost > 0 else f"{-lost} part(s) counted twice")
     return (f"{what}: the mass balance does not close (inserted {inserted}, on the track "
             f"{counts['on_track']}, exited {counts['exited']}"
-            + (f", rejected {counts['rejected']})" if "rejected" in counts else ")"))
+            + (f", rejected {counts['rejected']}" if "rejected" in counts else "")
+            + (f", returned {counts['returned']})" if "returned" in counts else ")"))
 
 
 def _signal_group(proc: subprocess.Popen, sig: int) -> None:

@@ -235,6 +235,13 @@ class BulkFrames:
         self.line = float(variables.get("sections", 1)) > 1
         self.outlet = (LineOutlet(*where, (0.0, float(variables["track_length"]))) if self.line
                        else Outlet(*where))
+        # recirculation (a line's rejects back to the inlet): the driver's, never by hand
+        self.returns = None
+        if self.line and float(variables.get("recirculate", 0)) > 0:
+            from .returns import Returns
+
+            self.returns = Returns(float(variables.get("return_delay", 0.0)),
+                                   int(float(variables.get("seed", 5489))), lmp.dt)
         self.track, self.template = prepared_geometry(spec)
         # a line's track: which vertices move with section 2 (None: not a line, or not told)
         self.track_sections = track_sections(self.track, variables) if self.line else None
@@ -265,6 +272,9 @@ class BulkFrames:
 
     def frame(self, lmp, comm, time: float):
         inserted = int(round(lmp.variable("n_inserted")))  # collective: on every rank
+        returned = self.returns.returned(lmp) if self.returns is not None else None
+        if returned is not None:
+            inserted += returned  # a returned part is inserted anew
         atoms = gather_atoms(lmp, comm, self.names)
         if atoms is None:
             return None
@@ -276,7 +286,10 @@ class BulkFrames:
         else:
             parts = spheres(atoms)
         if self.line:
-            return parts, *self.outlet.step(time, parts, inserted)
+            events, rejects, counts = self.outlet.step(time, parts, inserted)
+            if returned is not None:
+                counts["returned"] = returned
+            return parts, events, rejects, counts
         events, counts = self.outlet.step(time, parts, inserted)
         return parts, events, None, counts
 
@@ -401,7 +414,8 @@ def open_writer(spec: dict, derived: dict, ranks: int, natoms: int, bulk, sectio
         capacity_hint=max(natoms // (bulk.n_spheres if bulk else 1), 1), sections=sections,
         **({} if bulk is None else {"track": bulk.track, "outlet": bulk.outlet.attributes(),
                                     "body_template": bulk.template, "line": bulk.line,
-                                    "track_sections": bulk.track_sections}))
+                                    "track_sections": bulk.track_sections,
+                                    "returns": bulk.returns is not None}))
     flush_on_engine_exit(writer)
     return writer
 
@@ -435,6 +449,7 @@ class Frames:
         self.lmp, self.comm, self.writer, self.bulk, self.report = lmp, comm, writer, bulk, report
         self.sections = sections  # whose motion is recorded: section 1 and a line's further ones
         self.counts = None  # the mass balance of the last frame (bulk decks, rank 0)
+        self.commands: list[str] = []  # to give before the next segment (a line's returns)
         self._lost_reported = False
 
     def take(self) -> float:
@@ -450,6 +465,9 @@ class Frames:
                 self.writer.write_frame(step, t, parts, pos, vel, section_surfaces=further)
             return t
         got = self.bulk.frame(lmp, self.comm, t)
+        returns = self.bulk.returns
+        if returns is not None:  # collective: every rank gives the same commands
+            self.commands = returns.schedule(lmp, self.comm, t, self.bulk.outlet.reject_times)
         if self.writer is not None:
             parts, events, rejects, counts = got
             if events is not None:
@@ -482,6 +500,9 @@ def run_segments(lmp, frames: Frames, segs: list[tuple], report: Reporter) -> tu
         if k == len(segs):
             break
         commands, steps, setup = segs[k]
+        if frames.commands:  # a new fix (a line's returns) needs a run with setup
+            commands, setup = (*commands, *frames.commands), True
+            frames.commands = []
         lmp.commands(commands)
         lmp.command(f"run {steps} post no" if setup else f"run {steps} pre no post no")
         done += steps

@@ -256,7 +256,8 @@ class _Checker:
         if L.MASS_BALANCE not in self.f:
             return
         line = "rejected" in self.f[L.MASS_BALANCE]
-        names = L.LINE_COUNTS if line else L.MASS_BALANCE_COUNTS
+        returns = "returned" in self.f[L.MASS_BALANCE]
+        names = L.RETURN_COUNTS if returns else L.LINE_COUNTS if line else L.MASS_BALANCE_COUNTS
         counts = {}
         for name in names:
             path = f"{L.MASS_BALANCE}/{name}"
@@ -285,9 +286,11 @@ class _Checker:
                        f"{self.f[f'{L.PARTS}/position/time'][k]:g} s): they disappeared without "
                        "an outlet event")
         gone = counts["exited"] + counts.get("rejected", 0)  # left the track: still falling, or removed
-        for name in ("inserted", "exited", "rejected")[:3 if line else 2]:
+        for name in ("inserted", "exited", "rejected", "returned")[:2 + line + returns]:
             if np.any(np.diff(counts[name]) < 0):
                 self.error(f"{L.MASS_BALANCE}/{name}", "decreases")
+        if returns and np.any(counts["returned"] > counts["rejected"]):
+            self.error(f"{L.MASS_BALANCE}/returned", "more parts returned to the inlet than rejected")
         if np.any(counts["inserted"] != counts["on_track"] + gone + counts["lost"]):
             self.error(L.MASS_BALANCE, "inserted differs from on_track + exited + "
                                        f"{'rejected + ' if line else ''}lost")

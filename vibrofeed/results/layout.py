@@ -17,7 +17,8 @@ FORMAT_NAME = "vibrofeed-result"
 # 1.4: a feeder line records each section's motion (observables/surface_s<k>, k >= 2) and which
 # section each vertex of parameters/track belongs to (parameters/track/section); 1.3 files of
 # a line (section 2's motion unrecorded) still read, and check only warns about them.
-FORMAT_VERSION = (1, 4)
+# 1.5: a line that recirculates its rejects counts them back (mass balance ``returned``).
+FORMAT_VERSION = (1, 5)
 SECTIONS_SINCE = (1, 4)  # the first format that records a line's sections
 
 PARTS = "particles/parts"
@@ -98,6 +99,9 @@ MASS_BALANCE_COUNTS = ("inserted", "on_track", "exited", "lost")
 # A feeder line (sections > 1) also counts its rejects, the parts that fell off a side
 # (one event each in REJECTS): inserted = on_track + exited + rejected + lost.
 LINE_COUNTS = MASS_BALANCE_COUNTS + ("rejected",)
+# A line that recirculates (recirculate=1) also counts the parts returned to the inlet so
+# far, each a new part and part of inserted (format 1.5): returned <= rejected.
+RETURN_COUNTS = LINE_COUNTS + ("returned",)
 
 # Time-dependent observables of the vibrating surface, shape (frames, 3).
 SURFACE_ELEMENTS = {

@@ -398,12 +398,12 @@ class Result:
 
     @cached_property
     def mass_balance(self) -> dict[str, np.ndarray] | None:
-        """``{inserted, on_track, exited, lost}`` (and a feeder line's ``rejected``) ->
-        (frames,) int64, or None when absent."""
+        """``{inserted, on_track, exited, lost}`` (and a feeder line's ``rejected``, and
+        ``returned`` where it recirculates) -> (frames,) int64, or None when absent."""
         group = self.file.get(L.MASS_BALANCE)
         if group is None:
             return None
-        return {name: group[name]["value"][()] for name in L.LINE_COUNTS if name in group}
+        return {name: group[name]["value"][()] for name in L.RETURN_COUNTS if name in group}
 
     @cached_property
     def track_mesh(self) -> tuple[np.ndarray, np.ndarray] | None:

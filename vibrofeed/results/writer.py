@@ -162,6 +162,9 @@ class ResultWriter:
     line:
         a feeder line (sections > 1): creates the reject table (``L.REJECTS``, the
         outlet's attributes) and records the ``rejected`` count (``L.LINE_COUNTS``).
+    returns:
+        a line that recirculates its rejects: records the ``returned`` count too
+        (``L.RETURN_COUNTS``).
     sections:
         the sections whose motion is recorded: section 1 in ``L.SURFACE``, each further
         one in ``L.surface_path(k)``; every frame then gives ``sections - 1``
@@ -178,7 +181,9 @@ class ResultWriter:
                  command: str = "", run_id: str = "", capacity_hint: int = 1,
                  max_delay: float = 0.25, track=None, body_template=None,
                  outlet: Mapping | None = None, line: bool = False, sections: int = 1,
-                 track_sections=None):
+                 track_sections=None, returns: bool = False):
+        if returns and not line:
+            raise ValueError("returns without a line: only a feeder line has rejects to return")
         self.path = str(path)
         self.slots = SlotMap()
         self.frames = 0          # frames handed over
@@ -230,7 +235,7 @@ class ResultWriter:
             self._create_outlet(outlet)
         if line:  # a feeder line: its reject table (empty until a part falls off) and count
             self._create_outlet(outlet or {}, L.REJECTS)
-            self._count_names = L.LINE_COUNTS
+            self._count_names = L.RETURN_COUNTS if returns else L.LINE_COUNTS
         f.flush()
         # Flush from a thread too, so a frame waits at most max_delay even when
         # the next one is long in coming (the engine releases the GIL).
@@ -423,7 +428,8 @@ class ResultWriter:
         ``velocity``, ``angular_velocity``, ``force`` and optionally
         ``orientation`` (quaternions w, x, y, z); rows may come in any order.
         ``counts`` is the mass balance at this frame: ``{"inserted", "on_track",
-        "exited", "lost"}`` (ints), and ``"rejected"`` for a feeder line.
+        "exited", "lost"}`` (ints), ``"rejected"`` for a feeder line and ``"returned"`` for
+        one that recirculates.
         ``surface_position``, ``surface_velocity`` are section 1's motion (3,) [m, m s-1];
         ``section_surfaces`` the further sections' ``(position, velocity)``, section 2 first,
         one per section beyond the first the writer records (``sections``).

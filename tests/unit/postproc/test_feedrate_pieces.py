@@ -145,7 +145,7 @@ def test_feed_rate_summary_holds_the_contract_keys_json_ready(tmp_path):
         assert one.profile_velocity[0] == pytest.approx(fa.results.mean_velocity, rel=1e-12)
     summary = fa.summary()
     assert list(summary) == [k for k in SUMMARY_KEYS if k not in LINE_KEYS]  # LINE_KEYS: feeder lines only
-    assert LINE_KEYS == ("rejected", "sections", "rejects_by_tooling")
+    assert LINE_KEYS == ("rejected", "returned", "sections", "rejects_by_tooling")
     assert summary["parts_per_s"] == fa.results.parts_per_s
     assert isinstance(summary["profile_x"], list) and summary["n_events"] == 200
 

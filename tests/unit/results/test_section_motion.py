@@ -144,7 +144,8 @@ def test_section_motion_is_an_h5md_time_series_of_the_parts_frames(line):
             # the same frames as the parts: step and time hard-linked (H5MD shares them so)
             assert g["step"] == f[f"{L.PARTS}/position/step"] and g["time"] == f[f"{L.PARTS}/position/time"]
         assert f[L.TRACK_SECTION].dtype == np.int32
-        assert f[L.PARAMETERS].attrs["format_version"].tolist() == [1, 4]
+        assert f[L.PARAMETERS].attrs["format_version"].tolist() == list(L.FORMAT_VERSION)
+        assert tuple(L.FORMAT_VERSION) >= L.SECTIONS_SINCE == (1, 4)
 
 
 def test_a_single_track_has_one_section(tmp_path):
