@@ -58,7 +58,7 @@ def assert_bulk_result(path, shape, free_fall=True):
         # bodies
         q = r.read("orientation", frames=-1)
         live = r.read("id", frames=-1) != -1
-        assert np.allclose(np.linalg.norm(q[live], axis=1), 1, atol=1e-12)
+        assert np.allclose(np.linalg.norm(q[live], axis=1), 1, rtol=0, atol=1e-12)
         vertices, triangles = r.track_mesh
         assert vertices.shape[1] == 3 and triangles.max() < len(vertices)
         if shape == 0:
@@ -66,13 +66,14 @@ def assert_bulk_result(path, shape, free_fall=True):
         else:
             template = r.body_template
             assert template.shape[1] == 4 and len(template) > 1
-            # chips tumble off the edge and rotate (where any is left at the end)
-            assert not live.any() or not np.allclose(q[live], [1, 0, 0, 0])
+            # chips tumble off the edge and rotate (where any is left at the end): some quaternion
+            # component moved by more than 1e-2 (about a degree), which no rounding or contact jitter does
+            assert not live.any() or not np.allclose(q[live], [1, 0, 0, 0], rtol=0, atol=1e-2)
             # the enclosing radius is the template's
             arm = np.linalg.norm(template[:, :3] - template[:, :3].mean(0), axis=1) + template[:, 3]
-            assert np.allclose(r.read("radius", frames=-1)[live], arm.max(), rtol=1e-9)
+            assert np.allclose(r.read("radius", frames=-1)[live], arm.max(), rtol=1e-9, atol=0)  # ~2e-4 m
             assert np.allclose(quaternion_matrix(q[live]) @ np.swapaxes(quaternion_matrix(q[live]), 1, 2),
-                               np.eye(3), atol=1e-12)
+                               np.eye(3), rtol=0, atol=1e-12)
 
 
 @pytest.mark.parametrize("ranks", [1, 2])

@@ -49,7 +49,7 @@ def test_fit_finds_forces_that_keep_the_part_stuck(trial, tmp_path):
     assert 0 < out["mu_k"] <= 0.72
     assert out["mean_abs_error_mm"] < 0.02
     for t in out["trials"]:
-        assert t["normal_force"] == pytest.approx(t["normal_force_mg"] * MASS * G)
+        assert t["normal_force"] == pytest.approx(t["normal_force_mg"] * MASS * G, rel=1e-12)  # N, ~0.9
 
 
 @pytest.mark.parametrize("args, fragment", [

@@ -36,6 +36,12 @@ def open_edges(v, t):
     return [v[list(e)] for e, n in edges(t).items() if n == 1]
 
 
+def same(a, b):
+    """Coordinates (m) equal up to the mesh's rounding: TOL, with no relative part (numpy's default
+    atol=1e-8 m and rtol=1e-5, 0.2 um at 2 cm, would take a gap's width for a coincidence)."""
+    return np.isclose(a, b, rtol=0, atol=TOL)
+
+
 def test_section_dimensions_and_cross_tilt():
     s = section()
     v, t = section_mesh(s)
@@ -62,18 +68,18 @@ def test_closed_along_the_walls_open_only_where_parts_may_leave(drop):
     inner = lo + s.drop_width
     for p, q in open_edges(v, t):
         x, y, z = (p + q) / 2
-        at_ends = np.isclose(p[0], q[0]) and (np.isclose(x, s.x0) or np.isclose(x, s.x1))
-        on_top = np.isclose(p[2], top) and np.isclose(q[2], top)
-        at_drop_ends = np.isclose(x, a) or np.isclose(x, b)
-        wall_end = drop and np.isclose(p[0], q[0]) and np.isclose(y, hi) and at_drop_ends
-        drop_edge = drop and np.isclose(p[1], inner) and np.isclose(q[1], inner) and a - TOL <= x <= b + TOL
-        drop_step = drop and np.isclose(p[0], q[0]) and at_drop_ends and y > inner
+        at_ends = same(p[0], q[0]) and (same(x, s.x0) or same(x, s.x1))
+        on_top = same(p[2], top) and same(q[2], top)
+        at_drop_ends = same(x, a) or same(x, b)
+        wall_end = drop and same(p[0], q[0]) and same(y, hi) and at_drop_ends
+        drop_edge = drop and same(p[1], inner) and same(q[1], inner) and a - TOL <= x <= b + TOL
+        drop_step = drop and same(p[0], q[0]) and at_drop_ends and y > inner
         assert at_ends or on_top or wall_end or drop_edge or drop_step, (p, q)
     # the floor edge along the reference wall is never open; along the other wall only over the drop
     for p, q in open_edges(v, t):
-        along = not np.isclose(p[0], q[0])
-        assert not (along and np.isclose(p[1], lo) and np.isclose(q[1], lo) and p[2] < top - TOL)
-        if along and np.isclose(p[1], hi) and np.isclose(q[1], hi) and p[2] < top - TOL:
+        along = not same(p[0], q[0])
+        assert not (along and same(p[1], lo) and same(q[1], lo) and p[2] < top - TOL)
+        if along and same(p[1], hi) and same(q[1], hi) and p[2] < top - TOL:
             pytest.fail(f"the floor's edge at +w/2 is open at x = {p[0]:g}..{q[0]:g} m")
     if drop:  # over the drop no floor reaches past the drop width
         over = (v[:, 0] > a + TOL) & (v[:, 0] < b - TOL)
@@ -112,8 +118,8 @@ def test_section_joins_section_one_with_a_step_down():
     v1, t1 = track_mesh(L1, W1, 1e-3, gate_width=4.2e-4, gate_x=0.6 * L1)
     s = section()
     v2, t2 = section_mesh(s)
-    exit_y = np.abs(v1[np.isclose(v1[:, 0], L1) & (v1[:, 2] == 0), 1]).max()
-    start = v2[np.isclose(v2[:, 0], L1)]
+    exit_y = np.abs(v1[same(v1[:, 0], L1) & (v1[:, 2] == 0), 1]).max()
+    start = v2[same(v2[:, 0], L1)]
     assert start[:, 1].min() <= -exit_y + TOL and start[:, 1].max() >= exit_y - TOL  # covers the exit
     floor_start = start[start[:, 2] < -s.step + 1e-9, 2]
     assert floor_start.max() == pytest.approx(-5e-5, abs=TOL)  # a step of s2_step at the high edge

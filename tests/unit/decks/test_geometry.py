@@ -24,6 +24,18 @@ from vibrofeed.geometry import (
 from vibrofeed.mesh import write_stl
 
 L, W, H = 0.02, 2e-3, 1e-3
+PM = 1e-12  # m: the meshes and templates keep their lengths (1e-4..2e-2 m) to 1 pm (float64 rounding)
+
+
+def same(a, b):
+    """Lengths (m) equal to the mesh's precision PM, with no relative part: numpy's defaults
+    (atol=1e-8 m, rtol=1e-5: 0.2 um at 2 cm) would take a micro-part's gap for a coincidence."""
+    return np.isclose(a, b, rtol=0, atol=PM)
+
+
+def all_same(a, b):
+    """:func:`same` everywhere."""
+    return np.allclose(a, b, rtol=0, atol=PM)
 
 
 def edge_counts(triangles):
@@ -40,9 +52,9 @@ def open_edges(vertices, triangles):
 def test_track_dimensions(gate):
     v, t = track_mesh(L, W, H, gate_width=gate, gate_x=0.7 * L)
     assert v.dtype == np.float64 and t.dtype == np.int32 and v.shape[1] == t.shape[1] == 3
-    assert np.allclose(v.min(axis=0), [0, -W / 2, 0]) and np.allclose(v.max(axis=0), [L, W / 2, H])
-    floor = v[np.isclose(v[:, 2], 0)]
-    assert np.isclose(floor[:, 0].max(), L)  # the floor reaches the outlet edge
+    assert all_same(v.min(axis=0), [0, -W / 2, 0]) and all_same(v.max(axis=0), [L, W / 2, H])
+    floor = v[same(v[:, 2], 0)]
+    assert same(floor[:, 0].max(), L)  # the floor reaches the outlet edge
 
 
 @pytest.mark.parametrize("gate", [0.0, 8e-4])
@@ -58,11 +70,11 @@ def test_floor_and_walls_share_whole_edges(gate):
         assert not np.any((rel > 1e-9) & (rel < 1 - 1e-9) & (off < 1e-12))
     # open edges: the outlet (floor edge and the walls' ends at x = L) and the wall tops
     for p, q in open_edges(v, t):
-        at_outlet = np.isclose(p[0], L) and np.isclose(q[0], L)
-        on_top = np.isclose(p[2], H) and np.isclose(q[2], H)
+        at_outlet = same(p[0], L) and same(q[0], L)
+        on_top = same(p[2], H) and same(q[2], H)
         assert at_outlet or on_top, (p, q)
-    outlet = [e for e in open_edges(v, t) if np.isclose(e[0][2], 0) and np.isclose(e[1][2], 0)]
-    assert len(outlet) == 1 and np.allclose(outlet[0][:, 0], L)  # the floor's one open edge
+    outlet = [e for e in open_edges(v, t) if same(e[0][2], 0) and same(e[1][2], 0)]
+    assert len(outlet) == 1 and all_same(outlet[0][:, 0], L)  # the floor's one open edge
 
 
 def test_track_is_consistently_wound_with_normals_into_the_track():
@@ -72,10 +84,10 @@ def test_track_is_consistently_wound_with_normals_into_the_track():
     assert m.is_winding_consistent
     centre = m.triangles_center
     n = m.face_normals
-    floor = np.isclose(centre[:, 2], 0)
-    assert np.allclose(n[floor], [0, 0, 1])
-    back = np.isclose(centre[:, 0], 0) & ~floor
-    assert np.allclose(n[back], [1, 0, 0])
+    floor = same(centre[:, 2], 0)
+    assert np.allclose(n[floor], [0, 0, 1], rtol=0, atol=1e-12)  # unit normals: rounding
+    back = same(centre[:, 0], 0) & ~floor
+    assert np.allclose(n[back], [1, 0, 0], rtol=0, atol=1e-12)
     side = ~floor & ~back
     assert np.all(n[side, 1] * centre[side, 1] < 0)  # the side walls face the centre line
 
@@ -83,14 +95,14 @@ def test_track_is_consistently_wound_with_normals_into_the_track():
 def test_gate_width_and_taper():
     gate, gate_x = 6e-4, 0.7 * L
     v, t = track_mesh(L, W, H, gate_width=gate, gate_x=gate_x)
-    at = lambda x: np.abs(v[np.isclose(v[:, 0], x) & np.isclose(v[:, 2], 0), 1]).max()  # noqa: E731
-    assert np.isclose(at(L), gate / 2)
-    assert np.isclose(at(gate_x), W / 2)
+    at = lambda x: np.abs(v[same(v[:, 0], x) & same(v[:, 2], 0), 1]).max()  # noqa: E731
+    assert same(at(L), gate / 2)
+    assert same(at(gate_x), W / 2)
     taper_end = gate_x + (W - gate) / 2  # 45 degrees
-    assert np.isclose(at(taper_end), gate / 2)
+    assert same(at(taper_end), gate / 2)
     # no gate when it is as wide as the track
     v0, _ = track_mesh(L, W, H, gate_width=W)
-    assert np.allclose(np.abs(v0[:, 1]), W / 2)
+    assert all_same(np.abs(v0[:, 1]), W / 2)
 
 
 def test_a_gate_that_does_not_fit_is_refused():
@@ -100,7 +112,8 @@ def test_a_gate_that_does_not_fit_is_refused():
 
 def test_catch_face_is_a_unit_rectangle_facing_down(tmp_path):
     v, t = catch_face()
-    assert np.allclose(v.min(axis=0), [0, -0.5, 0]) and np.allclose(v.max(axis=0), [1, 0.5, 0])
+    assert np.allclose(v.min(axis=0), [0, -0.5, 0], rtol=0, atol=1e-15)  # unit lengths: rounding
+    assert np.allclose(v.max(axis=0), [1, 0.5, 0], rtol=0, atol=1e-15)
     normals = np.cross(v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]])
     assert np.all(normals[:, 2] < 0)
 
@@ -111,7 +124,7 @@ def test_stl_round_trip(tmp_path):
     v, t = track_mesh(L, W, H, gate_width=8e-4)
     path = write_stl(v, t, tmp_path / "track.stl")
     m = stl_mesh.Mesh.from_file(str(path))
-    assert np.allclose(m.vectors, v[t], atol=1e-9)
+    assert np.allclose(m.vectors, v[t], rtol=0, atol=1e-9)  # float32: half an ulp is 0.93 nm below 3.1 cm
     expected = np.cross(v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]])
     assert np.all(np.einsum("ij,ij->i", m.normals, expected) > 0)
 
@@ -121,13 +134,13 @@ def test_chip_outline_is_the_die(edge, thickness, n):
     rows = chip_template(edge, thickness)
     assert rows.shape == (n, 4)
     x, y, z, r = rows.T
-    assert np.allclose(r, thickness / 2)
-    assert np.isclose((x - r).min(), -edge / 2) and np.isclose((x + r).max(), edge / 2)
-    assert np.isclose((y - r).min(), -edge / 2) and np.isclose((y + r).max(), edge / 2)
-    assert np.isclose((z + r).max() - (z - r).min(), thickness)  # the die's thickness
+    assert all_same(r, thickness / 2)
+    assert same((x - r).min(), -edge / 2) and same((x + r).max(), edge / 2)
+    assert same((y - r).min(), -edge / 2) and same((y + r).max(), edge / 2)
+    assert same((z + r).max() - (z - r).min(), thickness)  # the die's thickness
     assert np.allclose(rows[:, :3].mean(axis=0), 0, atol=1e-18)  # centred: body frame
     spacing = np.diff(np.unique(np.round(x, 15)))
-    assert np.allclose(spacing, spacing[0]) and spacing[0] <= CLUMP_SPACING * thickness + 1e-15
+    assert all_same(spacing, spacing[0]) and spacing[0] <= CLUMP_SPACING * thickness + 1e-15
 
 
 def test_disc_outline_and_thickness():
@@ -135,11 +148,11 @@ def test_disc_outline_and_thickness():
     rows = disc_template(d, t)
     x, y, z, r = rows.T
     rho = np.hypot(x, y)
-    assert np.isclose((rho + r).max(), d / 2)
-    assert np.allclose(z, 0) and np.allclose(r, t / 2)
+    assert same((rho + r).max(), d / 2)
+    assert all_same(z, 0) and all_same(r, t / 2)
     assert np.allclose(rows[:, :3].mean(axis=0), 0, atol=1e-18)
     # neighbours on the outer ring are no further apart than the spacing rule
-    outer = np.sort(np.arctan2(y, x)[np.isclose(rho, rho.max())])
+    outer = np.sort(np.arctan2(y, x)[same(rho, rho.max())])
     chord = 2 * rho.max() * np.sin(np.diff(outer).max() / 2)
     assert chord <= CLUMP_SPACING * t + 1e-12
 
@@ -172,10 +185,10 @@ def test_prepare_writes_the_files_and_describes_them(tmp_path):
     assert p.variables == {"mesh_dir": str((tmp_path / "m").resolve())}
     text = (tmp_path / "m" / "prepared.in").read_text()
     assert "variable n_sph_chip equal 9" in text and "variable seed_6 equal" in text
-    assert np.allclose(p.body_template, chip_template(3e-4, 1.5e-4))
-    assert np.allclose(np.loadtxt(tmp_path / "m" / "chip.multisphere"), p.body_template)
+    assert all_same(p.body_template, chip_template(3e-4, 1.5e-4))
+    assert all_same(np.loadtxt(tmp_path / "m" / "chip.multisphere"), p.body_template)
     spec = json.loads(json.dumps(p.to_spec()))  # what the runner hands the worker
-    assert np.allclose(np.array(spec["track"][0]), p.track[0])
+    assert all_same(np.array(spec["track"][0]), p.track[0])
     assert spec["variables"]["mesh_dir"] == p.variables["mesh_dir"]
     sphere = prepare_bulk_feeder({**VALUES, "shape": "0"}, tmp_path / "s")
     assert sphere.body_template is None and sphere.to_spec()["body_template"] is None
@@ -190,19 +203,19 @@ def test_cross_tilt_makes_the_floor_a_plane_down_towards_the_minus_y_wall(gate):
     floor = v[~walls_top]
     # every floor vertex on the plane z = -(W/2 - y) tan(tilt), whatever the gate's width there
     assert np.abs(floor[:, 2] + (W / 2 - floor[:, 1]) * slope).max() < 1e-12  # the mesh keeps 1 pm
-    assert v[:, 2].min() == pytest.approx(-W * slope, rel=1e-12)  # the reference wall's foot
+    # the reference wall's foot, to the mesh's 1 pm (vertices are rounded to 12 decimals: 3.4e-13 m off
+    # here, which rel=1e-12 alone, 4e-16 m, would refuse)
+    assert v[:, 2].min() == pytest.approx(-W * slope, rel=0, abs=PM)
     # still one surface: no edge of three faces, and the only floor edge left open is the outlet's
     counts = edge_counts(t)
     assert set(counts.values()) <= {1, 2}
-    pm = dict(rtol=0, atol=1e-12)  # the mesh keeps its vertices to 1 pm
-    open_floor = [(p, q) for p, q in open_edges(v, t)
-                  if not (np.isclose(p[2], H, **pm) and np.isclose(q[2], H, **pm))]
-    assert all(np.isclose(p[0], L, **pm) and np.isclose(q[0], L, **pm) for p, q in open_floor)
+    open_floor = [(p, q) for p, q in open_edges(v, t) if not (same(p[2], H) and same(q[2], H))]
+    assert all(same(p[0], L) and same(q[0], L) for p, q in open_floor)  # to 1 pm
     # the floor's normals lean towards -y by the tilt: downhill, where the parts go
     tri = v[t]
     n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
     n /= np.linalg.norm(n, axis=1)[:, None]
-    is_floor = np.all(~np.isclose(tri[:, :, 2], H, **pm), axis=1) & (np.abs(n[:, 2]) > 0.5)
+    is_floor = np.all(~same(tri[:, :, 2], H), axis=1) & (np.abs(n[:, 2]) > 0.5)
     assert np.allclose(n[is_floor], [0, -math.sin(math.radians(tilt)), math.cos(math.radians(tilt))],
                        rtol=0, atol=1e-7)  # unit vectors from vertices kept to 1 pm over 0.1 mm
 

@@ -32,7 +32,7 @@ def test_bulk_spheres_take_the_smallest_sphere_of_the_spread(hamaker, roughness,
     mass = 4 / 3 * math.pi * r ** 3 * RHO
     want = models_limit(ad.Adhesion(hamaker, roughness, radius=r),
                         sf.Film(mu, r, sf.clearance(roughness), flat=False), mass)
-    assert surface_forces_step_limit(p) == pytest.approx(want, rel=1e-12)
+    assert surface_forces_step_limit(p) == pytest.approx(want, rel=1e-12, abs=0)
     # the smallest sphere binds: the nominal one allows a longer step
     assert surface_forces_step_limit({**p, "size_spread": 0.0}) > want
 
@@ -43,7 +43,7 @@ def test_a_clump_takes_its_whole_face_and_mass(shape, hamaker, roughness, mu):
     p = {**BULK, "shape": shape, "hamaker": hamaker, "roughness": roughness, "air_viscosity": mu}
     a, t = 3e-4, 1.5e-4
     mass, adh, film = lying_flat(shape, a, t, RHO, hamaker, roughness, mu)
-    assert surface_forces_step_limit(p) == pytest.approx(models_limit(adh, film, mass), rel=1e-12)
+    assert surface_forces_step_limit(p) == pytest.approx(models_limit(adh, film, mass), rel=1e-12, abs=0)
 
 
 def test_the_single_part_vocabulary_is_unchanged():
@@ -52,7 +52,7 @@ def test_the_single_part_vocabulary_is_unchanged():
     mass = 4 / 3 * math.pi * 5e-4 ** 3 * RHO
     want = models_limit(ad.Adhesion(1e-19, 1e-7, radius=5e-4, face_radius=2e-4),
                         sf.Film(MU, 2e-4, sf.clearance(1e-7)), mass)
-    assert surface_forces_step_limit(p) == pytest.approx(want, rel=1e-12)
+    assert surface_forces_step_limit(p) == pytest.approx(want, rel=1e-12, abs=0)
 
 
 def test_no_limit_when_both_forces_are_off_or_without_a_part():
@@ -100,14 +100,16 @@ def test_bad_surface_force_values_are_refused_in_the_bulk_feeder_too():
 def test_a_single_part_is_a_sphere_unless_it_lies_on_a_face():
     r, f = 5e-4, 2e-4
     sphere = {"mass": 4 / 3 * math.pi * r ** 3 * RHO, "radius": r}
-    # no face_radius (or 0): a sphere, without the flat face's area, Stefan constant or drag
-    assert surface_forces_part({"density": RHO, "radius": r}) == pytest.approx(sphere, rel=1e-12)
+    # no face_radius (or 0): a sphere, without the flat face's area, Stefan constant or drag;
+    # abs=0 throughout: the masses, areas and Stefan constants (1e-15..1e-6) are far below the
+    # default abs=1e-12 of pytest.approx, which would pass any of them for another
+    assert surface_forces_part({"density": RHO, "radius": r}) == pytest.approx(sphere, rel=1e-12, abs=0)
     assert surface_forces_part({"density": RHO, "radius": r, "face_radius": 0.0}) == pytest.approx(
-        sphere, rel=1e-12)
+        sphere, rel=1e-12, abs=0)
     film = sf.Film(MU, f, sf.MEAN_FREE_PATH)  # a disc face: Stefan 1.5 pi f^4, drag 16 mu f
     assert surface_forces_part({"density": RHO, "radius": r, "face_radius": f}) == pytest.approx(
         {**sphere, "area": math.pi * f ** 2, "stefan": film.stefan_constant,
-         "drag": film.free_coefficient / MU}, rel=1e-12)
+         "drag": film.free_coefficient / MU}, rel=1e-12, abs=0)
 
 
 @pytest.mark.parametrize("shape", [0, 1, 2], ids=["sphere", "chip", "disc"])
@@ -124,7 +126,7 @@ def test_a_bulk_part_is_its_sphere_or_its_whole_clump_on_its_face(shape):
         # radius: the clump's spheres, of diameter part_thickness (the deck's r_sph)
         want = {"mass": area * t * RHO, "radius": t / 2, "area": area, "stefan": film.stefan_constant,
                 "drag": film.free_coefficient / MU}
-    assert surface_forces_part(p) == pytest.approx(want, rel=1e-12)
+    assert surface_forces_part(p) == pytest.approx(want, rel=1e-12, abs=0)
 
 
 # -- the step limit: each force alone, and the cases that need no limit
@@ -145,7 +147,8 @@ def test_van_der_waals_alone_gives_the_adhesion_models_limit(roughness):
         if roughness:
             assert adhesion.stiffness < 1.0  # N/m: a soft spring, yet one to resolve
         p = {"density": RHO, "hamaker": 1e-19, **rough, **given}
-        assert surface_forces_step_limit(p) == pytest.approx(ad.vdw_step_limit(adhesion, mass), rel=1e-12)
+        assert surface_forces_step_limit(p) == pytest.approx(ad.vdw_step_limit(adhesion, mass),
+                                                             rel=1e-12, abs=0)  # s, from 1e-11
 
 
 def test_without_either_force_no_part_is_even_described():
@@ -182,7 +185,8 @@ def test_a_timestep_exactly_at_the_limit_is_accepted():
     limit = surface_forces_step_limit(p)
     r = 1.5e-4  # the default 300 um sphere
     mass = 4 / 3 * math.pi * r ** 3 * RHO
-    assert limit == pytest.approx(ad.vdw_step_limit(ad.Adhesion(1e-19, 1e-9, radius=r), mass), rel=1e-12)
+    assert limit == pytest.approx(ad.vdw_step_limit(ad.Adhesion(1e-19, 1e-9, radius=r), mass),
+                                  rel=1e-12, abs=0)  # s, ~2e-7
     assert resolve(BULK_DECK, {**given, "dt": repr(limit)})["dt"] == repr(limit)
     assert "is longer than" in refusal(**given, dt=repr(math.nextafter(limit, math.inf)))
 

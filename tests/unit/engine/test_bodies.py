@@ -19,11 +19,11 @@ def random_quaternions(n, seed=0):
 
 def test_quaternion_matrix_is_a_rotation():
     r = quaternion_matrix(random_quaternions(50))
-    assert np.allclose(r @ np.swapaxes(r, 1, 2), np.eye(3), atol=1e-14)
-    assert np.allclose(np.linalg.det(r), 1.0, atol=1e-14)
+    assert np.allclose(r @ np.swapaxes(r, 1, 2), np.eye(3), rtol=0, atol=1e-14)
+    assert np.allclose(np.linalg.det(r), 1.0, rtol=0, atol=1e-14)
     # 90 degrees about z carries x to y
     q = np.array([np.cos(np.pi / 4), 0, 0, np.sin(np.pi / 4)])
-    assert np.allclose(quaternion_matrix(q) @ [1, 0, 0], [0, 1, 0], atol=1e-15)
+    assert np.allclose(quaternion_matrix(q) @ [1, 0, 0], [0, 1, 0], rtol=0, atol=1e-15)
 
 
 @pytest.mark.parametrize("template", [CHIP, CLUMP], ids=["planar chip", "3-D clump"])
@@ -40,7 +40,7 @@ def test_fit_recovers_the_rotation_exactly(template):
     same = np.minimum(np.abs(fitted - q).max(axis=1), np.abs(fitted + q).max(axis=1))
     assert same.max() < 1e-12
     assert np.all(fitted[:, 0] >= 0)
-    assert np.allclose(np.linalg.norm(fitted, axis=1), 1, atol=1e-15)
+    assert np.allclose(np.linalg.norm(fitted, axis=1), 1, rtol=0, atol=1e-15)
 
 
 def clump_atoms(template, q, centres, v_c, omega, first_id=1, rmass=1e-9, shuffle=0):
@@ -77,10 +77,12 @@ def test_aggregate_bodies():
     assert np.allclose(parts["position"], centres, atol=1e-17, rtol=0)
     assert np.allclose(parts["velocity"], v_c, atol=1e-13, rtol=0)   # mean of v_c + w x r
     assert np.allclose(parts["angular_velocity"], omega, rtol=0, atol=0)
-    assert np.allclose(parts["mass"], 1e-9, rtol=0)  # LIGGGHTS: each sphere carries the body's mass
+    # LIGGGHTS: each sphere carries the body's mass (atol 1e-12 of it: numpy's default atol=1e-8 kg
+    # would pass the nine spheres' sum, 9e-9 kg)
+    assert np.allclose(parts["mass"], 1e-9, rtol=0, atol=1e-21)
     assert np.isnan(parts["force"]).all()  # not reachable for clumps (see bodies.aggregate)
     # enclosing radius: corner sphere at sqrt(2) * 75 um plus its radius
-    assert np.allclose(parts["radius"], 7.5e-5 * (1 + np.sqrt(2)), rtol=1e-12)
+    assert np.allclose(parts["radius"], 7.5e-5 * (1 + np.sqrt(2)), rtol=1e-12, atol=0)
     same = np.minimum(np.abs(parts["orientation"] - q).max(1), np.abs(parts["orientation"] + q).max(1))
     assert same.max() < 1e-12
 
@@ -131,7 +133,8 @@ def test_prepared_geometry_from_the_spec(tmp_path):
     np.savetxt(tmp_path / "chip.multisphere", template, header="chip: x y z r [m]")
     track, tpl = prepared_geometry({"prepared": {"track": str(tmp_path / "track.npz"),
                                                  "body_template": str(tmp_path / "chip.multisphere")}})
-    assert track[1].tolist() == [[0, 1, 2]] and np.allclose(tpl, template)
+    assert track[1].tolist() == [[0, 1, 2]]
+    assert np.allclose(tpl, template, rtol=0, atol=1e-18)  # m: savetxt's %.18e keeps every digit
     assert prepared_geometry({}) == (None, None)
     assert prepared_geometry({"prepared": {"track": None, "body_template": None}}) == (None, None)
 

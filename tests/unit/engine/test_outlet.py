@@ -11,9 +11,9 @@ G = gravity_vector(9.81, 0.0)
 
 
 def test_gravity_is_tilted_by_the_incline():
-    assert np.allclose(gravity_vector(9.81, 0.0), [0, 0, -9.81])
+    assert np.allclose(gravity_vector(9.81, 0.0), [0, 0, -9.81], rtol=0, atol=1e-12)  # m/s^2
     g = gravity_vector(9.81, 30.0)
-    assert np.allclose(g, 9.81 * np.array([-0.5, 0, -math.cos(math.radians(30))]))
+    assert np.allclose(g, 9.81 * np.array([-0.5, 0, -math.cos(math.radians(30))]), rtol=0, atol=1e-12)
 
 
 @pytest.mark.parametrize("incline", [0.0, 5.0, -10.0])

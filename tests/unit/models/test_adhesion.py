@@ -45,13 +45,14 @@ def test_sphere_force_is_minus_the_derivative_of_the_sphere_energy():
 def test_no_radius_convention_reproduces_both_sphere_figures():
     # Force over energy is 1/D for any radius: the pair quoted implies D = 5 pm.
     for r in (1e-6, 50e-6, 1e-3):
-        assert ad.sphere_plane_force(A, r, D) / -ad.sphere_plane_energy(A, r, D) == pytest.approx(1 / D)
+        ratio = ad.sphere_plane_force(A, r, D) / -ad.sphere_plane_energy(A, r, D)
+        assert ratio == pytest.approx(1 / D, rel=1e-12)
     d_implied = ad.separation_for(ad.REPORT_SPHERE_FORCE, ad.REPORT_SPHERE_ENERGY)
-    assert d_implied == pytest.approx(5e-12, rel=1e-12)
+    assert d_implied == pytest.approx(5e-12, rel=1e-12, abs=0)  # 5 pm: approx's default abs is 20 % of it
     assert D / d_implied == pytest.approx(40, rel=1e-12)
     # One at a time: the force needs R* = 480 um (10x the stated size), the energy 12 um.
-    assert ad.radius_for_force(ad.REPORT_SPHERE_FORCE) == pytest.approx(480e-6, rel=1e-12)
-    assert ad.radius_for_energy(ad.REPORT_SPHERE_ENERGY) == pytest.approx(12e-6, rel=1e-12)
+    assert ad.radius_for_force(ad.REPORT_SPHERE_FORCE) == pytest.approx(480e-6, rel=1e-12, abs=0)
+    assert ad.radius_for_energy(ad.REPORT_SPHERE_ENERGY) == pytest.approx(12e-6, rel=1e-12, abs=0)
     # Two spheres of 1 mm radius (or one of 1 mm diameter on a plane) give the force to 4 %.
     f_1mm = ad.sphere_plane_force(A, ad.effective_radius(1e-3, 1e-3), D)
     assert f_1mm / ad.REPORT_SPHERE_FORCE == pytest.approx(1.04, abs=0.005)
@@ -63,16 +64,17 @@ def test_every_reading_of_two_100_um_spheres_misses_the_quoted_figures():
     forces = [x.force for x in readings]
     energies = [x.energy for x in readings]
     # 10.4 to 41.7 uN: 4.8x to 19x below 200 uN; 2.1e-15 to 8.3e-15 J: 2x to 8x above 1e-15 J.
-    assert min(forces) == pytest.approx(10.42e-6, rel=1e-3)
-    assert max(forces) == pytest.approx(41.67e-6, rel=1e-3)
+    assert min(forces) == pytest.approx(10.42e-6, rel=1e-3, abs=0)
+    assert max(forces) == pytest.approx(41.67e-6, rel=1e-3, abs=0)
     assert all(ad.REPORT_SPHERE_FORCE / f >= 4.7 for f in forces)
-    assert min(energies) == pytest.approx(2.083e-15, rel=1e-3)
-    assert max(energies) == pytest.approx(8.333e-15, rel=1e-3)
+    # ~1e-15 J: approx's default abs=1e-12 J alone would pass any energy below a picojoule
+    assert min(energies) == pytest.approx(2.083e-15, rel=1e-3, abs=0)
+    assert max(energies) == pytest.approx(8.333e-15, rel=1e-3, abs=0)
     assert all(e / ad.REPORT_SPHERE_ENERGY >= 2 for e in energies)
     # The likeliest reading, two spheres of radius 100 um: the force 10x too small
     # for the quoted one (a decimal slip), the energy of the quoted order of magnitude.
     likeliest = next(x for x in readings if x.name.startswith("sphere-sphere, radius"))
-    assert likeliest.r_eff == pytest.approx(50e-6)
+    assert likeliest.r_eff == pytest.approx(50e-6, rel=1e-12, abs=0)
     assert ad.REPORT_SPHERE_FORCE / likeliest.force == pytest.approx(9.6, rel=1e-3)
     assert 1 <= likeliest.energy / ad.REPORT_SPHERE_ENERGY < 10
 
@@ -80,8 +82,8 @@ def test_every_reading_of_two_100_um_spheres_misses_the_quoted_figures():
 def test_roughness_is_a_larger_standoff():
     smooth = ad.Adhesion(A, 0.0, radius=150e-6)
     rough = ad.Adhesion(A, 9 * D, radius=150e-6)  # standoff 10 D0
-    assert smooth.pulloff == pytest.approx(ad.sphere_plane_force(A, 150e-6, D))
-    assert rough.pulloff == pytest.approx(smooth.pulloff / 100, rel=1e-12)
+    assert smooth.pulloff == pytest.approx(ad.sphere_plane_force(A, 150e-6, D), rel=1e-12, abs=0)
+    assert rough.pulloff == pytest.approx(smooth.pulloff / 100, rel=1e-12, abs=0)
     with pytest.raises(ValueError):
         ad.standoff(-1e-9)
 
@@ -91,7 +93,8 @@ def test_the_force_acts_in_flight_as_a_shifted_tail_and_is_constant_in_contact()
     s = adh.s
     assert adh.force(-1e-7) == adh.force(0.0) == adh.pulloff
     for gap in (s, 10 * s, 1e-6):
-        assert adh.force(gap) == pytest.approx(adh.pulloff * s ** 2 / (gap + s) ** 2, rel=1e-12)
+        # abs=0: down to 2e-12 N, where approx's default abs=1e-12 would be half the force
+        assert adh.force(gap) == pytest.approx(adh.pulloff * s ** 2 / (gap + s) ** 2, rel=1e-12, abs=0)
 
 
 @pytest.mark.parametrize("face_radius", [0.0, 100e-6])
@@ -108,10 +111,12 @@ def test_stiffness_and_work_are_the_derivative_and_integral_of_the_force(face_ra
 
 def test_a_flat_face_pulls_with_the_flat_pressure_over_its_area():
     adh = ad.Adhesion(A, 1e-6, face_radius=200e-6)
-    assert adh.pulloff == pytest.approx(ad.flat_pressure(A, 1e-6 + D) * math.pi * (200e-6) ** 2)
+    # ~5e-10 N: approx's default abs=1e-12 N would be 0.2 % of it
+    assert adh.pulloff == pytest.approx(ad.flat_pressure(A, 1e-6 + D) * math.pi * (200e-6) ** 2,
+                                        rel=1e-12, abs=0)
     square = ad.Adhesion(A, 1e-6, face_side=300e-6)  # a chip's face
-    assert square.flat and square.face_area == pytest.approx(9e-8)
-    assert square.pulloff == pytest.approx(ad.flat_pressure(A, 1e-6 + D) * 9e-8)
+    assert square.flat and square.face_area == pytest.approx(9e-8, rel=1e-12, abs=0)
+    assert square.pulloff == pytest.approx(ad.flat_pressure(A, 1e-6 + D) * 9e-8, rel=1e-12, abs=0)
     h = 1e-6 * square.s
     assert -(square.force(2 * h) - square.force(h)) / h == pytest.approx(square.stiffness, rel=1e-4)
 
@@ -133,7 +138,7 @@ def test_vdw_step_limit_resolves_the_force_near_contact():
     mass = 4 / 3 * math.pi * radius ** 3 * density
     adh = ad.Adhesion(1e-19, 3e-9, radius=radius)
     dt = ad.vdw_step_limit(adh, mass)
-    assert dt == pytest.approx(math.pi / 50 * math.sqrt(mass / adh.stiffness), rel=1e-12)
+    assert dt == pytest.approx(math.pi / 50 * math.sqrt(mass / adh.stiffness), rel=1e-12, abs=0)  # ~1e-6 s
     # A standoff twice as large: stiffness / 8, step x 2^1.5.
     wider = ad.Adhesion(1e-19, 2 * adh.s - D, radius=radius)
     assert ad.vdw_step_limit(wider, mass) / dt == pytest.approx(2 ** 1.5, rel=1e-9)

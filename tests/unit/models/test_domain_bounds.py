@@ -100,4 +100,4 @@ def test_a_two_level_drive_that_never_breaks_the_part_loose_moves_nothing():
     got = two_level_transport(0.4 * G, 5e-3, 2.0 * G, c)
     assert (got.displacement_per_period, got.net_speed, got.stuck_fraction, got.catch_delay) == \
         (0.0, 0.0, 1.0, 0.0)
-    assert got.t_down == pytest.approx(1e-3) and got.period == pytest.approx(6e-3)
+    assert got.t_down == pytest.approx(1e-3, rel=1e-12) and got.period == pytest.approx(6e-3, rel=1e-12)  # s

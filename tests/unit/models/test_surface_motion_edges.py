@@ -63,14 +63,14 @@ def test_a_time_a_hair_before_the_period_end_is_in_the_next_period():
 
 def test_zero_length_pieces_are_dropped():
     wf = PiecewiseConstantAccel([0.01, 0.0, 0.01], [1.0, 5.0, -1.0])
-    assert wf.durations.tolist() == [0.01, 0.01] and wf.period == pytest.approx(0.02)
+    assert wf.durations.tolist() == [0.01, 0.01] and wf.period == pytest.approx(0.02, rel=1e-12)
 
 
 def test_stick_slip_peak_speed_is_half_the_velocity_swing():
     wf = StickSlipWaveform(20.0, 3.0, 7.0)
     v = wf.velocity(np.linspace(0, wf.period, 2001))[0]
     assert wf.peak_speed == pytest.approx(v.max(), rel=1e-9) == pytest.approx(-v.min(), rel=1e-9)
-    assert StickSlipWaveform.from_peak_speed(20.0, 0.1, 0.3).peak_speed == pytest.approx(0.1)
+    assert StickSlipWaveform.from_peak_speed(20.0, 0.1, 0.3).peak_speed == pytest.approx(0.1, rel=1e-12)
 
 
 def test_a_b_spline_with_repeated_knots_is_the_same_motion():
@@ -90,7 +90,7 @@ def test_constructors_refuse_what_their_docstrings_exclude():
     with pytest.raises(ValueError, match="span one period"):
         PolynomialSurface(spl, period=1.0)
     d = two_level_drive(1.0, 1e-3, 0.5)                        # a gentle drop is allowed
-    assert d.period == pytest.approx(3e-3)
+    assert d.period == pytest.approx(3e-3, rel=1e-12)
 
 
 def test_the_default_sampling_step_of_a_window_is_exactly_a_4096th():

@@ -54,27 +54,28 @@ def test_feed_rate_figures_draw_the_exits_the_window_and_the_profile(tmp_path, d
     assert [p.name for p in paths] == ["feedrate_cumulative.png", "feedrate_velocity_profile.png"]
     ax = drawn["feedrate_cumulative.png"].axes[0]
     steps, fit = ax.lines[0], ax.lines[1]
-    # the cumulative count: 0 at the first frame, then one more at each exit
-    assert steps.get_xdata() == pytest.approx(np.r_[0.0, fr.event_times])
+    # the cumulative count: 0 at the first frame, then one more at each exit; what is drawn is the
+    # analysis' own numbers (s, parts, mm/s, ms), equal up to rounding (and a unit's factor)
+    assert steps.get_xdata() == pytest.approx(np.r_[0.0, fr.event_times], rel=1e-12)
     assert list(steps.get_ydata()) == list(range(fr.n_events + 1))
     # the fitted rate: a line from the count at the window's start, of slope parts_per_s
     x, y = np.asarray(fit.get_xdata()), np.asarray(fit.get_ydata())
-    assert x == pytest.approx([fr.steady_from, fr.steady_to])
+    assert x == pytest.approx([fr.steady_from, fr.steady_to], rel=1e-12)
     n_a = int((fr.event_times < fr.steady_from).sum())
-    assert y[0] == pytest.approx(n_a)
-    assert (y[1] - y[0]) / (x[1] - x[0]) == pytest.approx(fr.parts_per_s)
+    assert y[0] == pytest.approx(n_a, rel=1e-12)
+    assert (y[1] - y[0]) / (x[1] - x[0]) == pytest.approx(fr.parts_per_s, rel=1e-12)
     window = ax.patches[0]  # the axvspan: a rectangle, x in data coordinates
     assert (window.get_x(), window.get_x() + window.get_width()) == pytest.approx(
-        (fr.steady_from, fr.steady_to))
+        (fr.steady_from, fr.steady_to), rel=1e-12)
     assert f"{fr.parts_per_s:.4g}" in fit.get_label()
     assert ax.get_xlabel() == "time [s]" and "[-]" in ax.get_ylabel()
     names_the_run(drawn["feedrate_cumulative.png"], "f.h5")
 
     ax = drawn["feedrate_velocity_profile.png"].axes[0]
     guide, mean = ax.lines[0], ax.lines[-1]
-    assert np.asarray(guide.get_xdata()) == pytest.approx(fr.profile_x * 1e3)
-    assert np.asarray(guide.get_ydata()) == pytest.approx(fr.profile_velocity * 1e3, nan_ok=True)
-    assert np.asarray(mean.get_ydata()) == pytest.approx([fr.mean_velocity * 1e3] * 2)
+    assert np.asarray(guide.get_xdata()) == pytest.approx(fr.profile_x * 1e3, rel=1e-12)
+    assert np.asarray(guide.get_ydata()) == pytest.approx(fr.profile_velocity * 1e3, rel=1e-12, nan_ok=True)
+    assert np.asarray(mean.get_ydata()) == pytest.approx([fr.mean_velocity * 1e3] * 2, rel=1e-12)
     assert mean.get_label().startswith(f"mean {fr.mean_velocity * 1e3:.3g} ± ")
     names_the_run(drawn["feedrate_velocity_profile.png"], "f.h5")
 
@@ -93,25 +94,25 @@ def test_singulation_figures_draw_the_arrivals_against_random_ones_and_the_clust
     heights = np.array([p.get_height() for p in ax.patches])
     assert heights.sum() == len(sg.interarrival)          # every inter-arrival time, in ms
     lefts = np.array([p.get_x() for p in ax.patches])
-    assert lefts[0] == pytest.approx(sg.interarrival.min() * 1e3)
+    assert lefts[0] == pytest.approx(sg.interarrival.min() * 1e3, rel=1e-12)
     # random arrivals at the same rate: exponential inter-arrival times, N (e^-a/m - e^-b/m) per bin
     random = ax.lines[0]
     edges = np.asarray(random.get_xdata())
     mean = sg.mean_interarrival * 1e3
     expected = len(sg.interarrival) * (np.exp(-edges[:-1] / mean) - np.exp(-edges[1:] / mean))
-    assert np.asarray(random.get_ydata())[:-1] == pytest.approx(expected)
+    assert np.asarray(random.get_ydata())[:-1] == pytest.approx(expected, rel=1e-12)
     assert random.get_ydata()[-1] == random.get_ydata()[-2]   # a step: no drop at the last edge
-    assert edges[0] == pytest.approx(lefts[0])
+    assert edges[0] == pytest.approx(lefts[0], rel=1e-12)
     gap = ax.lines[1]
-    assert np.asarray(gap.get_xdata()) == pytest.approx([1.0, 1.0])  # the gap, 1 ms
+    assert np.asarray(gap.get_xdata()) == pytest.approx([1.0, 1.0], rel=1e-12)  # the gap, 1 ms
     assert gap.get_label() == "gap 1 ms"
     assert f"CV {sg.cv_interarrival:.3g}" in ax.get_title()
     names_the_run(drawn["singulation_interarrival.png"], "s.h5")
 
     ax = drawn["singulation_clusters.png"].axes[0]
     bars = {round(p.get_x() + p.get_width() / 2): p.get_height() for p in ax.patches}
-    assert bars == pytest.approx(sg.cluster_sizes)
-    assert sum(s * n for s, n in bars.items()) == pytest.approx(sg.cluster_size_counts.sum() / 5)
+    assert bars == pytest.approx(sg.cluster_sizes, rel=1e-12)
+    assert sum(s * n for s, n in bars.items()) == pytest.approx(sg.cluster_size_counts.sum() / 5, rel=1e-12)
     assert ax.get_title().startswith("5 frames")
     # log scale: clusters of four and more, a hundred times rarer than singles, stay visible
     assert ax.get_yscale() == "log"

@@ -74,17 +74,20 @@ def test_shape_from_deck_variables():
     # A template lying in the y = 0 plane puts the flat axis on y; sizes from its extent.
     template = np.array([[-1e-4, 0, -1e-4, 5e-5], [1e-4, 0, 1e-4, 5e-5]])
     s = scene.part_shape({"shape": 1.0}, template)
-    assert s.axis == 1 and s.size == pytest.approx(3e-4) and s.thickness == pytest.approx(1e-4)
+    assert s.axis == 1
+    assert (s.size, s.thickness) == pytest.approx((3e-4, 1e-4), rel=1e-12, abs=0)  # m: rounding
 
 
 def test_rotation_matrices_are_rotations_and_nan_is_identity():
     q = np.random.default_rng(1).normal(size=(20, 4))
     rot = scene.rotation_matrices(q)
-    assert np.allclose(rot @ rot.transpose(0, 2, 1), np.eye(3))
-    assert np.allclose(np.linalg.det(rot), 1)
-    assert np.allclose(scene.rotation_matrices([[np.nan] * 4, [0, 0, 0, 0]]), np.eye(3))
+    # (dimensionless: equal up to rounding)
+    assert np.allclose(rot @ rot.transpose(0, 2, 1), np.eye(3), rtol=0, atol=1e-12)
+    assert np.allclose(np.linalg.det(rot), 1, rtol=0, atol=1e-12)
+    assert np.allclose(scene.rotation_matrices([[np.nan] * 4, [0, 0, 0, 0]]), np.eye(3), rtol=0, atol=1e-12)
     # 90 degrees about x takes y to z
-    assert np.allclose(scene.rotation_matrices(quat_about_x(np.pi / 2))[0] @ [0, 1, 0], [0, 0, 1])
+    assert np.allclose(scene.rotation_matrices(quat_about_x(np.pi / 2))[0] @ [0, 1, 0], [0, 0, 1],
+                       rtol=0, atol=1e-12)
 
 
 @pytest.mark.parametrize("maker, args, volume", [
@@ -97,7 +100,7 @@ def test_template_shapes_are_whole_and_face_outwards(maker, args, volume):
     a, b, c = points[tris[:, 0]], points[tris[:, 1]], points[tris[:, 2]]
     assert np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6 == pytest.approx(volume, rel=0.05)
     # Normals: unit, outward (the shapes are convex around 0).
-    assert np.allclose(np.linalg.norm(normals, axis=1), 1)
+    assert np.allclose(np.linalg.norm(normals, axis=1), 1, rtol=0, atol=1e-12)
     assert (np.einsum("ij,ij->i", normals, points) > 0).all()
 
 
@@ -111,7 +114,7 @@ def test_cylinder_axis_and_box_extents():
     points, _, _ = scene.cylinder(2.0, 0.5, axis=0)
     assert np.allclose(np.ptp(points, axis=0), [0.5, 2.0, 2.0], atol=0.02)
     points, _, _ = scene.box((1, 2, 3))
-    assert np.allclose(np.ptp(points, axis=0), [1, 2, 3])
+    assert np.allclose(np.ptp(points, axis=0), [1, 2, 3], rtol=0, atol=1e-12)
 
 
 def test_shape_mesh_places_and_orients_chips(tmp_path):
@@ -125,12 +128,13 @@ def test_shape_mesh_places_and_orients_chips(tmp_path):
         for k in range(2):
             mine = mesh.points[mesh.owner == k]
             # Standing on an edge: the thickness now lies along y, the edge along z.
-            assert np.allclose(np.ptp(mine, axis=0), [6e-4, 1e-4, 6e-4])
-            assert np.allclose(mine.mean(axis=0), frame.position[k])
+            assert np.allclose(np.ptp(mine, axis=0), [6e-4, 1e-4, 6e-4], rtol=0, atol=1e-15)  # m: rounding
+            assert np.allclose(mine.mean(axis=0), frame.position[k], rtol=0, atol=1e-15)
             outward = np.einsum("ij,ij->i", mesh.normals[mesh.owner == k], mine - frame.position[k])
             assert (outward > 0).all()  # the normals turned with the chip
         normal, axis_x = scene.body_axes(frame, shape)
-        assert np.allclose(normal, [0, -1, 0]) and np.allclose(axis_x, [1, 0, 0])
+        assert np.allclose(normal, [0, -1, 0], rtol=0, atol=1e-12)  # unit vectors: rounding
+        assert np.allclose(axis_x, [1, 0, 0], rtol=0, atol=1e-12)
 
 
 def test_spheres_take_their_own_radius_and_track_moves_with_surface(tmp_path):
@@ -138,9 +142,9 @@ def test_spheres_take_their_own_radius_and_track_moves_with_surface(tmp_path):
     with Result(path) as r:
         frame = scene.read_frame(r, 2)
         mesh = scene.shape_mesh(frame, scene.PartShape())
-        assert np.allclose(np.ptp(mesh.points, axis=0)[2], 6e-4)
+        assert np.allclose(np.ptp(mesh.points, axis=0)[2], 6e-4, rtol=0, atol=1e-15)  # m: rounding
         vertices, triangles = scene.track_mesh(r, frame)
-        assert np.allclose(vertices, simple_track()[0] + [4e-5, 0, 2e-5])
+        assert np.allclose(vertices, simple_track()[0] + [4e-5, 0, 2e-5], rtol=0, atol=1e-15)
         with pytest.raises(UsageError, match="frame 3 out of range"):
             scene.read_frame(r, 3)
 

@@ -140,7 +140,7 @@ def test_quaternions_rotate_as_w_x_y_z():
     rot = quaternion_matrices([quat_z(np.pi / 2), [np.cos(np.pi / 4), np.sin(np.pi / 4), 0, 0]])
     assert rot[0] @ [1, 0, 0] == pytest.approx([0, 1, 0], abs=1e-15)      # about z
     assert rot[1] @ [0, 0, 1] == pytest.approx([0, -1, 0], abs=1e-15)     # about x
-    assert np.allclose(rot @ rot.transpose(0, 2, 1), np.eye(3))
+    assert np.allclose(rot @ rot.transpose(0, 2, 1), np.eye(3), rtol=0, atol=1e-15)
 
 
 def test_chips_touch_by_their_spheres_not_their_circumscribed_spheres():

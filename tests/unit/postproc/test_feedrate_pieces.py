@@ -32,19 +32,20 @@ FRAMES = np.arange(0, 1.0 + 1e-9, 0.01)
 # -- the pieces, on hand-computed series --------------------------------------------------
 def test_bins_hold_about_ten_events_in_whole_periods():
     # 100 periods in 1 s: 1000 events -> 100 bins of one period, 500 -> 50 bins of two
-    assert bin_width(0.0, 1.0, 100.0, 1000) == pytest.approx(0.01)
-    assert bin_width(0.0, 1.0, 100.0, 500) == pytest.approx(0.02)
-    assert bin_width(0.0, 1.0, 100.0, 0) == pytest.approx(0.1)        # at least 10 bins
-    assert bin_width(0.0, 1.0, 100.0, 10 ** 6) == pytest.approx(0.01)  # never below a period
-    assert bin_width(0.0, 6.0, 100.0, 10 ** 6) == pytest.approx(0.03)  # at most 200 bins: 600/200
-    assert bin_width(0.0, 0.005, 100.0, 50) == pytest.approx(0.005)   # less than a period: the span
+    # (widths in s, rates per s: hand-computed, equal up to rounding)
+    assert bin_width(0.0, 1.0, 100.0, 1000) == pytest.approx(0.01, rel=1e-12)
+    assert bin_width(0.0, 1.0, 100.0, 500) == pytest.approx(0.02, rel=1e-12)
+    assert bin_width(0.0, 1.0, 100.0, 0) == pytest.approx(0.1, rel=1e-12)  # at least 10 bins
+    assert bin_width(0.0, 1.0, 100.0, 10 ** 6) == pytest.approx(0.01, rel=1e-12)  # never below a period
+    assert bin_width(0.0, 6.0, 100.0, 10 ** 6) == pytest.approx(0.03, rel=1e-12)  # at most 200 bins: 600/200
+    assert bin_width(0.0, 0.005, 100.0, 50) == pytest.approx(0.005, rel=1e-12)  # less than a period: the span
     # without vibration: the span in 10 .. 200 equal bins
-    assert bin_width(0.0, 1.0, 0.0, 55) == pytest.approx(0.1)
-    assert bin_width(0.0, 1.0, 0.0, 1000) == pytest.approx(0.01)
-    assert bin_width(0.0, 2.0, 0.0, 10 ** 5) == pytest.approx(0.01)
+    assert bin_width(0.0, 1.0, 0.0, 55) == pytest.approx(0.1, rel=1e-12)
+    assert bin_width(0.0, 1.0, 0.0, 1000) == pytest.approx(0.01, rel=1e-12)
+    assert bin_width(0.0, 2.0, 0.0, 10 ** 5) == pytest.approx(0.01, rel=1e-12)
     # only the span counts, not where it starts
-    assert bin_width(0.5, 1.5, 100.0, 1000) == pytest.approx(0.01)
-    assert bin_width(0.5, 1.5, 0.0, 55) == pytest.approx(0.1)
+    assert bin_width(0.5, 1.5, 100.0, 1000) == pytest.approx(0.01, rel=1e-12)
+    assert bin_width(0.5, 1.5, 0.0, 55) == pytest.approx(0.1, rel=1e-12)
 
 
 @pytest.mark.parametrize("freq", [4.0, 0.0])  # four one-period batches, or 200 units in 4 batches
@@ -52,27 +53,29 @@ def test_batch_means_of_a_known_pattern(freq):
     # 1, 3, 1, 3 events in the quarters of [0, 1): rates 4, 12, 4, 12 per s
     times = np.array([0.1, 0.3, 0.4, 0.45, 0.6, 0.8, 0.9, 0.95])
     rate, err = batch_rate(times, np.ones(8), 0.0, 1.0, freq, 4)
-    assert rate == pytest.approx(8.0)
-    assert err == pytest.approx(math.sqrt(4 * 4 ** 2 / 3) / 2)   # std (ddof 1) of the rates / sqrt(4)
+    assert rate == pytest.approx(8.0, rel=1e-12)
+    # std (ddof 1) of the rates / sqrt(4)
+    assert err == pytest.approx(math.sqrt(4 * 4 ** 2 / 3) / 2, rel=1e-12)
     # weights: mass per second; events at t_b are not in [t_a, t_b)
     rate, _ = batch_rate(np.r_[times, 1.0], np.r_[np.full(8, 2.0), 100.0], 0.0, 1.0, freq, 4)
-    assert rate == pytest.approx(16.0)
+    assert rate == pytest.approx(16.0, rel=1e-12)
     rate, _ = batch_rate(np.r_[0.0, times], np.r_[5.0, np.ones(8)], 0.0, 1.0, freq, 4)
-    assert rate == pytest.approx(13.0)                               # t_a is inside
+    assert rate == pytest.approx(13.0, rel=1e-12)  # t_a is inside
 
 
 def test_batch_means_need_two_periods():
     rate, err = batch_rate(np.array([0.001, 0.004]), np.ones(2), 0.0, 0.01, 100.0, 10)
-    assert rate == pytest.approx(200.0) and math.isnan(err)          # one period: one batch
+    assert rate == pytest.approx(200.0, rel=1e-12) and math.isnan(err)          # one period: one batch
     _, err = batch_rate(np.array([0.001, 0.014]), np.ones(2), 0.0, 0.02, 100.0, 10)
-    assert err == pytest.approx(0.0)                                  # two periods, one event each
+    assert err == pytest.approx(0.0, abs=1e-12)  # two periods, one event each
 
 
 def test_mean_and_batch_error_of_grouped_values():
     mean, err = _mean_and_batch_error(np.array([1.0, 2, 3, 4]), np.array([0, 0, 1, 1]), 10)
-    assert mean == 2.5 and err == pytest.approx(1.0)   # batch means 1.5, 3.5: std sqrt(2) / sqrt(2)
+    assert mean == 2.5 and err == pytest.approx(1.0, rel=1e-12)  # batch means 1.5, 3.5: std sqrt(2) / sqrt(2)
     mean, err = _mean_and_batch_error(np.arange(1.0, 7.0), np.arange(6), 2)
-    assert mean == 3.5 and err == pytest.approx(1.5)   # batches {1,2,3}, {4,5,6}: 3 / sqrt(2) / sqrt(2)
+    # batches {1,2,3}, {4,5,6}: 3 / sqrt(2) / sqrt(2)
+    assert mean == 3.5 and err == pytest.approx(1.5, rel=1e-12)
     mean, err = _mean_and_batch_error(np.array([1.0, 5.0]), np.array([3, 3]), 10)
     assert mean == 3.0 and math.isnan(err)             # one interval: no spread to measure
     mean, err = _mean_and_batch_error(np.empty(0), np.empty(0, dtype=int), 10)
@@ -123,7 +126,7 @@ def test_an_event_mass_comes_from_the_frame_before_when_the_part_is_gone(tmp_pat
     with hand_made(tmp_path / "m.h5", frames, events_of([0.025], [1])) as r:
         fr = FeedRate(r).run().results
         assert fr.event_mass.tolist() == [m1]
-        assert fr.mass_per_s == pytest.approx(fr.parts_per_s * m1)
+        assert fr.mass_per_s == pytest.approx(fr.parts_per_s * m1, rel=1e-12, abs=1e-20)  # kg/s
     with hand_made(tmp_path / "n.h5", frames, events_of([0.025, 0.045], [1, 2])) as r:
         fr = FeedRate(r).run().results
         assert fr.event_mass[0] == m1 and math.isnan(fr.event_mass[1])
@@ -158,7 +161,7 @@ def test_a_window_of_one_frame_has_no_speed(tmp_path):
         fr = FeedRate(r, start=0.511, end=0.525).run().results   # holds frame 52 only
     assert math.isnan(fr.mean_velocity) and math.isnan(fr.mean_velocity_err)
     assert fr.profile_count.sum() == 0 and np.isnan(fr.profile_velocity).all()
-    assert fr.parts_per_s == pytest.approx(1 / 0.014)   # one arrival inside: at 0.52 s
+    assert fr.parts_per_s == pytest.approx(1 / 0.014, rel=1e-12)  # one arrival inside: at 0.52 s
 
 
 def test_singulation_without_an_outlet_edge_has_no_speed_and_counts_every_part(tmp_path):
@@ -177,7 +180,7 @@ def test_singulation_tolerance_from_the_parts_on_the_track_when_none_arrives(tmp
     exits = np.array([5.0, 5.01, 5.02])          # after the run: nobody arrives
     with Result(feeder(tmp_path / "t.h5", FRAMES, exits, freq=FREQ, speed=0.001, radius=RADIUS)) as r:
         sg = Singulation(r).run().results
-    assert sg.n_arrivals == 0 and sg.tolerance == pytest.approx(0.01 * 2 * RADIUS)
+    assert sg.n_arrivals == 0 and sg.tolerance == pytest.approx(0.01 * 2 * RADIUS, rel=1e-12, abs=0)
     assert math.isnan(sg.cv_interarrival) and math.isnan(sg.mean_interarrival)
     assert math.isnan(sg.doubles_rate) and math.isnan(sg.singulated_fraction)
     # no part at all: no size to take a tolerance from
@@ -203,7 +206,7 @@ def test_singulation_between_two_frames_samples_clusters_from_all_frames(tmp_pat
 def test_period_lag_of_frames_shorter_than_a_period_weighs_the_alias_per_period():
     # lags of 0.17, 0.34, 0.51 periods: aliases 0.17, 0.34, 0.49, per period 1, 1, 0.96
     m, alias = period_lag(np.arange(4) * 0.0017, 100.0)
-    assert m == 3 and alias == pytest.approx(0.49)
+    assert m == 3 and alias == pytest.approx(0.49, rel=1e-12)
 
 
 def test_a_given_start_cuts_only_the_end_by_mser_over_the_bins_after_it():
@@ -214,10 +217,10 @@ def test_a_given_start_cuts_only_the_end_by_mser_over_the_bins_after_it():
     rng = np.random.default_rng(1)
     times = np.r_[rng.uniform(0.0, 0.01, 60), rng.uniform(0.01, 0.7, 700)]
     t_a, t_b, width, counts = steady_window(times, 0.0, 1.0, FREQ, start=0.0)
-    assert width == pytest.approx(0.01) and counts[0] == 60
+    assert width == pytest.approx(0.01, rel=1e-12) and counts[0] == 60
     d, e = mser(counts, cut_start=False, cut_end=True)
     assert d == 0 and mser(counts[1:], cut_start=False, cut_end=True)[1] != e   # the burst matters
-    assert t_a == 0.0 and t_b == pytest.approx(1.0 - e * width)
+    assert t_a == 0.0 and t_b == pytest.approx(1.0 - e * width, rel=1e-12)
     assert len(counts) == 100 and counts.sum() == len(times)   # whole bins over the span, no more
 
 
@@ -227,8 +230,8 @@ def test_feed_rate_profile_without_an_outlet_edge_spans_the_parts(tmp_path):
     with hand_made(tmp_path / "p.h5", frames, events_of([0.012, 0.031], [1, 3]),
                    outlet={"method": "m"}) as r:
         fr = FeedRate(r, bins=10).run().results
-    assert fr.profile_edges == pytest.approx(np.linspace(0.0, 0.01, 11))   # 0 .. the farthest part
-    assert fr.profile_x == pytest.approx((np.arange(10) + 0.5) * 1e-3)     # the bins' middles
+    assert fr.profile_edges == pytest.approx(np.linspace(0.0, 0.01, 11), abs=1e-15)  # 0 .. the farthest part
+    assert fr.profile_x == pytest.approx((np.arange(10) + 0.5) * 1e-3, abs=1e-15)  # the bins' middles
     assert fr.profile_count.sum() == 3 * 5 and fr.mean_velocity == 0.0
 
 
@@ -246,10 +249,10 @@ def test_singulation_counts_only_the_arrivals_in_its_window(tmp_path):
         sg = Singulation(r, start=0.3, end=0.6).run().results
     inside = exits[(exits >= 0.3) & (exits < 0.6)]
     assert sg.n_arrivals == len(inside) == 30
-    assert sg.arrival_times == pytest.approx(inside)
+    assert sg.arrival_times == pytest.approx(inside, rel=1e-12)
     with Result(tmp_path / "win.h5") as r:   # every pair 10 ms apart is a double by a 20 ms gap
         crowded = Singulation(r, gap=0.02, start=0.3, end=0.6).run().results
-    assert crowded.n_doubles == 29 and crowded.doubles_per_s == pytest.approx(29 / 0.3)
+    assert crowded.n_doubles == 29 and crowded.doubles_per_s == pytest.approx(29 / 0.3, rel=1e-12)
 
 
 def test_a_feed_rate_of_two_frames(tmp_path):

@@ -28,9 +28,9 @@ def test_random_arrivals_have_cv_one_and_periodic_ones_cv_zero(tmp_path):
     with open_feeder(tmp_path, exits, name="poisson.h5", speed=0.05, lanes=lanes) as r:
         sg = Singulation(r, start=0.0, end=1.0).run().results
     assert sg.n_arrivals == len(exits)
-    assert sg.interarrival == pytest.approx(np.diff(exits))
+    assert sg.interarrival == pytest.approx(np.diff(exits), abs=1e-15)  # s: differences of times ~1 s
     assert sg.cv_interarrival == pytest.approx(1.0, abs=0.1)   # ~400 intervals: +-0.05
-    assert sg.mean_interarrival == pytest.approx(np.diff(exits).mean())
+    assert sg.mean_interarrival == pytest.approx(np.diff(exits).mean(), rel=1e-12)
     periodic = 0.05 + np.arange(300) / 300.0
     with open_feeder(tmp_path, periodic, name="periodic.h5", speed=0.5) as r:
         sg = Singulation(r).run().results
@@ -61,11 +61,11 @@ def test_doubles_planted_at_known_times_are_found_by_time_and_by_distance(tmp_pa
     pairs = len(exits) - 1
     for sg in (by_time, by_distance):
         assert sg.n_doubles == 3 and not sg.touching.any()
-        assert sg.doubles_rate == pytest.approx(3 / pairs)
-        assert sg.singulated_fraction == pytest.approx((len(exits) - 6) / len(exits))
-        assert sg.doubles_per_s == pytest.approx(3 / 1.0)
+        assert sg.doubles_rate == pytest.approx(3 / pairs, rel=1e-12)
+        assert sg.singulated_fraction == pytest.approx((len(exits) - 6) / len(exits), rel=1e-12)
+        assert sg.doubles_per_s == pytest.approx(3 / 1.0, rel=1e-12)
         first = np.nonzero(sg.doubles)[0]
-        assert sg.arrival_times[first] == pytest.approx(exits[[5, 13, 32]])
+        assert sg.arrival_times[first] == pytest.approx(exits[[5, 13, 32]], rel=1e-12)
     assert by_distance.gap_distance == 0.0 and by_distance.gap is None
     # asking for more than the regular 0.7 mm of clear track makes every pair a double
     assert roomy.n_doubles == pairs and roomy.singulated_fraction == 0.0
@@ -88,7 +88,7 @@ def test_touching_parts_are_doubles_whatever_the_gap(tmp_path):
     with open_feeder(tmp_path, exits_n, name="n.h5", speed=v, lanes=lanes_n) as r:
         near = Singulation(r, gap=1e-6, start=0.0, end=1.0).run().results
         wide = Singulation(r, gap=1e-6, tolerance=3 * tol, start=0.0, end=1.0).run().results
-    assert touching.tolerance == pytest.approx(tol)
+    assert touching.tolerance == pytest.approx(tol, rel=1e-12, abs=0)
     assert touching.n_doubles == 2 and touching.touching.sum() == 2
     assert near.n_doubles == 0
     assert wide.n_doubles == 2
@@ -109,7 +109,7 @@ def test_cluster_sizes_of_chains_on_the_track(tmp_path):
         sg = Singulation(r, cluster_frames=7).run().results
     assert sg.cluster_frames == 7
     assert sg.cluster_sizes == {1: 1.0, 2: 1.0, 3: 1.0, 4: 1.0, 5: 1.0}
-    assert sg.track_singulated_fraction == pytest.approx(1 / 15)
+    assert sg.track_singulated_fraction == pytest.approx(1 / 15, rel=1e-12)
     assert sg.n_arrivals == 0
 
 
@@ -121,7 +121,7 @@ def test_parts_falling_off_are_not_on_the_track(tmp_path):
         on_track = r.mass_balance["on_track"]
     # parts 3 mm apart: all alone; the count per frame is the mass balance's on_track
     assert set(sg.cluster_sizes) == {1}
-    assert sg.cluster_sizes[1] == pytest.approx(on_track.mean())
+    assert sg.cluster_sizes[1] == pytest.approx(on_track.mean(), rel=1e-12)
 
 
 # -- chips --------------------------------------------------------------------------------
@@ -153,13 +153,13 @@ def test_chip_faces_and_alignment_at_the_outlet(tmp_path):
     with open_feeder(tmp_path, exits, speed=0.05, orientations=quats, body_template=CHIP,
                      lanes=lanes) as r:
         sg = Singulation(r, start=0.0, end=1.0).run().results
-    assert sg.face_up_fraction == pytest.approx(0.7)
-    assert sg.face_down_fraction == pytest.approx(0.2)
-    assert sg.on_edge_fraction == pytest.approx(0.1)
+    assert sg.face_up_fraction == pytest.approx(0.7, rel=1e-12)
+    assert sg.face_down_fraction == pytest.approx(0.2, rel=1e-12)
+    assert sg.on_edge_fraction == pytest.approx(0.1, rel=1e-12)
     assert sg.cos_tilt == pytest.approx([1] * 7 + [-1, -1, 0], abs=1e-12)
     # yaw folded by the square's quarter-turn symmetry into (-45, 45]
     assert sg.yaw_deg[:7] == pytest.approx([0, 30, 10, 40, 5, 5, 2], abs=1e-9)
-    assert sg.aligned_fraction == pytest.approx(6 / 10)   # 0, 10, 5, 5, 2 face up; 20 face down
+    assert sg.aligned_fraction == pytest.approx(6 / 10, rel=1e-12)  # 0, 10, 5, 5, 2 face up; 20 face down
     # face up and aligned, part by part: the five face-up ones within 10 degrees (the one on
     # edge is aligned, not face up) -- not the product of the fractions, 0.7 x 0.6 = 0.42
     assert sg.orientation_yield == pytest.approx(5 / 10, abs=1e-12)
@@ -175,10 +175,11 @@ def test_chip_faces_are_taken_as_the_track_delivers_them(tmp_path):
     with open_feeder(tmp_path, exits, speed=0.05, orientations=flat, tipped=tip, body_template=CHIP,
                      lanes=np.arange(n) * 1e-3) as r:
         sg = Singulation(r, start=0.0, end=1.0).run().results
-    assert sg.face_up_fraction == pytest.approx(1.0) and sg.on_edge_fraction == pytest.approx(0.0)
+    assert sg.face_up_fraction == pytest.approx(1.0, abs=1e-12)
+    assert sg.on_edge_fraction == pytest.approx(0.0, abs=1e-12)
     assert sg.cos_tilt == pytest.approx([1.0] * n, abs=1e-12)
     assert sg.yaw_deg == pytest.approx([0, 3, -30, 0, 7, 2], abs=1e-9)
-    assert sg.aligned_fraction == pytest.approx(5 / 6)
+    assert sg.aligned_fraction == pytest.approx(5 / 6, rel=1e-12)
     # the tipped orientation alone would read every chip on edge (cos 80 deg)
     cos_tipped, _ = face_orientation(tip, CHIP)
     assert cos_tipped == pytest.approx([np.cos(80 * np.pi / 180)] * n, abs=1e-12)
@@ -200,11 +201,11 @@ def test_the_orientation_yield_counts_the_parts_both_face_up_and_aligned(tmp_pat
 
 
 def test_thin_axis_and_orientation_of_a_template():
-    assert thin_axis(CHIP) == pytest.approx([0, 0, 1])
+    assert thin_axis(CHIP) == pytest.approx([0, 0, 1], abs=1e-12)
     tilted = CHIP[:, [2, 0, 1, 3]]           # the same chip lying in the yz plane
-    assert thin_axis(tilted) == pytest.approx([1, 0, 0])
+    assert thin_axis(tilted) == pytest.approx([1, 0, 0], abs=1e-12)
     cos_tilt, yaw = face_orientation([q_axis([0, 1, 0], np.pi / 2)], tilted)
-    assert cos_tilt == pytest.approx([-1.0])  # x turned onto -z: face down
+    assert cos_tilt == pytest.approx([-1.0], abs=1e-12)  # x turned onto -z: face down
     # standing on edge unturned: the in-plane reference is its y axis (x is the normal), 90 deg,
     # folded to 0 by the square's symmetry
     cos_tilt, yaw = face_orientation([[1.0, 0, 0, 0]], tilted)
@@ -273,7 +274,7 @@ def test_a_chip_past_the_edge_at_the_frame_before_its_exit_is_read_a_frame_earli
 def test_one_chip_arriving_has_a_face(tmp_path):
     with tipping_chips(tmp_path / "one.h5", 1) as r:
         sg = Singulation(r, start=0.0, end=0.04).run().results
-    assert sg.n_arrivals == 1 and sg.face_up_fraction == 1.0 and sg.yaw_deg == pytest.approx([5.0])
+    assert sg.n_arrivals == 1 and sg.face_up_fraction == 1.0 and sg.yaw_deg == pytest.approx([5.0], abs=1e-9)
 
 
 def test_aligned_means_within_ten_degrees():
@@ -289,11 +290,11 @@ def test_a_template_thin_along_x_measures_its_yaw_in_its_yz_face():
     flat = q_axis([0, 1, 0], -np.pi / 2)     # turns x onto +z: the chip lies face up
     q = q_mul(yaw_quat(30), flat)
     cos_tilt, yaw = face_orientation([q], tilted)
-    assert cos_tilt == pytest.approx([1.0]) and yaw == pytest.approx([30.0], abs=1e-9)
+    assert cos_tilt == pytest.approx([1.0], abs=1e-12) and yaw == pytest.approx([30.0], abs=1e-9)
 
 
 def test_the_thin_axis_does_not_depend_on_where_the_template_sits():
-    assert thin_axis(CHIP + [1e-3, -2e-3, 5e-4, 0]) == pytest.approx([0, 0, 1])
+    assert thin_axis(CHIP + [1e-3, -2e-3, 5e-4, 0]) == pytest.approx([0, 0, 1], abs=1e-12)
 
 
 def test_the_cv_of_a_few_intervals_uses_the_sample_deviation(tmp_path):

@@ -37,10 +37,10 @@ def test_roundtrip_with_varying_particle_number(tmp_path):
         t, x = r.track(3)
         assert t.tolist() == [2.0] and x.tolist() == [[5, 0, 1]]
         t, x = r.track(1)
-        assert np.allclose(x[:, 0], [0, 0.1, 0.2])
+        assert np.allclose(x[:, 0], [0, 0.1, 0.2], rtol=0, atol=1e-15)  # m: float64 round trip
         assert r.part_ids.tolist() == [1, 2, 3]
         assert r.present().tolist() == [2, 1, 2]
-        assert np.allclose(r.surface_position[:, 2], [0, 1e-6, 2e-6])
+        assert np.allclose(r.surface_position[:, 2], [0, 1e-6, 2e-6], rtol=0, atol=1e-18)  # m: 1 um steps
         assert r.parameters == {"freq": 50.0}
         assert r.units("freq") == "Hz"
         assert "LIGGGHTS" in r.liggghts_version and r.seed == 1
@@ -359,16 +359,19 @@ def test_bulk_roundtrip(tmp_path):
         assert r.ids.tolist() == [[1, 2, 3, -1], [1, 2, 3, 4], [1, -1, 3, 4]]
         q = r.read("orientation")
         assert q.shape == (3, 4, 4)
-        assert np.allclose(q[0, 0], known["q1"]) and np.allclose(q[1, 1], known["q2"])
+        # (quaternions: float64 round trip)
+        assert np.allclose(q[0, 0], known["q1"], rtol=0, atol=1e-15)
+        assert np.allclose(q[1, 1], known["q2"], rtol=0, atol=1e-15)
         assert np.isnan(q[0, 3]).all() and np.isnan(q[2, 1]).all()
-        assert np.allclose(r.orientation[2, 0], known["q1"])  # whole-array attribute
+        assert np.allclose(r.orientation[2, 0], known["q1"], rtol=0, atol=1e-15)  # whole-array attribute
         t, qs = r.track(2, "orientation")
-        assert t.tolist() == [0.0, 0.01] and np.allclose(qs, known["q2"])
+        assert t.tolist() == [0.0, 0.01] and np.allclose(qs, known["q2"], rtol=0, atol=1e-15)
         f = r.frame(1, fields=("position", "orientation"))
-        assert np.allclose(f["orientation"][f.ids.tolist().index(2)], known["q2"])
+        assert np.allclose(f["orientation"][f.ids.tolist().index(2)], known["q2"], rtol=0, atol=1e-15)
         out = r.outlet
         assert out["id"].tolist() == [2] and out["time"].tolist() == [0.0071]
-        assert out["position"].shape == (1, 3) and np.allclose(out["orientation"][0], known["q2"])
+        assert out["position"].shape == (1, 3)
+        assert np.allclose(out["orientation"][0], known["q2"], rtol=0, atol=1e-15)
         assert r.outlet_plane == {"outlet_x": 0.02, "catch_z": -3e-4, "method": "synthetic"}
         mb = r.mass_balance
         assert mb["inserted"].tolist() == [3, 4, 4] and mb["exited"].tolist() == [0, 1, 1]

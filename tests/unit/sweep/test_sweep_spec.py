@@ -110,7 +110,7 @@ def test_dispatch_is_longest_expected_first():
     # cost = t_end x parts (module docstring); inlet parts count, a given timestep divides
     assert P.cost({"t_end": "2", "n_parts": "300"}) == pytest.approx(600)
     assert P.cost({"t_end": "2", "n_parts": "0", "inlet_rate": "100"}) == pytest.approx(400)
-    assert P.cost({"t_end": "1", "dt": "1e-6"}) == pytest.approx(1e6)
+    assert P.cost({"t_end": "1", "dt": "1e-6"}) == pytest.approx(1e6, rel=1e-12)
 
 
 # ------------------------------------------------------------------ refusals, with lines
@@ -382,8 +382,8 @@ def test_settings_average_replicates_with_their_standard_error():
     ]
     one, two = R.settings(rows, ["a"], "parts_per_s")
     assert (one["done"], one["runs"], two["done"], two["runs"]) == (3, 3, 1, 2)
-    assert one["merit"] == pytest.approx(110.0)
-    assert one["merit_err"] == pytest.approx(np.std([100, 110, 120], ddof=1) / math.sqrt(3))
+    assert one["merit"] == pytest.approx(110.0, rel=1e-12)
+    assert one["merit_err"] == pytest.approx(np.std([100, 110, 120], ddof=1) / math.sqrt(3), rel=1e-12)
     assert (two["merit"], two["merit_err"]) == (50.0, 4.0)  # one run: its own batch-means error
 
 

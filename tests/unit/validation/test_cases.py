@@ -85,7 +85,7 @@ def test_row_tolerances():
     assert not Row("c", "q", 0.5, 0.511, 0.01, "abs").passed
     assert Row("c", "q", 2, 2, 0, "abs").passed and not Row("c", "q", 2, 1, 0, "abs").passed
     r = Row("c", "q", 2.0, 2.1, 0.1, "rel")
-    assert r.rel_diff == pytest.approx(0.05)
+    assert r.rel_diff == pytest.approx(0.05, rel=1e-12)
     assert Row("c", "q", 0.0, 0.01, 0.02, "abs").rel_diff is None  # JSON null, not Infinity
     assert set(r.as_dict()) >= {"case", "quantity", "model", "dem", "rel_diff", "tolerance", "passed"}
 
@@ -127,7 +127,8 @@ def test_reference_cases_name_one_sweep_point():
      math.pi * 1e-6 * 1e-3),                                                     # disc: a cylinder
 ])
 def test_mass_of_every_deck_part(params, mass):
-    assert dm.mass(params) == pytest.approx(mass, rel=1e-12)
+    # abs=0: the masses are 3e-9..2e-8 kg, and approx's default abs=1e-12 kg alone would be 3e-4 of them
+    assert dm.mass(params) == pytest.approx(mass, rel=1e-12, abs=0)
 
 
 def test_landing_period():
@@ -164,8 +165,8 @@ def test_deck_waveforms_have_the_requested_amplitude(waveform):
 
 
 def test_gamma_conversion_round_trip():
-    assert dm.gamma_from_amp(dm.amp_from_gamma(2.5, 60), 60) == pytest.approx(2.5)
-    assert dm.amp_from_gamma(1, 50) == pytest.approx(9.81 / (2 * math.pi * 50) ** 2)
+    assert dm.gamma_from_amp(dm.amp_from_gamma(2.5, 60), 60) == pytest.approx(2.5, rel=1e-12)
+    assert dm.amp_from_gamma(1, 50) == pytest.approx(9.81 / (2 * math.pi * 50) ** 2, rel=1e-12, abs=0)
 
 
 def test_infeasible_vertical_case_is_refused_clearly():
@@ -181,9 +182,10 @@ def test_jkr_pulloff_closed_form():
     17.67 uN, one on a flat (R* = 150 um) at twice that."""
     from vibrofeed.validation.crosscheck import jkr_pulloff
 
-    assert jkr_pulloff(0.05, 3e-4, 0) == pytest.approx(1.5 * 3.141592653589793 * 0.05 * 75e-6)
+    assert jkr_pulloff(0.05, 3e-4, 0) == pytest.approx(1.5 * 3.141592653589793 * 0.05 * 75e-6,
+                                                       rel=1e-12, abs=0)  # N, ~1.8e-5
     assert jkr_pulloff(0.05, 3e-4, 0) == pytest.approx(17.671e-6, rel=1e-4)
-    assert jkr_pulloff(0.05, 3e-4, 1) == pytest.approx(2 * jkr_pulloff(0.05, 3e-4, 0))
+    assert jkr_pulloff(0.05, 3e-4, 1) == pytest.approx(2 * jkr_pulloff(0.05, 3e-4, 0), rel=1e-12, abs=0)
 
 
 @pytest.mark.parametrize("params, pulloff", [
@@ -198,7 +200,7 @@ def test_jkr_pulloff_closed_form():
      1e-19 * math.pi * 1e-8 / (6 * math.pi * 1.02e-8 ** 3)),
 ])
 def test_adhesion_of_every_deck_part(params, pulloff):
-    assert dm.adhesion(params).pulloff == pytest.approx(pulloff, rel=1e-12)
+    assert dm.adhesion(params).pulloff == pytest.approx(pulloff, rel=1e-12, abs=0)  # from 1.6e-8 N
 
 
 def test_the_film_is_under_the_flat_face_when_the_part_has_one():

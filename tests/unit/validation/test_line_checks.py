@@ -123,14 +123,14 @@ def test_line_density_times_speed_is_the_flux(tmp_path):
     # section 1 from 2 mm to the 6 mm joint: 20 parts 0.2 mm apart at every frame
     assert s1["hold_up"] == pytest.approx(20, abs=1e-12)
     assert s1["hold_up_error"] == pytest.approx(0, abs=1e-12)
-    assert s1["rho"] == pytest.approx(20 / 4e-3) and s1["speed"] == pytest.approx(V1, rel=1e-9)
+    assert s1["rho"] == pytest.approx(20 / 4e-3, rel=1e-12) and s1["speed"] == pytest.approx(V1, rel=1e-9)
     assert s2["hold_up"] == pytest.approx(10, abs=1e-12) and s2["speed"] == pytest.approx(V2, rel=1e-9)
     for s in flows:
         assert s["flow"] == pytest.approx(100.0, rel=1e-9) and s["flow_error"] == pytest.approx(0, abs=1e-9)
     # the line density falls by the speed ratio
     assert s1["rho"] / s2["rho"] == pytest.approx(V2 / V1, rel=1e-9)
     # the inlet: a part enters (at x = 0) every 10 ms; 30 in the 0.3 s window, exact to one
-    assert feed == pytest.approx(100.0, rel=1e-9) and feed_error == pytest.approx(1 / 0.3)
+    assert feed == pytest.approx(100.0, rel=1e-9) and feed_error == pytest.approx(1 / 0.3, rel=1e-9)
     assert S2_LENGTH == 5e-3 and JOINT == 6e-3  # what the counts above assume
 
 
@@ -153,5 +153,5 @@ def test_over_the_whole_section_1_rho_v_misses_where_parts_enter(tmp_path):
 
 
 def test_batch_error_leaves_out_empty_batches():
-    assert batch_error([1.0, 2.0, 3.0, np.nan]) == pytest.approx(1 / math.sqrt(3))
+    assert batch_error([1.0, 2.0, 3.0, np.nan]) == pytest.approx(1 / math.sqrt(3), rel=1e-12)
     assert math.isnan(batch_error([2.0, np.nan]))
