@@ -13,14 +13,22 @@ def _si(x: float, unit: str) -> str:
     return f"{x:g} {unit}"
 
 
+def _stopped(run) -> str:
+    """Why a run given a target error ended, in parentheses ('' without one)."""
+    if run.target_error is None or not run.stop_reason:
+        return ""
+    return f" ({'stopped early: ' * run.stopped_early}{run.stop_reason})"
+
+
 def run_summary(run) -> str:
-    """``deck: t simulated in wall (rate) -> file | physics of the parts`` (or, for a
-    result kept by ``--reuse``, where it is and its run id instead of a speed)."""
+    """``deck: t simulated (why it ended, with a target error) in wall (rate) -> file |
+    physics of the parts`` (or, for a result kept by ``--reuse``, where it is and its run id
+    instead of a speed)."""
     if run.reused:  # nothing ran now: no speed to report
         head = (f"{run.deck}: reused {run.output} (run id {run.run_id[:12]}..., not run again): "
-                f"{run.sim_time:.4g} s simulated, {run.frames} frames")
+                f"{run.sim_time:.4g} s simulated{_stopped(run)}, {run.frames} frames")
     else:
-        head = (f"{run.deck}: {run.sim_time:.4g} s simulated in {run.wall:.1f} s "
+        head = (f"{run.deck}: {run.sim_time:.4g} s simulated{_stopped(run)} in {run.wall:.1f} s "
                 f"({run.steps_per_second / 1e3:.0f}k steps/s, {run.ranks} rank{'s' * (run.ranks > 1)}), "
                 f"{run.frames} frames -> {run.output}")
     with Result(run.output) as r:

@@ -7,6 +7,7 @@ import shlex
 import sys
 import threading
 
+from .numbers import real
 from .options import add_deck_arguments, ranks
 
 DESCRIPTION = ("Run a deck through LIGGGHTS and write one H5MD result file "
@@ -21,6 +22,9 @@ def add_arguments(p) -> None:
     p.add_argument("--reuse", action="store_true",
                    help="keep OUT.h5 if it is a complete run of the same deck, parameters and "
                         "vibrofeed version (same run id) instead of running again")
+    p.add_argument("--target-error", type=real(), metavar="E",
+                   help="a bulk feeder: stop as soon as the feed rate's relative error (as "
+                        "`vibrofeed feedrate` reports it) is at or below E, in (0, 1), else at t_end")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
 
 
@@ -41,7 +45,8 @@ def run(args) -> int:
     progress = RunProgress(deck.name, enabled=False if args.quiet else None)
     try:
         result = run_deck(deck, params, output, ranks=args.ranks, on_event=progress,
-                          reuse=args.reuse, command=shlex.join(["vibrofeed"] + sys.argv[1:]))
+                          reuse=args.reuse, command=shlex.join(["vibrofeed"] + sys.argv[1:]),
+                          target_error=args.target_error)
     finally:
         progress.close()
     if result.reused:

@@ -67,6 +67,13 @@ class RunResult:
     parameters: dict = field(default_factory=dict)
     run_id: str = ""
     reused: bool = False  # an earlier complete result with the same run id was kept
+    target_error: float | None = None  # the feed rate's relative error the run was to stop at
+    stop_reason: str = ""  # why the engine ended it (layout.STOP_AT_END, ...; FORMAT.md)
+
+    @property
+    def stopped_early(self) -> bool:
+        """Whether the run stopped before its end, its target error reached."""
+        return L.stopped_early(self.stop_reason)
 
     @property
     def steps_per_second(self) -> float:
@@ -115,11 +122,13 @@ def check_ranks(ranks) -> int:
     return ranks
 
 
-def run_id(deck: Deck, values: Mapping[str, str], before_run=None, schedule=None) -> str:
+def run_id(deck: Deck, values: Mapping[str, str], before_run=None, schedule=None,
+           target_error: float | None = None) -> str:
     """The identity of a run (signac's state point idea): a SHA-256 over the
     text of the deck and of every file it includes, the resolved parameters,
-    any commands a driver adds, and the vibrofeed version. Equal ids mean the
-    same computation, so a complete result with the id can stand in for it."""
+    any commands a driver adds, the target error if any (it decides where the run
+    ends), and the vibrofeed version. Equal ids mean the same computation, so a
+    complete result with the id can stand in for it."""
     state = {
         "deck": deck.name,
         "sources": deck.sources,
@@ -128,8 +137,29 @@ def run_id(deck: Deck, values: Mapping[str, str], before_run=None, schedule=None
         "schedule": schedule,
         "vibrofeed": __version__,
     }
+    if target_error is not None:  # absent otherwise: the ids of other runs stay as they were
+        state["target_error"] = float(target_error)
     text = json.dumps(state, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()
+
+
+def check_target_error(target, deck: Deck) -> float | None:
+    """``target`` (the feed rate's relative error to stop at) if ``deck`` can be stopped at
+    it, else UsageError: it must lie in (0, 1), and the deck must have an outlet (define
+    the bulk-feeder variables of ``layout.BULK_CONTRACT``, as the worker tells a bulk deck)."""
+    if target is None:
+        return None
+    try:
+        value = float(target)
+    except (TypeError, ValueError):
+        raise UsageError(f"target error must be a number, got {target!r}") from None
+    if not 0 < value < 1:  # NaN too
+        raise UsageError(f"target error {target} is outside (0, 1): it is the feed rate's "
+                         "relative error (0.03: 3 %)")
+    if not any(name in deck.formulas for name in L.BULK_CONTRACT):
+        raise UsageError(f"target error: deck {deck.name} has no outlet (it is not a bulk feeder) "
+                         "and measures no feed rate")
+    return value
 
 
 def _reusable(out: Path, rid: str, deck: Deck, values, ranks: int) -> RunResult | None:
@@ -148,12 +178,13 @@ def _reusable(out: Path, rid: str, deck: Deck, values, ranks: int) -> RunResult 
             n_steps = int(r.step[-1] - r.step[0]) if frames else 0
             sim_time = float(r.time[-1] - r.time[0]) if frames else 0.0
             wall = float(r.run_info.get("wall_seconds", 0.0))
+            target, reason = r.target_error, r.stop_reason
     except (ResultError, KeyError):
         return None
     return RunResult(output=out, log=out.with_suffix(".log"), deck=deck.name, ranks=ranks,
                      n_steps=n_steps, dt=sim_time / n_steps if n_steps else 0.0, frames=frames,
                      natoms=natoms, sim_time=sim_time, wall=wall, parameters=dict(values),
-                     run_id=rid, reused=True)
+                     run_id=rid, reused=True, target_error=target, stop_reason=reason)
 
 
 def worker_command(spec_path: str, ranks: int, shim: Path | None = None) -> list[str]:
@@ -236,7 +267,7 @@ def _unreadable(path: Path) -> bool:
 def run_deck(deck: Deck, params: Mapping[str, str], output, *, ranks: int = 1,
              on_event: Callable[[dict], None] | None = None, command: str = "",
              before_run: list[str] | None = None, schedule: list[dict] | None = None,
-             reuse: bool = False) -> RunResult:
+             reuse: bool = False, target_error: float | None = None) -> RunResult:
     """Run ``deck`` with ``params`` (name -> value strings) into ``output``.
 
     ``before_run``: LIGGGHTS commands issued after the deck, before the first
@@ -247,9 +278,12 @@ def run_deck(deck: Deck, params: Mapping[str, str], output, *, ranks: int = 1,
     ``on_event`` receives the worker's messages (``run``, ``progress``,
     ``done``...) as dicts, for progress display. ``reuse``: keep ``output``
     and return at once if it is a complete result with this run's id (see
-    :func:`run_id`). Raises :class:`~vibrofeed.errors.ParameterError` or
+    :func:`run_id`). ``target_error``: a bulk feeder's run stops as soon as its feed
+    rate's relative error (as ``vibrofeed feedrate`` reports it) is at or below it, else
+    at its end; ``RunResult.stop_reason`` says which (:func:`check_target_error`).
+    Raises :class:`~vibrofeed.errors.ParameterError` or
     :class:`~vibrofeed.errors.UsageError` before starting anything if a
-    parameter or the rank count is bad, :class:`OutputError` if the output
+    parameter, the rank count or the target error is bad, :class:`OutputError` if the output
     cannot be written (a full disk included), :class:`EngineError` if
     LIGGGHTS stops with an error, :class:`RunError` for any other failure of
     the run: a worker that stops answering (:mod:`.watchdog`), parts lost or
@@ -259,8 +293,9 @@ def run_deck(deck: Deck, params: Mapping[str, str], output, *, ranks: int = 1,
     """
     interrupt.check()  # a process being stopped starts no run (queued runs of other threads)
     check_ranks(ranks)
+    target_error = check_target_error(target_error, deck)
     values = resolve(deck, params)
-    rid = run_id(deck, values, before_run, schedule)
+    rid = run_id(deck, values, before_run, schedule, target_error)
     out, part, log = _prepare_output(output)
     if reuse:
         kept = _reusable(out, rid, deck, values, ranks)
@@ -270,7 +305,7 @@ def run_deck(deck: Deck, params: Mapping[str, str], output, *, ranks: int = 1,
         stale.unlink(missing_ok=True)
     scratch.remove_abandoned(out.parent)
 
-    run = _Run(deck, values, rid, out, part, log, ranks, on_event)
+    run = _Run(deck, values, rid, out, part, log, ranks, on_event, target_error)
     key = interrupt.register(run.stop)
     try:
         run.prepare(command, before_run, schedule)
@@ -292,8 +327,9 @@ class _Run:
     its messages, and how it ended (``OUT.h5``, or ``OUT.h5.part`` with a status)."""
 
     def __init__(self, deck: Deck, values: dict, rid: str, out: Path, part: Path, log: Path,
-                 ranks: int, on_event):
+                 ranks: int, on_event, target_error: float | None = None):
         self.deck, self.values, self.rid, self.ranks = deck, values, rid, ranks
+        self.target_error = target_error
         self.out, self.part, self.log = out, part, log
         self.on_event = on_event
         self.tmp: Path | None = None
@@ -329,6 +365,7 @@ class _Run:
             "command": command, "run_id": self.rid, "sources": deck.sources,
             "before_run": list(before_run or ()),
             "schedule": schedule,
+            "target_error": self.target_error,  # stop once the feed rate is this precise (None: t_end)
             # extra -var values, the track mesh and the clump template (vibrofeed.geometry.Prepared)
             "prepared": prepared.to_spec() if prepared is not None else None,
         }
@@ -426,9 +463,10 @@ class _Run:
         self.complete()
         start = self.event("run")
         result = RunResult(output=self.out, log=self.log, deck=self.deck.name, ranks=self.ranks,
-                           parameters=self.values, run_id=self.rid)
+                           parameters=self.values, run_id=self.rid,
+                           target_error=self.target_error, stop_reason=done.get("stop_reason", ""))
         result.wall = time.monotonic() - self.started
-        result.n_steps, result.dt = start["n_steps"], start["dt"]
+        result.n_steps, result.dt = done["step"], start["dt"]  # steps run: fewer if stopped early
         result.frames, result.natoms = done["frames"], done["natoms"]
         result.sim_time = result.n_steps * result.dt
         return result

@@ -25,17 +25,25 @@ template the runner's prepare hook made (``spec["prepared"]``) in the file. A
 feeder line's deck (``sections`` > 1) also defines each further section's motion
 (``s2_surface_*``: ``results.layout.surface_variables``), recorded at every frame beside
 section 1's, and the file says which section each track vertex belongs to.
+
+A bulk run given a target error (``spec["target_error"]``, ``vibrofeed run --target-error``)
+stops once the feed rate's relative error is at or below it (:class:`TargetError`): rank 0
+judges the file written so far with :class:`~vibrofeed.postproc.feedrate.FeedRate`, as
+``vibrofeed feedrate`` will judge the result, and every rank learns whether to stop. The file
+records why the run ended (``parameters/run@stop_reason``).
 """
 
 from __future__ import annotations
 
 import errno
 import json
+import math
 import os
 import signal
 import sys
 import threading
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -48,6 +56,10 @@ from .protocol import MARK
 
 PER_ATOM = ("id", "type", "radius", "rmass", "x", "v", "omega", "f")
 HEARTBEAT_SECONDS = 1.0
+# --target-error: a check reads every frame so far, so checks are spaced by this fraction of
+# the time run so far: their total cost is that of ~1/CHECK_FRACTION reads per e-fold of the
+# run, and a run stops at most this fraction later than a check at every frame would stop it.
+CHECK_FRACTION = 0.05
 
 
 class Reporter:
@@ -412,6 +424,7 @@ def open_writer(spec: dict, derived: dict, ranks: int, natoms: int, bulk, sectio
         engine_version=engine_version(spec["log"]), seed=spec.get("seed"),
         ranks=ranks, command=spec.get("command", ""), run_id=spec.get("run_id", ""),
         capacity_hint=max(natoms // (bulk.n_spheres if bulk else 1), 1), sections=sections,
+        target_error=spec.get("target_error"),
         **({} if bulk is None else {"track": bulk.track, "outlet": bulk.outlet.attributes(),
                                     "body_template": bulk.template, "line": bulk.line,
                                     "track_sections": bulk.track_sections,
@@ -484,29 +497,134 @@ class Frames:
         return t
 
 
-def run_segments(lmp, frames: Frames, segs: list[tuple], report: Reporter) -> tuple[int, float]:
-    """A frame, then each segment and a frame after it; (steps run, wall seconds)."""
+@dataclass(frozen=True)
+class Verdict:
+    """A feed rate's relative ``error`` (NaN: not measured) judged against a target with the
+    frames up to time ``t``: ``reached``, else ``why`` not."""
+
+    reached: bool
+    error: float
+    t: float
+    why: str = ""
+
+
+def judge_feed_rate(result, target: float, stop: int | None = None) -> Verdict:
+    """Whether ``result`` (its frames up to ``stop``, default all) measures its feed rate to
+    a relative error at or below ``target`` as :class:`~vibrofeed.postproc.feedrate.FeedRate`
+    with its defaults (what ``vibrofeed feedrate`` reports) measures it: batch-means error over
+    rate. Never before FeedRate measures a rate at all (enough exits, a bed it calls steady),
+    its steady window holds all its batches (whole periods each) and the bed's drift could be
+    judged."""
+    from ..errors import InputError
+    from ..postproc.feedrate import MIN_EXITS, FeedRate
+    from ..postproc.line import batch_cuts
+
+    t = float(result.time[:stop][-1])
+    fr = FeedRate(result, model=False)  # (the single-part model does not touch the rate)
+    exits = int(np.count_nonzero(result.outlet["time"] <= t))
+    if exits < max(MIN_EXITS, fr.batches):  # no window can hold enough: spare reading the frames
+        return Verdict(False, math.nan, t, f"too few exits to measure ({exits} so far; need ≥ "
+                                           f"{max(MIN_EXITS, fr.batches)} in the window)")
+    try:
+        fr.run(stop=stop)
+    except InputError as exc:  # too few frames, no steady window yet
+        return Verdict(False, math.nan, t, str(exc))
+    r = fr.results
+    if r.reason:  # too few exits in the window, or a bed that drifts over it
+        return Verdict(False, math.nan, t, r.reason)
+    freq = float(result.parameters.get("freq", 0.0))
+    held = len(batch_cuts(r.steady_from, r.steady_to, freq, fr.batches)) - 1
+    if held < fr.batches:
+        return Verdict(False, math.nan, t, f"the steady window ({r.steady_to - r.steady_from:.3g} s) "
+                                           f"holds {held} of the {fr.batches} batches")
+    if not r.bed_trends:
+        return Verdict(False, math.nan, t, "too few frames in the window to judge the bed steady")
+    error = r.parts_per_s_err / r.parts_per_s if r.parts_per_s > 0 else math.nan
+    if not error <= target:
+        return Verdict(False, error, t, f"relative error {error:.3g}")
+    return Verdict(True, error, t)
+
+
+class TargetError:
+    """Stops a bulk run once its feed rate's relative error is at or below ``target``.
+
+    :meth:`reached` after every frame, on every rank: now and then (:data:`CHECK_FRACTION`)
+    and at the last frame, rank 0 judges the file so far (:func:`judge_feed_rate`) and
+    broadcasts the decision, as the engine's commands that follow are collective. The times
+    are the engine's, the same on every rank, so every rank checks at the same frames.
+    """
+
+    def __init__(self, target: float, comm):
+        self.target, self.comm = float(target), comm
+        self.verdict: Verdict | None = None  # the last check's, on rank 0
+        self._first = self._checked = None  # times of the first frame and of the last check
+
+    def _due(self, t: float) -> bool:
+        if self._first is None:
+            self._first = self._checked = t
+        return t > self._checked and t - self._checked >= CHECK_FRACTION * (t - self._first)
+
+    def reached(self, writer, t: float, last: bool = False) -> bool:
+        """Whether to stop after the frame at ``t`` (``writer``: rank 0's, None elsewhere)."""
+        if not (last or self._due(t)):
+            return False
+        self._checked = t
+        reached = None
+        if writer is not None:
+            self.verdict = judge_feed_rate(writer.read_back(), self.target)
+            reached = self.verdict.reached
+        return self.comm.bcast(reached, root=0) if self.comm.size > 1 else reached
+
+    def stop_reason(self, at_end: bool) -> str:
+        """Why the run ended (rank 0, after its last frame was judged; FORMAT.md,
+        ``parameters/run@stop_reason``)."""
+        v, target = self.verdict, f"{L.STOP_AT_TARGET} {self.target:g}"
+        if not at_end:
+            return f"{target} reached: {v.error:.3g} at t = {v.t:.4g} s"
+        said = (f"reached at the last frame: {v.error:.3g}" if v.reached
+                else f"not reached at t = {v.t:.4g} s: {v.why}")
+        return f"{L.STOP_AT_END} ({target} {said})"
+
+
+def run_segments(lmp, frames: Frames, segs: list[tuple], report: Reporter,
+                 target: TargetError | None = None) -> tuple[int, float, int]:
+    """A frame, then each segment and a frame after it, until the last segment or until
+    ``target`` is reached; (steps run, wall seconds, frames taken)."""
     started = time.monotonic()
     done = 0
     last_report = 0.0
-    for k in range(len(segs) + 1):
+    for k, segment in enumerate([*segs, None]):  # None: the frame after the last segment
         t = frames.take()
+        stop = segment is None
+        if target is not None:  # collective; the last frame is judged for the record
+            stop = target.reached(frames.writer, t, last=stop) or stop
         now = time.monotonic()
-        if k == len(segs) or now - last_report > 0.2:
+        if stop or now - last_report > 0.2:
             writer = frames.writer
             report("progress", step=done, time=t, frames=writer.frames if writer else 0,
                    natoms=lmp.natoms, wall=now - started)
             last_report = now
-        if k == len(segs):
-            break
-        commands, steps, setup = segs[k]
+        if stop:
+            return done, time.monotonic() - started, k + 1
+        commands, steps, setup = segment
         if frames.commands:  # a new fix (a line's returns) needs a run with setup
             commands, setup = (*commands, *frames.commands), True
             frames.commands = []
         lmp.commands(commands)
         lmp.command(f"run {steps} post no" if setup else f"run {steps} pre no post no")
         done += steps
-    return done, time.monotonic() - started
+
+
+def target_error(spec: dict, is_bulk: bool, comm) -> TargetError | None:
+    """The run's :class:`TargetError` (``spec["target_error"]``), None without one; a deck
+    without an outlet measures no feed rate: refused (the runner refuses it first)."""
+    target = spec.get("target_error")
+    if target is None:
+        return None
+    if not is_bulk:
+        raise DeckError("a target error needs a deck with an outlet (a bulk feeder): this one "
+                        "measures no feed rate")
+    return TargetError(target, comm)
 
 
 def bulk_warnings(bulk) -> list[str]:
@@ -531,6 +649,7 @@ def run(spec: dict, heartbeat: Heartbeat | None = None, on_term: OnTerminate | N
         heartbeat.watch(lmp.step_counter())
     lmp.file(spec["deck"])
     n_steps, every, dt, is_bulk = read_contract(lmp)
+    target = target_error(spec, is_bulk, comm)
     sections = recorded_sections(lmp, spec)
     derived = derived_constants(lmp, spec["constants"])
 
@@ -551,14 +670,20 @@ def run(spec: dict, heartbeat: Heartbeat | None = None, on_term: OnTerminate | N
     report("run", n_steps=n_steps, dt=dt, output_every=every, n_frames=n_frames,
            natoms=lmp.natoms)
     frames = Frames(lmp, comm, writer, bulk, report, sections)
-    done, wall = run_segments(lmp, frames, segs, report)
+    done, wall, taken = run_segments(lmp, frames, segs, report, target)
 
     for message in bulk_warnings(bulk):
         report("warning", message=message)
-    if writer is not None:
+    reason = None
+    if writer is not None:  # rank 0: the only one that judged the feed rate
+        at_end = taken == n_frames
+        reason = L.STOP_AT_END if target is None else target.stop_reason(at_end)
         # "complete" is the runner's to write, as it renames OUT.h5.part to OUT.h5 (FORMAT.md)
-        writer.finish(L.STATUS_RUNNING, "the engine reached the end of the run", wall_seconds=wall)
-    report("done", step=done, frames=n_frames, wall=wall, natoms=lmp.natoms, counts=frames.counts)
+        writer.finish(L.STATUS_RUNNING, "the engine reached the end of the run" if at_end else
+                      "the engine stopped the run at its target error", wall_seconds=wall,
+                      stop_reason=reason)
+    report("done", step=done, frames=taken, wall=wall, natoms=lmp.natoms, counts=frames.counts,
+           stop_reason=reason)
     if heartbeat is not None:
         heartbeat.watch(None)
     lmp.close()

@@ -409,7 +409,25 @@ class _Checker:
             hint = {L.STATUS_RUNNING: "the run was killed or is still going"}.get(status, msg)
             text = f"run status is {status!r}" + (f": {hint}" if hint else "")
             (self.warn if self.allow_incomplete else self.error)(L.RUN, text)
+        self.stop()
         return status
+
+    def stop(self):
+        """Why the run ended and its target error, where recorded (optional in format 1.5)."""
+        attrs = self.f[L.RUN].attrs
+        target = attrs.get("target_error")
+        if target is not None and not (np.ndim(target) == 0 and np.asarray(target).dtype.kind == "f"
+                                       and 0 < float(target) < 1):
+            self.error(L.RUN, f"attribute 'target_error' must be a number in (0, 1), got {target!r}")
+        if "stop_reason" not in attrs:
+            return
+        reason = _text(attrs["stop_reason"])
+        if not reason.startswith((L.STOP_AT_END, L.STOP_AT_TARGET)):
+            self.error(L.RUN, f"attribute 'stop_reason' must start with {L.STOP_AT_END!r} or "
+                              f"{L.STOP_AT_TARGET!r}, got {reason!r}")
+        elif L.stopped_early(reason) and target is None:
+            self.error(L.RUN, "attribute 'stop_reason' says the target error was reached, but the "
+                              "run records no 'target_error'")
 
 
 # The physical limits (FORMAT.md, "What check checks"). No part of a vibratory

@@ -17,7 +17,9 @@ FORMAT_NAME = "vibrofeed-result"
 # 1.4: a feeder line records each section's motion (observables/surface_s<k>, k >= 2) and which
 # section each vertex of parameters/track belongs to (parameters/track/section); 1.3 files of
 # a line (section 2's motion unrecorded) still read, and check only warns about them.
-# 1.5: a line that recirculates its rejects counts them back (mass balance ``returned``).
+# 1.5: a line that recirculates its rejects counts them back (mass balance ``returned``);
+# optional in 1.5 (files without them stay valid): parameters/run@stop_reason, why the engine
+# ended the run, and @target_error, the feed rate's relative error a run was told to stop at.
 FORMAT_VERSION = (1, 5)
 SECTIONS_SINCE = (1, 4)  # the first format that records a line's sections
 
@@ -141,6 +143,19 @@ STATUS_COMPLETE = "complete"
 STATUS_FAILED = "failed"
 STATUS_INTERRUPTED = "interrupted"
 STATUSES = (STATUS_RUNNING, STATUS_COMPLETE, STATUS_FAILED, STATUS_INTERRUPTED)
+
+# Why the engine ended a run that reached its end (parameters/run@stop_reason): the text starts
+# with STOP_AT_END (t_end, or a schedule's end: "t_end", or "t_end (target error 0.03 not
+# reached: ...)") or with STOP_AT_TARGET (the feed rate's relative error fell to the run's
+# target_error first: "target error 0.03 reached: 0.028 at t = 1.42 s").
+STOP_AT_END = "t_end"
+STOP_AT_TARGET = "target error"
+
+
+def stopped_early(stop_reason: str) -> bool:
+    """Whether a run stopped before its end because its target error was reached."""
+    return stop_reason.startswith(STOP_AT_TARGET)
+
 
 # Names every deck must define for vibrofeed to drive it (equal-style
 # variables evaluated by the engine at each frame, or once at the start).

@@ -142,6 +142,8 @@ class Result:
     ``species``, ``orientation``, ``surface_position``, ``surface_velocity``.
     """
 
+    _borrowed = False  # reading a file opened elsewhere (:meth:`borrow`): never closed here
+
     def __init__(self, path, allow_incomplete: bool = False):
         self.path = str(path)
         try:
@@ -160,6 +162,14 @@ class Result:
                 f"{self.path}: run status is {status!r}"
                 + (f" ({msg})" if msg else "")
                 + "; open with allow_incomplete=True to read the frames it holds")
+
+    @classmethod
+    def borrow(cls, file: h5py.File, path=None) -> Result:
+        """A Result reading ``file``, an h5py file open elsewhere (a run's writer reading
+        what it wrote so far): whatever its status; :meth:`close` leaves it open."""
+        result = cls.__new__(cls)
+        result.path, result.file, result._borrowed = str(path or file.filename), file, True
+        return result
 
     # -- run ------------------------------------------------------------------------
     @property
@@ -204,6 +214,19 @@ class Result:
             group.visititems(lambda name, obj: found.__setitem__(name, _text(obj[()]))
                              if hasattr(obj, "shape") else None)
         return found
+
+    @property
+    def stop_reason(self) -> str:
+        """Why the engine ended the run (``"t_end"``, ``"target error 0.03 reached: ..."``:
+        see :func:`.layout.stopped_early`); '' when unrecorded (before format 1.5, or a run
+        that did not reach its end)."""
+        return _text(self.file[L.RUN].attrs.get("stop_reason", ""))
+
+    @property
+    def target_error(self) -> float | None:
+        """The feed rate's relative error the run was to stop at (``--target-error``), or None."""
+        value = self.file[L.RUN].attrs.get("target_error")
+        return None if value is None else float(value)
 
     @property
     def run_id(self) -> str:
@@ -496,7 +519,7 @@ class Result:
 
     # -- lifetime -------------------------------------------------------------------
     def close(self) -> None:
-        if self.file.id.valid:
+        if self.file.id.valid and not self._borrowed:
             self.file.close()
 
     def __enter__(self):

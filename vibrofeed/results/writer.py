@@ -172,6 +172,9 @@ class ResultWriter:
     track_sections:
         ``(V,)`` the section (1-based) of each vertex of ``track``, stored as
         ``L.TRACK_SECTION``: at frame k a vertex sits at rest + its section's position.
+    target_error:
+        the feed rate's relative error the run stops at (``--target-error``), recorded as
+        ``parameters/run@target_error``; :meth:`finish` records why it stopped.
     """
 
     def __init__(self, path, *, deck_name: str, deck_path: str, deck_text: str,
@@ -181,7 +184,7 @@ class ResultWriter:
                  command: str = "", run_id: str = "", capacity_hint: int = 1,
                  max_delay: float = 0.25, track=None, body_template=None,
                  outlet: Mapping | None = None, line: bool = False, sections: int = 1,
-                 track_sections=None, returns: bool = False):
+                 track_sections=None, returns: bool = False, target_error: float | None = None):
         if returns and not line:
             raise ValueError("returns without a line: only a feeder line has rejects to return")
         self.path = str(path)
@@ -208,6 +211,8 @@ class ResultWriter:
         self._write_h5md_metadata(f)
         self._write_parameters(f, deck_name, deck_path, deck_text, includes or {}, variables,
                                derived, engine_version, seed, ranks, command, run_id)
+        if target_error is not None:
+            f[L.RUN].attrs["target_error"] = float(target_error)
         self._create_time_series(f)
         # Dataset handles, looked up once.
         self._values = {name: f[L.PARTS][name]["value"] for name in L.PART_ELEMENTS}
@@ -561,14 +566,27 @@ class ResultWriter:
             ds.resize(capacity, axis=1)
         self._capacity = capacity
 
+    def read_back(self):
+        """The frames and events handed over so far, as a :class:`~.reader.Result` read
+        through this writer's open file (flushed first): HDF5 without SWMR does not promise
+        that a second open of a file being written sees it whole. Valid until the next frame;
+        closing it leaves the file open."""
+        from .reader import Result
+
+        self.flush()
+        return Result.borrow(self.file, self.path)
+
     # -- end ------------------------------------------------------------------------
     def finish(self, status: str = L.STATUS_COMPLETE, message: str = "",
-               wall_seconds: float | None = None) -> None:
-        """Record how the run ended and close the file."""
+               wall_seconds: float | None = None, stop_reason: str | None = None) -> None:
+        """Record how the run ended (``stop_reason``: why the engine ended a run that
+        reached its end, ``L.STOP_AT_END`` ...) and close the file."""
         if status not in L.STATUSES:
             raise ValueError(f"unknown run status {status!r}")
         self.flush()
         with self._lock:
+            if stop_reason is not None:
+                self.file[L.RUN].attrs["stop_reason"] = stop_reason
             mark_status(self.file, status, message, wall_seconds)
         self.close()
 
