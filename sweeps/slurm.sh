@@ -7,7 +7,8 @@
 # How it runs: every task is one MPI rank of `vibrofeed sweep`. The ranks form groups
 # of ranks_per_run (from the sweep file); rank 0 hands out the jobs one at a time,
 # longest first, to whichever group is free, runs one itself, and writes
-# DIR/summary.h5 and DIR/summary.csv after every job. Each job is its own process (its
+# each finished job's row into DIR/summary.h5 and DIR/summary.csv (a journal line per
+# job, the two files rewritten now and then). Each job is its own process (its
 # own mpirun when ranks_per_run > 1) started on its group leader's node, so a job
 # that crashes becomes a failed row and the allocation goes on. Idle ranks sleep
 # between polls: they cost no CPU.

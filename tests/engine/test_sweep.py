@@ -66,10 +66,10 @@ def assert_rows_true(folder: Path, spec_path: Path) -> list[dict]:
     complete result and its metrics are what the analyses give on it."""
     rows, meta = S.read(folder)
     jobs = {j.index: j for j in plan(load(spec_path))}
-    with open(folder / S.CSV_NAME, newline="") as f:  # written just before summary.h5
+    with open(folder / S.CSV_NAME, newline="") as f:  # a snapshot: maybe older than the journal
         table = list(csv.DictReader(f))
     by_job = {r["job"]: r for r in rows}
-    assert {int(r["job"]) for r in table} >= set(by_job) and len(table) <= len(rows) + 1
+    assert {int(r["job"]) for r in table} <= set(by_job)
     for line in table:
         job = jobs[int(line["job"])]
         assert line["run_id"] == job.run_id and line["status"] in (S.DONE, S.FAILED)

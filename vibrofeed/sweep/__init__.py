@@ -7,8 +7,9 @@
   ``vibrofeed run`` does, and orders them longest expected first.
 - :mod:`.folder` owns the output folder: the spec's fingerprint, a lock, the
   manifest, and which jobs a rerun skips (their files checked, not merely present).
-- :mod:`.summary` writes ``summary.h5`` and ``summary.csv`` atomically, one
-  row per finished job; :mod:`.metrics` computes a finished job's figures.
+- :mod:`.summary` keeps ``summary.h5`` and ``summary.csv``, one row per finished job, as a
+  ledger (a journal line per job, the files rewritten atomically now and then; the optimiser's
+  ``study.*`` too); :mod:`.metrics` computes a finished job's figures.
 - :mod:`.execute` runs the jobs through the executor validation shares
   (:mod:`vibrofeed.engine.batch`), ``-j`` at a time or across the groups of
   ranks of an ``mpirun`` (rank 0 dispatches); :mod:`.progress` reports done /

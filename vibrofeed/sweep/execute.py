@@ -1,4 +1,4 @@
-"""Running a sweep: its jobs through the isolated runner, and the summary after each one.
+"""Running a sweep: its jobs through the isolated runner, and the summary's row of each one.
 
 Every job is one :func:`~vibrofeed.engine.runner.run_deck` (a worker process
 of its own, or its own ``mpirun`` for ``ranks_per_run`` > 1, started without
@@ -13,7 +13,7 @@ The jobs go through the executor validation shares
 ``workers`` jobs at once, each waited for by a thread (the threads only wait
 for their worker processes and analyse); under ``mpirun``, across groups of
 ``ranks_per_run`` ranks, rank 0 dispatching. Only one process writes the
-summary: this one, or rank 0.
+summary: this one, or rank 0, a journal line per finished job (:class:`.summary.Ledger`).
 """
 
 from __future__ import annotations
@@ -69,7 +69,8 @@ def run_job(job: Job, folder: Path, deck: Deck, ranks: int, parameters: list[str
 
     try:
         result = run_deck(deck, job.params, folder / job.file, ranks=ranks, reuse=True,
-                          on_event=on_event, command=f"{command} (job {job.index})".strip())
+                          on_event=on_event, command=f"{command} (job {job.index})".strip(),
+                          target_error=job.target_error)
     except VibrofeedError as exc:
         partial = getattr(exc, "partial", None)
         row.update(error=_one_line(exc), wall_s=time.monotonic() - started,
@@ -89,22 +90,26 @@ def run_job(job: Job, folder: Path, deck: Deck, ranks: int, parameters: list[str
 
 
 class Recorder:
-    """Keeps the rows and rewrites the summary (atomically) after every finished job."""
+    """Records each finished job in the summary's ledger (one journal line: O(1) per
+    job, the snapshot rewritten now and then) and tells the progress."""
 
     def __init__(self, folder: Path, rows: list[dict], parameters: list[str], meta: dict,
                  progress: SweepProgress | None = None):
-        self.folder, self.parameters, self.meta, self.progress = folder, parameters, meta, progress
-        self.rows = {row["job"]: row for row in rows}
-        self.flush()
+        self.ledger = S.Ledger(folder, parameters, meta, rows=rows)  # drops rows no longer true
+        self.progress = progress
+
+    @property
+    def rows(self) -> dict[int, dict]:
+        return self.ledger.rows
 
     def add(self, job: Job, row: dict, computed: bool) -> None:
-        self.rows[job.index] = row
-        self.flush()
+        self.ledger.add(row)
         if self.progress is not None:
             self.progress.finished(job, row, computed)
 
-    def flush(self) -> None:
-        S.write(self.folder, list(self.rows.values()), self.parameters, self.meta)
+    def close(self) -> None:
+        """The last snapshot: summary.csv then lists every finished job."""
+        self.ledger.close()
 
 
 def run_local(todo: list[Job], workers: int, run_one, recorder: Recorder,
@@ -215,7 +220,7 @@ def _run(spec, deck, jobs, folder, ours, parameters, groups, workers, retry_fail
             "axes": json.dumps([axis.keys for axis in spec.axes]),
             "units": json.dumps({n: deck.tunables[n].unit for n in spec.parameters}),
             "spec": spec.text}
-    recorder = Recorder(folder, kept, parameters, meta, progress)  # drops rows no longer true
+    recorder = Recorder(folder, kept, parameters, meta, progress)
     command = shlex.join(["vibrofeed", "sweep", str(spec_path), "-o", str(folder)])
 
     def warn(job, message):
@@ -233,6 +238,9 @@ def _run(spec, deck, jobs, folder, ours, parameters, groups, workers, retry_fail
             run_mpi(comm, todo, setup, run_one, recorder, progress)
     finally:
         progress.close()
+    # Only after a whole run: a sweep ended by an error leaves its journal to the next
+    # run or reader (a snapshot then could raise another error in place of that one).
+    recorder.close()
     rows = list(recorder.rows.values())
     failed = sum(r["status"] != S.DONE for r in rows)
     # a done job whose analysis measured no feed rate is no rate of zero: counted apart

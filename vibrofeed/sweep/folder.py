@@ -3,7 +3,8 @@
 ::
 
     DIR/sweep.json      the sweep file's fingerprint and content, and the jobs (the manifest)
-    DIR/summary.h5      one row per finished job (summary.py); summary.csv the same as text
+    DIR/summary.h5      one row per finished job (summary.py): a snapshot, summary.csv the same
+                        as text, and summary.journal.jsonl the rows finished since
     DIR/jobs/job-K.h5   job K's result (job-K.log its LIGGGHTS log)
     DIR/.lock           held while a sweep runs here
 
@@ -28,7 +29,7 @@ from .. import __version__
 from ..errors import UsageError
 from .plan import Job
 from .spec import SweepSpec, describe_change
-from .summary import CSV_NAME, DONE, FAILED, H5_NAME, replace_atomically
+from .summary import CSV_NAME, DONE, FAILED, H5_NAME, JOURNAL_NAME, replace_atomically
 
 SPEC_NAME = "sweep.json"
 LOCK_NAME = ".lock"
@@ -52,7 +53,8 @@ def check_folder(folder: Path, spec: SweepSpec) -> bool:
         raise UsageError(f"-o {folder}: not a folder")
     old = recorded(folder) if folder.is_dir() else None
     if old is None:
-        if folder.is_dir() and any(p.name in (H5_NAME, CSV_NAME, "jobs") for p in folder.iterdir()):
+        if folder.is_dir() and any(p.name in (H5_NAME, CSV_NAME, JOURNAL_NAME, "jobs")
+                                   for p in folder.iterdir()):
             raise UsageError(f"{folder} holds sweep files but no {SPEC_NAME}: not a sweep vibrofeed "
                              "can resume; choose another -o DIR")
         return False
@@ -128,7 +130,8 @@ def result_is_true(folder: Path, job: Job) -> bool:
 def resume(jobs: list[Job], rows: list[dict], retry_failed: bool, verify) -> tuple[list[dict], list[Job]]:
     """(rows kept, jobs to run) of a rerun.
 
-    ``rows``: the summary's rows; ``verify(job)``: whether a done job's result
+    ``rows``: the summary's rows (:func:`.summary.read`: the snapshot and its
+    journal, so every job recorded before a kill); ``verify(job)``: whether a done job's result
     still checks (see :func:`result_is_true`). A row is kept only if it
     belongs to a planned job with the same run id and, when ``done``, its file
     checks; a ``failed`` row is kept unless ``retry_failed``."""

@@ -40,6 +40,7 @@ class Job:
     run_id: str
     cost: float
     file: str  # the result, relative to the sweep's folder
+    target_error: float | None = None  # stop at this relative feed-rate error (run_deck's)
 
     def label(self, varied: list[str]) -> str:
         bits = [f"{name}={self.setting[name]}" for name in varied if name in self.setting]
@@ -123,10 +124,14 @@ def _culprit(spec: SweepSpec, message: str, setting: dict) -> tuple:
 def plan(spec: SweepSpec, deck: Deck | None = None) -> list[Job]:
     """The jobs of ``spec``, each checked; ParameterError naming the line of
     the first parameter that fails (and how many jobs fail in all)."""
-    from ..engine.runner import check_ranks, run_id
+    from ..engine.runner import check_ranks, check_target_error, run_id
 
     deck = deck or find_deck(spec)
     _check_names(spec, deck)
+    try:
+        check_target_error(spec.target_error, deck)
+    except UsageError as exc:
+        raise UsageError(f"{spec.where('target_error')}: {exc}") from None
     try:
         check_ranks(spec.ranks_per_run)
     except UsageError as exc:
@@ -156,8 +161,9 @@ def plan(spec: SweepSpec, deck: Deck | None = None) -> list[Job]:
                 first_error = (_culprit(spec, str(exc), setting), k, label, str(exc))
             continue
         jobs.append(Job(index=k, replicate=r, seed=seed, setting=setting, params=params,
-                        values=values, run_id=run_id(deck, values), cost=cost(values),
-                        file=f"jobs/job-{k:0{width}d}.h5"))
+                        values=values, run_id=run_id(deck, values, target_error=spec.target_error),
+                        cost=cost(values), file=f"jobs/job-{k:0{width}d}.h5",
+                        target_error=spec.target_error))
     if first_error is not None:
         key, k, label, message = first_error
         more = f" ({bad} of {total} jobs are invalid)" if bad > 1 else ""

@@ -12,7 +12,7 @@ import sys
 import time
 
 
-def _duration(seconds: float) -> str:
+def duration(seconds: float) -> str:
     seconds = int(round(seconds))
     h, rest = divmod(seconds, 3600)
     m, s = divmod(rest, 60)
@@ -49,7 +49,7 @@ class SweepProgress:
     def status(self) -> str:
         eta = self.eta()
         return (f"{self.done} done, {len(self.running)} running, {self.failed} failed"
-                + (f", ETA {_duration(eta)}" if eta is not None else ""))
+                + (f", ETA {duration(eta)}" if eta is not None else ""))
 
     def _refresh(self) -> None:
         if self.bar is not None:

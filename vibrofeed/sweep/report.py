@@ -137,7 +137,7 @@ def load(folder) -> tuple[list[dict], dict]:
     folder = Path(folder)
     if not (folder / S.H5_NAME).is_file():
         raise UsageError(f"{folder}: no {S.H5_NAME}; give the -o DIR of a `vibrofeed sweep` "
-                         "(its summary appears after the first job finishes)")
+                         "(its summary appears as the sweep starts)")
     rows, meta = S.read(folder)
     meta["varied"] = json.loads(meta.get("varied", "[]"))
     meta["axes"] = json.loads(meta.get("axes", "[]")) or [[v] for v in meta["varied"]]

@@ -6,6 +6,7 @@
     ranks_per_run = 1         # MPI ranks of each run
     replicates = 2            # runs per setting, with seeds seed, seed+1, ...
     description = "..."       # optional, free text
+    target_error = 0.05       # optional: each run stops once its feed rate is this precise
 
     [fixed]                   # one value each, for every job
     t_end = 1.0
@@ -48,7 +49,8 @@ from pathlib import Path
 
 from ..errors import InputError
 
-TOP_KEYS = ("deck", "ranks_per_run", "replicates", "description", "fixed", "grid", "zip", "point")
+TOP_KEYS = ("deck", "ranks_per_run", "replicates", "description", "target_error", "fixed", "grid",
+            "zip", "point")
 SECTIONS = ("fixed", "grid", "zip", "point")
 
 
@@ -77,6 +79,7 @@ class SweepSpec:
     fixed: dict = field(default_factory=dict)
     axes: list[Axis] = field(default_factory=list)
     lines: dict = field(default_factory=dict)  # key path (tuple) -> line number
+    target_error: float | None = None  # a run stops at this relative feed-rate error
 
     @property
     def fingerprint(self) -> str:
@@ -199,7 +202,7 @@ def key_lines(text: str) -> dict[tuple, int]:
 
 
 # ---------------------------------------------------------------- parsing
-def _scalar(value) -> bool:
+def scalar(value) -> bool:
     return isinstance(value, int | float | str) and not isinstance(value, bool)
 
 
@@ -213,9 +216,12 @@ def load(path) -> SweepSpec:
     return parse(text, path)
 
 
-class _Reader:
+class KeyReader:
     """What the steps of :func:`parse` share: the file's name and key lines, to name the
     line of a refusal, and which key sets each parameter (a parameter is set once)."""
+
+    # where a parameter may be set, once (the refusal of a second place says it)
+    ONCE = "a parameter is fixed, or in one grid list, zip group or the points"
 
     def __init__(self, source: Path, lines: dict[tuple, int]):
         self.source, self.lines = source, lines
@@ -233,14 +239,14 @@ class _Reader:
         if name in self.owner:
             self.fail(key, f"parameter {name!r} is set twice (also at line "
                            f"{self.lines.get(self.owner[name], '?')}); "
-                           "a parameter is fixed, or in one grid list, zip group or the points")
+                           f"{self.ONCE}")
         self.owner[name] = key
 
     def values_list(self, key: tuple, name: str, value) -> list:
         if not isinstance(value, list) or not value:
             self.fail(key, f"{name} must be a non-empty list of values, got {value!r}")
         for v in value:
-            if not _scalar(v):
+            if not scalar(v):
                 self.fail(key, f"{name}: {v!r} is not a number or a string")
         if len({json.dumps(v) for v in value}) != len(value):
             self.fail(key, f"{name} lists a value twice: {value!r} (replicates repeat a setting)")
@@ -254,19 +260,25 @@ def parse(text: str, source: Path | str = "sweep.toml") -> SweepSpec:
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"{source}: not valid TOML: {exc}") from None
     lines = key_lines(text)
-    r = _Reader(source, lines)
+    r = KeyReader(source, lines)
     numbers = _top_level(data, r)
     fixed = _fixed(data, r)
     axes = _grid_axes(data, r) + _zip_axes(data, r) + _point_axes(data, r)
     if "seed" in r.owner and r.owner["seed"][0] != "fixed" and numbers["replicates"] > 1:
         r.fail(r.owner["seed"], "seed is varied and replicates > 1: replicates set the seeds "
                                 "(seed, seed+1, ...); fix seed or set replicates = 1")
+    target = data.get("target_error")
+    if target is not None and (isinstance(target, bool) or not isinstance(target, int | float)
+                               or not 0 < target < 1):
+        r.fail(("target_error",), f"target_error must be a number in (0, 1) (the feed rate's "
+                                  f"relative error a run stops at), got {target!r}")
     return SweepSpec(source=source, text=text, data=data, deck=data["deck"].strip(),
                      ranks_per_run=numbers["ranks_per_run"], replicates=numbers["replicates"],
-                     description=data.get("description", ""), fixed=fixed, axes=axes, lines=lines)
+                     description=data.get("description", ""), fixed=fixed, axes=axes, lines=lines,
+                     target_error=target)
 
 
-def _top_level(data: dict, r: _Reader) -> dict[str, int]:
+def _top_level(data: dict, r: KeyReader) -> dict[str, int]:
     """Check the top-level keys, the deck and the sections' types; ranks_per_run and replicates."""
     for key in data:
         if key not in TOP_KEYS:
@@ -291,11 +303,11 @@ def _top_level(data: dict, r: _Reader) -> dict[str, int]:
     return numbers
 
 
-def _fixed(data: dict, r: _Reader) -> dict:
+def _fixed(data: dict, r: KeyReader) -> dict:
     """The [fixed] parameters: one value each."""
     fixed = {}
     for name, value in data.get("fixed", {}).items():
-        if not _scalar(value):
+        if not scalar(value):
             r.fail(("fixed", name), f"[fixed] {name} must be one number or string, got {value!r} "
                                     "(lists of values go in [grid] or [zip.NAME])")
         r.claim(name, ("fixed", name))
@@ -303,7 +315,7 @@ def _fixed(data: dict, r: _Reader) -> dict:
     return fixed
 
 
-def _grid_axes(data: dict, r: _Reader) -> list[Axis]:
+def _grid_axes(data: dict, r: KeyReader) -> list[Axis]:
     """One axis per [grid] list."""
     axes = []
     for name, value in data.get("grid", {}).items():
@@ -313,7 +325,7 @@ def _grid_axes(data: dict, r: _Reader) -> list[Axis]:
     return axes
 
 
-def _zip_axes(data: dict, r: _Reader) -> list[Axis]:
+def _zip_axes(data: dict, r: KeyReader) -> list[Axis]:
     """One axis per [zip.NAME] group: its lists, of equal lengths, vary together."""
     axes = []
     for group, table in data.get("zip", {}).items():
@@ -336,7 +348,7 @@ def _zip_axes(data: dict, r: _Reader) -> list[Axis]:
     return axes
 
 
-def _point_axes(data: dict, r: _Reader) -> list[Axis]:
+def _point_axes(data: dict, r: KeyReader) -> list[Axis]:
     """The [[point]] tables, explicit settings: one axis, or none without them."""
     points = data.get("point", [])
     if not points:
@@ -346,7 +358,7 @@ def _point_axes(data: dict, r: _Reader) -> list[Axis]:
         if not isinstance(point, dict) or not point:
             r.fail(("point", i), "each [[point]] must set at least one parameter")
         for name, value in point.items():
-            if not _scalar(value):
+            if not scalar(value):
                 r.fail(("point", i, name), f"[[point]] {name} must be one number or string, "
                                            f"got {value!r}")
             if name not in keys:  # first [[point]] naming it

@@ -1,0 +1,302 @@
+"""The summary's journal and snapshots (summary.Ledger, summary.read): O(1) per finished job,
+true at every instant (a torn line, a kill inside a compaction, SIGKILL), and a resume that
+skips exactly the finished jobs. No engine: rows are made by hand."""
+
+from __future__ import annotations
+
+import csv
+import errno
+import json
+import math
+import os
+import signal
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from vibrofeed.errors import ResultError
+from vibrofeed.sweep import folder as F
+from vibrofeed.sweep import plan as P
+from vibrofeed.sweep import summary as S
+from vibrofeed.sweep.spec import parse
+
+PARAMS = ["a"]
+SPEC = 'deck = "bulk_feeder"\nreplicates = 2\n[grid]\namp_n = [5e-5, 1e-4, 2e-4]\n'
+
+
+class Killed(BaseException):
+    """Stands for SIGKILL at one step: nothing after it runs (not an Exception: never caught)."""
+
+
+def row(job, status=S.DONE, **metrics):
+    out = {"job": job, "replicate": job % 2, "seed": 100 + job, "a": 0.5 * job, "status": status,
+           "error": "" if status == S.DONE else "LIGGGHTS error: boom, with a comma",
+           "file": f"jobs/job-{job:04d}.h5" if status == S.DONE else "", "run_id": f"id{job}",
+           "wall_s": 1.25 + job}
+    out.update(metrics)
+    return out
+
+
+def as_snapshot(rows, folder):
+    """What read gives for ``rows`` written as a snapshot alone (no journal)."""
+    folder.mkdir()
+    S.write(folder, rows, PARAMS, {})
+    assert not (folder / S.JOURNAL_NAME).exists()
+    return S.read(folder)[0]
+
+
+def journal_jobs(folder):
+    """The jobs of the journal's complete row lines (its first line is the header)."""
+    text = (folder / S.JOURNAL_NAME).read_text()
+    return [json.loads(line)["job"] for line in text.split("\n")[1:-1]]
+
+
+def csv_jobs(folder):
+    with open(folder / S.CSV_NAME, newline="") as f:
+        return [int(r["job"]) for r in csv.DictReader(f)]
+
+
+# ------------------------------------------------------------------ rows in, rows out
+def test_rows_read_equal_rows_added_from_the_journal_and_from_the_snapshot(tmp_path):
+    added = [row(3, parts_per_s=0.1 + 0.2, n_events=np.int64(288), reason=None),
+             row(0, parts_per_s=math.nan, n_events=12, reason="too few exits"),
+             row(2, S.FAILED, parts_per_s=None, n_events=None),
+             row(1, parts_per_s=np.float64(346.7), n_events=7, reason="")]
+    folder = tmp_path / "sweep"
+    folder.mkdir()
+    ledger = S.Ledger(folder, PARAMS, {"n_jobs": 4})
+    for r in added:
+        ledger.add(r)
+    # nothing compacted yet: what read gives comes from the journal
+    assert ledger.compactions == 1 and journal_jobs(folder) == [3, 0, 2, 1]
+    back, meta = S.read(folder)
+    assert [r["job"] for r in back] == [0, 1, 2, 3]  # sorted by job
+    assert meta["n_jobs"] == 4 and meta["parameters"] == PARAMS
+    assert meta["metrics"] == ["parts_per_s", "n_events", "reason"]
+    # exactly equal (no tolerance): JSON and HDF5 keep every digit of a float
+    assert back[3]["parts_per_s"] == 0.1 + 0.2 and back[1]["parts_per_s"] == 346.7
+    assert back[0]["parts_per_s"] is None  # NaN: None, as the snapshot reads it
+    assert back[2]["error"] == "LIGGGHTS error: boom, with a comma" and back[2]["file"] is None
+    assert back[0]["error"] is None and back[1]["reason"] is None and back[0]["reason"] == "too few exits"
+    # n_events has a missing value, so the snapshot stores it as float: the journal's rows read so too
+    assert back[3]["n_events"] == 288 and isinstance(back[3]["n_events"], float)
+    assert back == as_snapshot(added, tmp_path / "alone")  # the same rows as a snapshot of them gives
+    # the CSV alone is the last snapshot: older (no row yet), never wrong
+    assert csv_jobs(folder) == []
+    ledger.close()
+    assert not (folder / S.JOURNAL_NAME).exists() and csv_jobs(folder) == [0, 1, 2, 3]
+    assert S.read(folder) == (back, meta)
+
+
+def test_a_later_row_of_a_job_replaces_the_earlier_one(tmp_path):
+    ledger = S.Ledger(tmp_path, PARAMS, {})
+    ledger.add(row(0, S.FAILED))
+    ledger.add(row(1))
+    ledger.add(row(0, parts_per_s=5.0))  # --retry-failed ran it again
+    back = S.read(tmp_path)[0]
+    assert [(r["job"], r["status"]) for r in back] == [(0, S.DONE), (1, S.DONE)]
+    assert back[0]["parts_per_s"] == 5.0 and back[0]["error"] is None
+    ledger.close()
+
+
+def test_another_table_keeps_its_own_files(tmp_path):
+    S.write(tmp_path, [row(0)], PARAMS, {})
+    study = S.Ledger(tmp_path, PARAMS, {"kind": "study"}, stem="study")
+    study.add(row(5, objective=2.5))
+    assert (tmp_path / "study.journal.jsonl").is_file() and not (tmp_path / S.JOURNAL_NAME).exists()
+    rows, meta = S.read(tmp_path, stem="study")
+    assert [r["job"] for r in rows] == [5] and rows[0]["objective"] == 2.5 and meta["kind"] == "study"
+    assert [r["job"] for r in S.read(tmp_path)[0]] == [0]  # the summary untouched
+    study.close()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["study.csv", "study.h5", "summary.csv",
+                                                          "summary.h5"]
+
+
+# ------------------------------------------------------------------ true at every instant
+def test_a_torn_last_line_is_ignored_and_the_next_ledger_starts_clean(tmp_path):
+    ledger = S.Ledger(tmp_path, PARAMS, {})
+    for job in range(3):
+        ledger.add(row(job))
+    ledger._close_journal()  # killed: no close()
+    line = S._line(row(3))
+    with open(tmp_path / S.JOURNAL_NAME, "ab") as f:
+        f.write(line[: len(line) // 2])  # the kill landed inside the write of job 3's line
+    rows = S.read(tmp_path)[0]
+    assert [r["job"] for r in rows] == [0, 1, 2]
+    resumed = S.Ledger(tmp_path, PARAMS, {}, rows=rows)  # starts with a snapshot, no journal
+    assert not (tmp_path / S.JOURNAL_NAME).exists()
+    resumed.add(row(3))
+    assert [r["job"] for r in S.read(tmp_path)[0]] == [0, 1, 2, 3]
+    assert journal_jobs(tmp_path) == [3]
+    resumed.close()
+
+
+def test_a_torn_header_is_an_empty_journal_and_a_damaged_line_is_named(tmp_path):
+    S.write(tmp_path, [row(0)], PARAMS, {})
+    (tmp_path / S.JOURNAL_NAME).write_bytes(b'{"format":"vibrofeed-sweep-jour')
+    assert [r["job"] for r in S.read(tmp_path)[0]] == [0]
+    ledger = S.Ledger(tmp_path, PARAMS, {}, rows=[row(0)])
+    ledger.add(row(1))
+    ledger._close_journal()
+    text = (tmp_path / S.JOURNAL_NAME).read_bytes()
+    head, rest = text.split(b"\n", 1)
+    (tmp_path / S.JOURNAL_NAME).write_bytes(head + b"\n" + rest[:10] + b"\n" + rest)
+    with pytest.raises(ResultError, match=S.JOURNAL_NAME):
+        S.read(tmp_path)
+
+
+def test_a_kill_between_snapshot_and_journal_removal_loses_and_duplicates_nothing(tmp_path, monkeypatch):
+    ledger = S.Ledger(tmp_path, PARAMS, {})
+    for job in (0, 1, 2):
+        ledger.add(row(job))
+
+    def killed(*args, **kwargs):
+        raise Killed
+
+    # the new snapshot is in place, the old journal not yet gone: readers skip it
+    monkeypatch.setattr(type(ledger.journal), "unlink", killed)
+    with pytest.raises(Killed):
+        ledger.compact()
+    monkeypatch.undo()
+    assert journal_jobs(tmp_path) == [0, 1, 2] and csv_jobs(tmp_path) == [0, 1, 2]
+    rows = S.read(tmp_path)[0]
+    assert [r["job"] for r in rows] == [0, 1, 2]
+
+    # A resumed sweep finds job 1's result untrue and drops its row; killed at the same
+    # step, the journal that still holds job 1 must not bring it back.
+    kept = [r for r in rows if r["job"] != 1]
+    monkeypatch.setattr(type(ledger.journal), "unlink", killed)
+    with pytest.raises(Killed):
+        S.Ledger(tmp_path, PARAMS, {}, rows=kept)
+    monkeypatch.undo()
+    assert journal_jobs(tmp_path) == [0, 1, 2]
+    assert [r["job"] for r in S.read(tmp_path)[0]] == [0, 2]
+
+
+def test_a_kill_between_the_csv_and_the_hdf5_snapshot_loses_and_duplicates_nothing(tmp_path, monkeypatch):
+    ledger = S.Ledger(tmp_path, PARAMS, {})
+    for job in (0, 1):
+        ledger.add(row(job))
+    replace, calls = os.replace, []
+
+    def replace_once(src, dst):
+        calls.append(dst)
+        if len(calls) > 1:
+            raise Killed
+        replace(src, dst)
+
+    monkeypatch.setattr(os, "replace", replace_once)
+    with pytest.raises(Killed):
+        ledger.compact()
+    monkeypatch.undo()
+    assert [os.path.basename(c) for c in calls] == [S.CSV_NAME, S.H5_NAME]
+    assert csv_jobs(tmp_path) == [0, 1]  # the new CSV; summary.h5 is the old one, with its journal
+    assert [r["job"] for r in S.read(tmp_path)[0]] == [0, 1]
+
+
+def test_a_failed_snapshot_leaves_the_journal_going_on(tmp_path, monkeypatch):
+    ledger = S.Ledger(tmp_path, PARAMS, {})
+    ledger.add(row(0))
+
+    def full(*args, **kwargs):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(os, "replace", full)
+    with pytest.raises(OSError, match="disk full"):
+        ledger.compact()
+    monkeypatch.undo()
+    ledger.add(row(1))  # appended to the journal the snapshot on disk still matches
+    assert [r["job"] for r in S.read(tmp_path)[0]] == [0, 1] and journal_jobs(tmp_path) == [0, 1]
+    ledger.close()
+
+
+def test_a_short_write_is_undone_and_the_journal_goes_on(tmp_path, monkeypatch):
+    ledger = S.Ledger(tmp_path, PARAMS, {})
+    ledger.add(row(0))
+    write = os.write
+    monkeypatch.setattr(os, "write", lambda fd, data: write(fd, data[: len(data) // 2]))  # disk full
+    with pytest.raises(OSError) as info:
+        ledger.add(row(1))
+    monkeypatch.undo()
+    assert info.value.errno == errno.ENOSPC
+    assert [r["job"] for r in S.read(tmp_path)[0]] == [0]  # job 1 is not recorded, nor half of it
+    ledger.add(row(2))  # after a whole line, not after half of one
+    assert [r["job"] for r in S.read(tmp_path)[0]] == [0, 2] and journal_jobs(tmp_path) == [0, 2]
+    ledger.close()
+
+
+def test_sigkill_after_some_jobs_and_a_resume_skips_exactly_the_finished_jobs(tmp_path):
+    spec_path = tmp_path / "s.toml"
+    spec_path.write_text(SPEC)
+    folder = tmp_path / "out"
+    folder.mkdir()
+    # A sweep process that records jobs 4, 1 (failed) and 5, then dies by SIGKILL.
+    code = f"""
+import os, signal
+from pathlib import Path
+from vibrofeed.sweep.execute import Recorder, base_row
+from vibrofeed.sweep.plan import plan
+from vibrofeed.sweep.spec import load
+jobs = plan(load({str(spec_path)!r}))
+recorder = Recorder(Path({str(folder)!r}), [], ["amp_n"], {{"n_jobs": len(jobs)}})
+for k in (4, 1, 5):
+    row = base_row(jobs[k], ["amp_n"])
+    row.update(status="failed" if k == 1 else "done", error="boom" if k == 1 else "", file=jobs[k].file)
+    recorder.add(jobs[k], row, True)
+os.kill(os.getpid(), signal.SIGKILL)
+"""
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert proc.returncode == -signal.SIGKILL, proc.stderr
+    assert journal_jobs(folder) == [4, 1, 5]  # the kill came before any later snapshot
+    jobs = P.plan(parse(SPEC, spec_path))
+    rows = S.read(folder)[0]
+    kept, todo = F.resume(jobs, rows, False, lambda job: True)
+    assert [r["job"] for r in kept] == [1, 4, 5] and [j.index for j in todo] == [0, 2, 3]
+    kept, todo = F.resume(jobs, rows, True, lambda job: True)
+    assert [r["job"] for r in kept] == [4, 5] and [j.index for j in todo] == [0, 1, 2, 3]
+
+
+# ------------------------------------------------------------------ O(1) per job
+def test_add_writes_one_line_and_the_snapshots_are_amortised(tmp_path, monkeypatch):
+    monkeypatch.setattr(S.Ledger, "INTERVAL", math.inf)  # the row rule alone: deterministic
+    snapshots, flushes = [], []
+    write_snapshot = S._write_snapshot
+
+    def counted(folder, rows, *args):
+        snapshots.append(len(rows))
+        write_snapshot(folder, rows, *args)
+
+    monkeypatch.setattr(S, "_write_snapshot", counted)
+    # the disk's speed is not what this test measures: count the flushes instead of waiting
+    monkeypatch.setattr(S.os, "fdatasync", flushes.append)
+    ledger = S.Ledger(tmp_path, PARAMS, {})
+    journal, grew = tmp_path / S.JOURNAL_NAME, []
+    n = 1000
+    for job in range(n):
+        before = journal.stat().st_size if journal.exists() else None
+        r = row(job, parts_per_s=1.0 + job, n_events=job)
+        ledger.add(r)
+        if before is not None and journal.exists():  # no snapshot came between
+            grew.append(journal.stat().st_size - before - len(S._line(r)))
+    assert len(grew) > 0.95 * n and set(grew) == {0}  # each add: its own line, nothing more
+    headers = len(snapshots)  # each snapshot but the last is followed by a journal's header
+    assert len(flushes) == n + headers - 1 + journal.exists()  # one flush per add
+    # The old summary rewrote every row after each job: 1000 snapshots, 500 500 rows.
+    # Now a snapshot waits for a quarter of the rows: O(log n) of them, under 5 rows per add.
+    assert len(snapshots) <= 12 and sum(snapshots) <= 5 * n
+    ledger.close()
+    assert [r["job"] for r in S.read(tmp_path)[0]] == list(range(n))
+
+
+def test_the_snapshot_follows_the_journal_within_the_interval(tmp_path, monkeypatch):
+    now = [1000.0]
+    monkeypatch.setattr(S.time, "monotonic", lambda: now[0])
+    ledger = S.Ledger(tmp_path, PARAMS, {})
+    ledger.add(row(0))
+    assert csv_jobs(tmp_path) == []  # 0 s after the last snapshot: the journal only
+    now[0] += S.Ledger.INTERVAL
+    ledger.add(row(1))
+    assert csv_jobs(tmp_path) == [0, 1] and not (tmp_path / S.JOURNAL_NAME).exists()
+    ledger.close()
