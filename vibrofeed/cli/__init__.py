@@ -35,6 +35,9 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "validate": ("vibrofeed.cli.validate", "run DEM and analytic model on the validation cases"),
     "sweep": ("vibrofeed.cli.sweep", "run a deck over a design of parameters (grid, lists, replicates)"),
     "sweep-report": ("vibrofeed.cli.sweep_report", "a sweep's table, best setting and feed-rate maps"),
+    "optimize": ("vibrofeed.cli.optimize", "find the best feeder settings in few DEM runs (a study file)"),
+    "optimize-report": ("vibrofeed.cli.optimize_report", "a study's answer, convergence, Pareto front, "
+                        "importances"),
     "replay": ("vibrofeed.cli.replay", "replay measured vertical-transport trials"),
     "decks": ("vibrofeed.cli.decks", "list the decks in decks/"),
     "params": ("vibrofeed.cli.params", "list a deck's parameters with defaults and units"),

@@ -18,6 +18,10 @@ run's outcome and never stops the others. Two ways to spread the runs:
   leader runs its item and sends the answer back; the other members of a group
   only hold their slot of the allocation.
 
+Both take the items lazily, one as a slot frees: ``items`` may be a generator that
+decides the next run from the answers so far (the optimiser asks its sampler so), and
+may yield :data:`WAIT` when it has nothing to start until a running item finishes.
+
 Open MPI's blocking receive spins a core at 100 % while it waits; every wait
 here is ``Iprobe`` then a short sleep instead, so idle ranks cost nothing and
 the cores go to the runs.
@@ -43,6 +47,32 @@ TAG_SETUP, TAG_JOB, TAG_ROW, TAG_STOP = 11, 12, 13, 14
 POLL, IDLE_POLL = 0.05, 0.5
 # Variables that say this process was started by an MPI launcher (Open MPI, MPICH/Hydra, PMIx/srun).
 LAUNCHER_VARIABLES = ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK", "PMI_RANK")
+
+
+# What an item source yields when it has nothing to start until a running item finishes.
+WAIT = object()
+
+
+class _Source:
+    """Items pulled one at a time from an iterable (a list, or a generator that may yield WAIT)."""
+
+    def __init__(self, items: Iterable):
+        self._items = iter(items)
+        self.ended = False
+
+    def take(self):
+        """The next item; None when there is none now (WAIT) or ever (``ended``)."""
+        if self.ended:
+            return None
+        try:
+            item = next(self._items)
+        except StopIteration:
+            self.ended = True
+            return None
+        return None if item is WAIT else item
+
+    def stalled(self) -> RuntimeError:
+        return RuntimeError("the item source waits (WAIT) with no item running: it would wait forever")
 
 
 @dataclass
@@ -82,7 +112,7 @@ def run_local(items: Iterable, workers: int, work: Callable, started: Callable =
     ``finished(item, answer)`` with what ``work`` returned as it ends, both in the
     calling thread. An exception ``work`` raises is raised here (the others'
     threads are left to end with the process)."""
-    waiting = deque(items)
+    source = _Source(items)
     done: queue.Queue = queue.Queue()
     running = 0
 
@@ -92,12 +122,18 @@ def run_local(items: Iterable, workers: int, work: Callable, started: Callable =
         except BaseException as exc:  # noqa: BLE001 (re-raised in the calling thread)
             done.put((item, None, exc))
 
-    while waiting or running:
-        while waiting and running < max(1, int(workers)):
-            item = waiting.popleft()
+    while True:
+        while running < max(1, int(workers)):
+            item = source.take()
+            if item is None:
+                break
             started(item)
             threading.Thread(target=one, args=(item,), daemon=True).start()
             running += 1
+        if not running:
+            if source.ended:
+                return
+            raise source.stalled()
         item, answer, exc = done.get()
         running -= 1
         if exc is not None:
@@ -207,7 +243,7 @@ def dispatch(comm, items: Iterable, setup: dict, work: Callable, started: Callab
     for rank in range(1, size):
         comm.send(("setup", setup), dest=rank, tag=TAG_SETUP)
     _released = True
-    waiting = deque(items)
+    source = _Source(items)
     free = deque(range(per_run, (size // per_run) * per_run, per_run))  # the other leaders
     busy: dict[int, object] = {}
     mine: queue.Queue = queue.Queue()
@@ -221,16 +257,24 @@ def dispatch(comm, items: Iterable, setup: dict, work: Callable, started: Callab
             mine.put((item, None, exc))
 
     try:
-        while waiting or busy or local is not None:
-            if local is None and waiting:
-                local = waiting.popleft()
-                started(local)
-                threading.Thread(target=one, args=(local,), daemon=True).start()
-            while free and waiting:
-                item, rank = waiting.popleft(), free.popleft()
+        while True:
+            if local is None:
+                local = source.take()
+                if local is not None:
+                    started(local)
+                    threading.Thread(target=one, args=(local,), daemon=True).start()
+            while free:
+                item = source.take()
+                if item is None:
+                    break
+                rank = free.popleft()
                 comm.send(item, dest=rank, tag=TAG_JOB)
                 busy[rank] = item
                 started(item)
+            if local is None and not busy:
+                if source.ended:
+                    break
+                raise source.stalled()
             heard = False
             while comm.Iprobe(source=MPI.ANY_SOURCE, tag=TAG_ROW, status=status):
                 rank = status.Get_source()

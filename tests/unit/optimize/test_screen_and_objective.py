@@ -1,0 +1,144 @@
+"""The model screen (vibrofeed.optimize.screen) against closed forms of a sine drive, the
+constraints' margins, the objective values and errors (vibrofeed.optimize.objective), and
+the pieces of the search that rank and confirm (vibrofeed.optimize.search)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from vibrofeed.models.constants import G
+from vibrofeed.optimize import objective as O
+from vibrofeed.optimize.screen import drive, screen
+from vibrofeed.optimize.search import (
+    _confirmed,
+    _mean_and_error,
+    from_unit,
+    setting_index,
+    target_margins,
+    to_unit,
+)
+from vibrofeed.optimize.spec import parse
+
+SINE = {"freq": 100.0, "amp_t": 5e-5, "amp_n": 5e-5, "phase": 0.0, "waveform": 0, "mu": 0.5,
+        "restitution": 0.3, "incline": 0.0}
+
+
+def study(extra: str = "", variables: str = 'amp_n = { low = 1e-5, high = 1e-4 }') -> object:
+    return parse('deck = "bulk_feeder"\n[variables]\n' + variables + '\n[objective]\n'
+                 'maximize = "parts_per_s"\n' + extra, "s.toml")
+
+
+def test_a_sines_peaks_are_its_closed_forms():
+    w = 2 * math.pi * 100.0
+    # in phase: |a| peaks at w^2 sqrt(at^2 + an^2); 90 degrees apart: at w^2 max(at, an)
+    d = drive(SINE, 1, with_model=False)
+    assert d.peak_acceleration == pytest.approx(w * w * math.hypot(5e-5, 5e-5) / G, rel=1e-4)
+    assert d.peak_displacement == pytest.approx(5e-5, rel=1e-4)
+    d = drive({**SINE, "amp_n": 2e-5, "phase": 90.0}, 1, with_model=False)
+    assert d.peak_acceleration == pytest.approx(w * w * 5e-5 / G, rel=1e-4)
+    # hopping: Gamma_n = an w^2 / g above 1 (here 2.01) hops, below (0.4) does not
+    assert drive(SINE, 1, with_model=False).hops
+    assert not drive({**SINE, "amp_n": 1e-5}, 1, with_model=False).hops
+    # an incline shares gravity: g cos(beta) must be beaten (Gamma_n 0.9 hops at 30 degrees
+    # only if 0.9 > cos 30 = 0.866)
+    an = 0.9 * G / (w * w)
+    assert drive({**SINE, "amp_n": an, "incline": 30.0}, 1, with_model=False).hops
+    assert not drive({**SINE, "amp_n": an, "incline": 20.0}, 1, with_model=False).hops
+
+
+def test_section_two_has_its_own_drive_and_the_model_speed():
+    p = {**SINE, "sections": 2, "s2_freq": 150.0, "s2_amp_t": 1e-4, "s2_amp_n": 2e-5, "s2_phase": -30.0}
+    d2 = drive(p, 2)
+    w2 = 2 * math.pi * 150.0
+    assert d2.freq == 150.0 and d2.peak_displacement == pytest.approx(1e-4, rel=1e-4)
+    assert d2.peak_acceleration <= w2 * w2 * math.hypot(1e-4, 2e-5) / G * (1 + 1e-9)
+    assert d2.peak_acceleration >= w2 * w2 * 1e-4 / G * (1 - 1e-4)
+    from vibrofeed.models.deck import transport
+
+    expected = transport({**p, "freq": 150.0, "amp_t": 1e-4, "amp_n": 2e-5, "phase": -30.0}).velocity
+    assert d2.speed == pytest.approx(expected, rel=1e-12) and d2.speed > 0
+
+
+def test_margins_say_what_breaks_and_by_how_much():
+    s = study('[constraints]\nmax_acceleration = 2.5\nmax_displacement = 4e-5\nfrequency = [120, 200]\n'
+              'no_hopping = [1]\nrequire = ["amp_n <= 2 * amp_t"]\n')
+    sc = screen(s, {**SINE, "sections": 1})
+    w = 2 * math.pi * 100.0
+    m = sc.margins
+    assert m["section 1: peak acceleration [g]"] == pytest.approx(w * w * math.hypot(5e-5, 5e-5) / G - 2.5,
+                                                                  rel=1e-4)
+    assert m["section 1: peak displacement [m]"] == pytest.approx(1e-5, rel=1e-3)
+    assert m["section 1: frequency [Hz]"] == pytest.approx(20.0, abs=1e-12)
+    assert m["section 1: hops"] == 1.0
+    assert m["amp_n <= 2 * amp_t"] <= 0  # holds
+    assert not sc.feasible and set(sc.broken) == {k for k in m if k != "amp_n <= 2 * amp_t"}
+    ok = screen(s, {**SINE, "sections": 1, "freq": 150.0, "amp_t": 1e-5, "amp_n": 1e-5})
+    assert ok.feasible and ok.broken == []
+
+
+def test_a_drive_the_model_gives_no_speed_for_is_ruled_out_when_speed_is_asked():
+    s = study("[constraints]\nmin_model_speed = 1e-3\n")
+    sc = screen(s, {**SINE, "sections": 1, "amp_t": 0.0})  # no tangential stroke: no conveying
+    assert sc.margins["section 1: model speed [m/s]"] == pytest.approx(1e-3, abs=1e-6)
+    assert not sc.feasible
+
+
+def test_objective_values_and_errors():
+    row = {"parts_per_s": 20.0, "parts_per_s_err": 1.0, "singulated_fraction": 0.9, "n_arrivals": 100,
+           "orientation_yield": None}
+    v, e = O.value_and_error(row, "singulated_fraction")
+    assert v == 0.9 and e == pytest.approx(math.sqrt(0.9 * 0.1 / 100), rel=1e-12)  # binomial
+    v, e = O.value_and_error(row, "singulated_rate")
+    assert v == pytest.approx(18.0, rel=1e-12)
+    assert e == pytest.approx(math.hypot(1.0 * 0.9, 0.03 * 20.0), rel=1e-12)  # relative errors in quadrature
+    assert O.value_and_error(row, "oriented_rate") == (None, None)  # not measured: no number
+    assert O.value_and_error({"parts_per_s": float("nan")}, "parts_per_s") == (None, None)
+    assert O.cautious(18.0, 0.5, "singulated_rate") == 17.5 and O.cautious(0.3, 0.1, "cv_interarrival") == 0.4
+    assert O.better(0.2, 0.3, "doubles_rate") and O.better(3.0, 2.0, "parts_per_s")
+
+
+def test_targets_are_relative_shortfalls():
+    s = study('[objective.at_least]\nparts_per_s = 25\n'.replace("[objective.at_least]", "at_least = "
+                                                                 "{ parts_per_s = 25 }\n[x]")
+              .split("[x]")[0])
+    assert target_margins(s, {"parts_per_s": 20.0}) == [pytest.approx(0.2, rel=1e-12)]
+    assert target_margins(s, {"parts_per_s": 30.0}) == [pytest.approx(-0.2, rel=1e-12)]
+    assert target_margins(s, {"parts_per_s": None}) == [1.0]
+
+
+def test_unit_cube_round_trip_and_seed_offsets():
+    s = study(variables='amp_n = { low = 1e-5, high = 1e-4, log = true }\nfreq = { low = 50, high = 150 }\n'
+                        'inlet_batch = { low = 1, high = 4, type = "int" }\nshape = { choices = [0, 1, 2] }')
+    setting = from_unit(s, np.array([0.5, 0.25, 1.0, 0.0]))
+    assert setting["amp_n"] == pytest.approx(math.sqrt(1e-5 * 1e-4), rel=1e-12)  # log midpoint
+    assert setting["freq"] == pytest.approx(75.0, rel=1e-12) and setting["inlet_batch"] == 4
+    assert setting["shape"] == 0 and type(setting["freq"]) is float
+    assert from_unit(s, np.array([0.0, 0.0, 0.0, 0.999]))["shape"] == 2
+    u = to_unit(s, setting)
+    assert u[:3] == pytest.approx([0.5, 0.25, 1.0], abs=1e-12) and u[3] == pytest.approx(1 / 6, abs=1e-12)
+    assert setting_index(setting) == setting_index(dict(reversed(list(setting.items()))))
+    assert setting_index(setting) != setting_index({**setting, "freq": 75.000001})
+    assert 0 <= setting_index(setting) < 1_000_000
+
+
+def test_replicates_mean_and_error():
+    mean, err = _mean_and_error([10.0, 12.0, 14.0], [0.1, 0.1, 0.1])
+    assert mean == 12.0 and err == pytest.approx(2.0 / math.sqrt(3), rel=1e-12)  # the scatter wins
+    mean, err = _mean_and_error([10.0, 10.0], [1.0, 1.0])
+    assert err == pytest.approx(math.sqrt(2.0) / 2, rel=1e-12)  # the runs' own errors win
+    assert _mean_and_error([5.0], [None]) == (5.0, None)
+
+
+def test_confirmation_ranks_by_the_fresh_runs_one_error_towards_worse():
+    s = study()
+    rows = [  # setting 0: mean 20 +- 4 (cautious ~16); setting 1: 18 +- 0.1 (cautious ~17.9)
+        {"job": 10000, "stage": "confirm", "objective": 16.0, "objective_err": 0.1},
+        {"job": 10001, "stage": "confirm", "objective": 24.0, "objective_err": 0.1},
+        {"job": 10100, "stage": "confirm", "objective": 18.0, "objective_err": 0.1},
+        {"job": 10101, "stage": "confirm", "objective": 18.0, "objective_err": 0.1},
+        {"job": 5, "stage": "search", "objective": 99.0, "objective_err": 0.1},  # not a confirmation
+    ]
+    out = _confirmed(s, [{"amp_n": 1e-5}, {"amp_n": 2e-5}], rows)
+    assert [c["setting"]["amp_n"] for c in out] == [2e-5, 1e-5]
+    assert out[1]["parts_per_s"] == (20.0, pytest.approx(4.0, rel=1e-12)) and out[0]["runs"] == 2

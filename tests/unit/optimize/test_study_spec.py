@@ -1,0 +1,103 @@
+"""The study file (vibrofeed.optimize.spec): what it accepts, and every refusal in one line
+naming the line of the file; inequalities evaluated as written."""
+
+import textwrap
+
+import pytest
+
+from vibrofeed.errors import InputError
+from vibrofeed.optimize.spec import parse
+
+GOOD = textwrap.dedent("""\
+    deck = "bulk_feeder"
+    seed = 11
+
+    [fixed]
+    sections = 2
+    amp_t = 3.5e-5
+
+    [variables]
+    s2_amp_t = { low = 6e-5, high = 2.4e-4 }
+    freq = { low = 50, high = 200, log = true }
+    inlet_batch = { low = 1, high = 4, type = "int" }
+    shape = { choices = [0, 1] }
+
+    [constraints]
+    max_acceleration = 6.0
+    frequency = [50, 200]
+    require = ["s2_amp_t >= 2 * amp_t", "abs(s2_amp_t - amp_t) < 2e-4"]
+
+    [objective]
+    maximize = "singulated_rate"
+    at_least = { parts_per_s = 25 }
+
+    [budget]
+    runs = 12
+    seeds = 4
+
+    [robustness]
+    mu = [0.4, 0.6]
+    """)
+
+
+def test_a_good_study_reads_as_written():
+    s = parse(GOOD, "study.toml")
+    assert s.deck == "bulk_feeder" and s.seed == 11 and s.fixed == {"sections": 2, "amp_t": 3.5e-5}
+    kinds = {v.name: (v.kind, v.low, v.high, v.log, v.choices) for v in s.variables}
+    assert kinds == {"s2_amp_t": ("float", 6e-5, 2.4e-4, False, []), "freq": ("float", 50, 200, True, []),
+                     "inlet_batch": ("int", 1, 4, False, []), "shape": ("choice", None, None, False, [0, 1])}
+    assert s.maximize == ["singulated_rate"] and not s.multi and s.at_least == {"parts_per_s": 25}
+    assert s.budget == {"runs": 12, "seeds": 4, "screen": 256, "confirm": 3, "replicates": 3}
+    assert s.robustness == {"mu": [0.4, 0.6]}
+    assert s.parameters == ["sections", "amp_t", "s2_amp_t", "freq", "inlet_batch", "shape"]
+    # the fingerprint follows the content, not the layout
+    assert parse(GOOD.replace("seed = 11", "seed  =  11  # the sampler's"), "x").fingerprint == s.fingerprint
+    assert parse(GOOD.replace("seed = 11", "seed = 12"), "x").fingerprint != s.fingerprint
+
+
+def test_inequalities_hold_and_break_by_their_margin():
+    s = parse(GOOD, "study.toml")
+    ratio, spread = s.inequalities
+    assert ratio.holds({"s2_amp_t": 7e-5, "amp_t": 3.5e-5})  # exactly 2x: >= holds
+    assert not ratio.holds({"s2_amp_t": 6.9e-5, "amp_t": 3.5e-5})
+    assert ratio.margin({"s2_amp_t": 6e-5, "amp_t": 3.5e-5}) == pytest.approx(1e-5, rel=1e-9)
+    assert not spread.holds({"s2_amp_t": 2.4e-4, "amp_t": 3.5e-5})  # 2.05e-4: < fails
+    assert spread.margin({"s2_amp_t": 1e-4, "amp_t": 3.5e-5}) == pytest.approx(-1.35e-4, rel=1e-9)
+
+
+@pytest.mark.parametrize("change, line, words", [
+    (("[budget]", "[budget]\nflights = 3"), 24, "unknown key 'flights' in [budget]"),
+    (('maximize = "singulated_rate"', 'maximize = "speed"'), 20, "unknown metric 'speed'"),
+    (('maximize = "singulated_rate"', 'maximize = ["parts_per_s", "parts_per_s"]'), 20, "the same metric"),
+    (("freq = { low = 50, high = 200, log = true }", "freq = { low = 200, high = 50 }"), 10,
+     "needs numbers low < high"),
+    (("freq = { low = 50, high = 200, log = true }", "freq = { low = 0, high = 50, log = true }"), 10,
+     "log scale needs low > 0"),
+    (("inlet_batch = { low = 1, high = 4, type = \"int\" }", "inlet_batch = { low = 1, high = 4.5, "
+      "type = \"int\" }"), 11, "whole bounds"),
+    (("shape = { choices = [0, 1] }", "shape = { choices = [0, 0] }"), 12, "listed twice"),
+    (('"s2_amp_t >= 2 * amp_t"', '"__import__(1) > 0"'), 17, "calls something other"),
+    (('"s2_amp_t >= 2 * amp_t"', '"s2_amp_t == amp_t"'), 17, "one comparison"),
+    (("max_acceleration = 6.0", "max_acceleration = -1"), 15, "must be a number > 0"),
+    (("frequency = [50, 200]", "frequency = [200, 50]"), 16, "0 < low < high"),
+    (("runs = 12", "runs = 3"), 25, "seeds (4) exceeds runs (3)"),
+    (("mu = [0.4, 0.6]", "freq = [60, 80]"), 28, "freq is a design variable"),
+    (("amp_t = 3.5e-5", "s2_amp_t = 1e-4"), 9, "'s2_amp_t' is set twice"),
+    (("[objective]", "[objectives]"), 19, "unknown key 'objectives'"),
+    (("seed = 11", "seed = 11\ntarget_error = 1.5"), 3, "target_error must be a number in (0, 1)"),
+])
+def test_refusals_name_the_line(change, line, words):
+    text = GOOD.replace(*change)
+    assert text != GOOD
+    with pytest.raises(InputError) as err:
+        parse(text, "study.toml")
+    message = str(err.value)
+    assert words in message and "\n" not in message
+    assert message.startswith(f"study.toml:{line}:"), message
+
+
+def test_a_study_needs_variables_and_an_objective():
+    with pytest.raises(InputError, match="no design variables"):
+        parse('deck = "bulk_feeder"\n[objective]\nmaximize = "parts_per_s"\n', "s.toml")
+    with pytest.raises(InputError, match="maximize must name a metric"):
+        parse('deck = "bulk_feeder"\n[variables]\nfreq = { low = 50, high = 60 }\n', "s.toml")

@@ -1,0 +1,54 @@
+"""``vibrofeed optimize``: the feeder settings a designer needs, found in few DEM runs."""
+
+from __future__ import annotations
+
+import sys
+
+from .options import count, jobs
+
+DESCRIPTION = ("Search a study file's design variables (bounds, choices) for the best value of its "
+               "objective (a metric of the feed-rate and singulation analyses, or two: a Pareto "
+               "front) within its constraints (actuator acceleration and stroke, frequency range, "
+               "inequalities, targets to reach). The analytic models screen the space first and "
+               "seed the search; a setting they rule out is never sent to DEM. Optuna's TPE sampler "
+               "proposes the DEM runs (-j at a time, or across the ranks of mpirun); the best few "
+               "are confirmed with fresh seeds and the best re-run over the [robustness] values. "
+               "Writes DIR/study.csv, DIR/study.h5, DIR/study.json; killed, it continues with "
+               "--resume without repeating a finished run.")
+
+
+def add_arguments(p) -> None:
+    p.add_argument("study", metavar="STUDY.toml", help="the study file (see docs/optimize.md)")
+    p.add_argument("-o", "--output", metavar="DIR",
+                   help="folder for the runs and the study's files (default: results/<STUDY>)")
+    p.add_argument("-j", "--jobs", type=jobs, default=1, metavar="K",
+                   help="DEM runs at a time without mpirun (default 1)")
+    p.add_argument("--budget", type=count("DEM runs"), metavar="N",
+                   help="DEM runs of the search (default: the study file's budget.runs)")
+    p.add_argument("--resume", action="store_true",
+                   help="continue the study in DIR (finished runs are not repeated)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
+
+
+def run(args) -> int:
+    from ..engine import batch
+    from ..optimize.search import optimize
+    from ..sweep.execute import serve
+
+    comm = batch.world()
+    if args.output is not None:
+        from .outputs import folder_destination
+
+        folder_destination("-o", args.output, create=False, parents=True)
+    if comm is not None and comm.Get_rank() != 0:
+        return serve(comm)
+    if comm is not None and args.jobs > 1:
+        from ..errors import UsageError
+
+        raise UsageError("-j: under mpirun the groups of ranks_per_run ranks are the workers; drop -j")
+    try:
+        return optimize(args.study, args.output, workers=args.jobs, budget=args.budget,
+                        resume=args.resume, quiet=args.quiet, comm=comm, out=sys.stdout)
+    finally:
+        if comm is not None:
+            batch.release(comm)
