@@ -146,11 +146,10 @@ class Setting:
 
 
 def _kind(refusal: str) -> str:
-    """A parameter check's refusal without its numbers: ``parameter s2_step``, what it names."""
+    """A parameter check's refusal without its numbers (what the screen's counts group by)."""
     import re
 
-    m = re.match(r"parameter (\w+)", refusal) or re.match(r"(\w+)=", refusal)
-    return f"parameter check: {m.group(1)}" if m else "parameter check"
+    return "parameter check: " + re.sub(r"(?<![\w.])[-+]?\d[\d.]*(e[-+]?\d+)?", "#", refusal).split(";")[0][:80]
 
 
 def screen_space(spec: StudySpec, deck) -> tuple[list[dict], dict]:
