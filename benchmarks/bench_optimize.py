@@ -1,6 +1,7 @@
 """The optimiser on a problem whose optimum the models know: how many DEM runs to it.
 
     .venv/bin/python benchmarks/bench_optimize.py [--study studies/single_part_phase.toml] [--runs 15]
+                                                  [--seeds 0]
 
 The study varies one drive setting of the single-part deck (the phase, in the shipped
 study). The reference is the single-part model's optimum of the same drive, found by a
@@ -57,6 +58,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--study", default=str(ROOT / "studies" / "single_part_phase.toml"))
     ap.add_argument("--runs", type=int, default=15)
+    ap.add_argument("--seeds", type=int, default=None,
+                    help="the screen's seeds (default: the study's; 0: the sampler alone)")
     a = ap.parse_args()
     from vibrofeed.optimize.spec import load
     from vibrofeed.sweep import summary as S
@@ -79,6 +82,8 @@ def main() -> None:
         text = Path(a.study).read_text()
         text = re.sub(r"(?m)^confirm = \d+", "confirm = 0", text)
         text = re.sub(r"(?m)^\[robustness\][\s\S]*", "", text)
+        if a.seeds is not None:
+            text = re.sub(r"(?m)^seeds = \d+", f"seeds = {a.seeds}", text)
         study = tmp / "study.toml"
         study.write_text(text)
         t0 = time.monotonic()
@@ -90,7 +95,8 @@ def main() -> None:
     speeds = [r["objective"] for r in rows]
     reached = next((i + 1 for i, v in enumerate(speeds) if v is not None and v >= 0.98 * v_ref), None)
     best = max((v for v in speeds if v is not None), default=float("nan"))
-    print(f"machine: {machine()}; study {Path(a.study).name}, {a.runs} search runs")
+    seeds = "the study's" if a.seeds is None else a.seeds
+    print(f"machine: {machine()}; study {Path(a.study).name}, {a.runs} search runs, seeds {seeds}")
     print("| measurement | result |\n|---|---|")
     print(f"| model optimum | {name} = {x_model:.4g}, model speed {v_model * 1e3:.3f} mm/s |")
     print(f"| DEM at the model optimum (the reference) | {v_ref * 1e3:.3f} mm/s |")

@@ -467,7 +467,7 @@ def _run(spec, deck, folder, runs, workers, quiet, comm, out, spec_path) -> int:
         doc["screen"] = counts
         st.say(f"screen: {counts['feasible']} of {counts['screened']} settings pass the checks and "
                f"models; {len(seeds)} seed the search")
-        if not seeds:
+        if not counts["feasible"]:
             _write_json(folder, doc)
             raise UsageError("no setting of the design space passes the checks and the models "
                              f"({counts['reasons']}); widen the bounds or loosen [constraints]")
