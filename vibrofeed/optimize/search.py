@@ -149,7 +149,8 @@ def _kind(refusal: str) -> str:
     """A parameter check's refusal without its numbers (what the screen's counts group by)."""
     import re
 
-    return "parameter check: " + re.sub(r"(?<![\w.])[-+]?\d[\d.]*(e[-+]?\d+)?", "#", refusal).split(";")[0][:80]
+    words = re.sub(r"(?<![\w.])[-+]?\d[\d.]*(e[-+]?\d+)?", "#", refusal)
+    return "parameter check: " + words.split(";")[0][:80]
 
 
 def screen_space(spec: StudySpec, deck) -> tuple[list[dict], dict]:
