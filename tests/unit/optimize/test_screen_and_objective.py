@@ -142,3 +142,14 @@ def test_confirmation_ranks_by_the_fresh_runs_one_error_towards_worse():
     out = _confirmed(s, [{"amp_n": 1e-5}, {"amp_n": 2e-5}], rows)
     assert [c["setting"]["amp_n"] for c in out] == [2e-5, 1e-5]
     assert out[1]["parts_per_s"] == (20.0, pytest.approx(4.0, rel=1e-12)) and out[0]["runs"] == 2
+
+
+def test_the_screens_reasons_group_refusals_without_their_numbers():
+    from vibrofeed.optimize.search import _kind
+
+    a = _kind("the joint opens by up to 0.000204 m along the track (amp_t, s2_amp_t), more than half")
+    b = _kind("the joint opens by up to 1.7e-4 m along the track (amp_t, s2_amp_t), more than half")
+    assert a == b == ("parameter check: the joint opens by up to # m along the track (amp_t, s2_amp_t), "
+                      "more than half")
+    assert _kind("parameter s2_step=-2e-05 m: must step down; also this") == \
+        "parameter check: parameter s2_step=# m: must step down"
