@@ -6,25 +6,43 @@ Usage (from the repository root, with the project's venv)::
     .venv/bin/python tests/mutation/run.py parameters postproc  # some targets
     .venv/bin/python tests/mutation/run.py --retest-survivors   # after new tests
     .venv/bin/python tests/mutation/run.py --report             # figures only
+    .venv/bin/python tests/mutation/run.py --plan               # mutants and time, nothing run
+    .venv/bin/python tests/mutation/run.py --operators 'slips/.*' line  # some operators only
 
-Each target of ``[tool.cosmic-ray.targets]`` in pyproject.toml (modules to
-mutate, the fast unit tests that guard them) runs in its own copy of the tree
-under ``--workdir`` (default /tmp/vibrofeed-mutation), so the repository is
-never edited and targets can run side by side (``--jobs``). cosmic-ray mutates
-one spot at a time in place and runs the target's tests; a mutant is killed
-when they fail (or time out). The copy imports as ``vibrofeed`` through
-PYTHONPATH: ``vibrofeed/postproc`` and ``vibrofeed/validation`` are symlinks
-to the top-level folders, as setuptools' ``package-dir`` maps them.
+Each target of ``[tool.cosmic-ray.targets]`` in pyproject.toml (``modules`` to mutate,
+``tests``: the fast unit tests that guard them; optional ``sample``, ``timeout``,
+``exclude-operators`` added to the global ones, and ``functions``: module -> the functions or
+classes, fnmatch patterns on the innermost enclosing definition, whose mutants are tested, the
+others of that module skipped) runs in its own copy of the tree under ``--workdir`` (default
+/tmp/vibrofeed-mutation), so the repository is never edited and targets can run side by side
+(``--jobs``). cosmic-ray mutates one spot at a time in place and runs the target's tests; a
+mutant is killed when they fail (or time out). The copy imports as ``vibrofeed`` through
+PYTHONPATH: ``vibrofeed/postproc`` and ``vibrofeed/validation`` are symlinks to the top-level
+folders, as setuptools' ``package-dir`` maps them.
 
-A session is resumed while the mutated modules are unchanged (an interrupted
-run goes on where it stopped); ``--retest-survivors`` copies the current tests
-and runs the survivors again. Survivors listed in tests/mutation/EQUIVALENT.md
-(same module, operator and source line) count as equivalent mutants. The score
-is (killed + equivalent) / mutants tested, per target. A target with ``sample = f`` (or
-``--sample f``) tests a fixed pseudo-random fraction f of its mutants, the same
-ones every time: the score is then an estimate. ``--min-score`` makes the exit status 1
-when any target is below it (CTest ``mutation``). Survivors with their diffs go to
-``WORKDIR/survivors.md``, the figures to ``WORKDIR/summary.md``.
+Operators: cosmic-ray's core ones, one partner each (``exclude-operators``), and the provider
+``slips`` of tests/mutation/slips.py for the slips they miss: ``slips/MeanMedian`` (np.mean <->
+np.median, ``a.mean()`` -> ``np.median(a)``), ``slips/AxisNone`` (``axis=K`` -> ``axis=None``),
+``slips/OffByOne`` (a slice or range() bound ``E`` -> ``E +/- 1``; ``a[:-1]`` -> ``a[:]``) and
+``slips/LoosenTolerance`` (a tolerance-like name's value times 10); see that module. Nothing is
+installed: run.py writes the module and a ``*.dist-info`` folder holding its entry point
+(``cosmic_ray.operator_providers``) into ``WORKDIR/TARGET/plugin``, which it puts on PYTHONPATH,
+checks that cosmic-ray loads the provider, and runs the operators' own examples first.
+``slips = false`` in ``[tool.cosmic-ray]`` leaves them out.
+
+A session is resumed while its modules, operators, sample, functions and ``--operators`` are
+unchanged (an interrupted run goes on where it stopped). When only the operators, sample,
+functions or ``--operators`` changed, a new session keeps the outcomes of the mutants both
+share (same module, operator, occurrence and position): adding an operator or a larger sample
+tests only the new mutants, and ``--operators 'slips/.*'`` followed by a plain run tests the rest.
+``--retest-survivors`` copies the current tests and runs the survivors again. Survivors listed
+in tests/mutation/EQUIVALENT.md (same module, operator and source line) count as equivalent
+mutants. The score is (killed + equivalent) / mutants tested, per target. A target with
+``sample = f`` (or ``--sample f``) tests a fixed pseudo-random fraction f of its mutants, the
+same ones every time: the score is then an estimate. ``--min-score`` makes the exit status 1
+when any target is below it (CTest ``mutation``). ``--plan`` sets the sessions up and times each
+target's tests once: the mutants to test and the most they take (one test run each).
+Survivors with their diffs go to ``WORKDIR/survivors.md``, the figures to ``WORKDIR/summary.md``.
 """
 
 from __future__ import annotations
@@ -46,6 +64,8 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
 EQUIVALENT = Path(__file__).with_name("EQUIVALENT.md")
+SLIPS = Path(__file__).with_name("slips.py")  # the provider `slips` of extra operators
+PLUGIN = "vibrofeed_mutation_slips"  # its module and distribution name in the session's plugin/
 # What the copy needs to import and test the package (no build tree, no venv).
 COPIED = ("vibrofeed", "postproc", "validation", "decks", "tests", "pyproject.toml", "README.md",
           "FORMAT.md")
@@ -98,6 +118,42 @@ def fingerprint(modules) -> str:
     return h.hexdigest()
 
 
+def operators_fingerprint(cfg: dict, spec: dict) -> str:
+    """What decides the set of operators: the exclusions and the slips provider's code."""
+    h = hashlib.sha256(json.dumps([excluded(cfg, spec), cfg.get("slips", True)]).encode())
+    if cfg.get("slips", True):
+        h.update(SLIPS.read_bytes())
+    return h.hexdigest()
+
+
+def excluded(cfg: dict, spec: dict) -> list[str]:
+    return list(cfg.get("exclude-operators", [])) + list(spec.get("exclude-operators", []))
+
+
+def make_plugin(home: Path) -> Path:
+    """The slips provider as an installed distribution would look, in ``home/plugin``: on
+    PYTHONPATH, importlib.metadata (stevedore, hence cosmic-ray) finds its entry point
+    ``cosmic_ray.operator_providers: slips``. Nothing is installed in the venv. Files are
+    rewritten only when they change (stevedore caches entry points by path and mtime)."""
+    plugin = home / "plugin"
+    info = plugin / f"{PLUGIN}-1.0.dist-info"
+    info.mkdir(parents=True, exist_ok=True)
+    files = {
+        plugin / f"{PLUGIN}.py": SLIPS.read_text(),
+        info / "METADATA": f"Metadata-Version: 2.1\nName: {PLUGIN}\nVersion: 1.0\n",
+        info / "entry_points.txt": f"[cosmic_ray.operator_providers]\nslips = {PLUGIN}:Provider\n",
+    }
+    for path, text in files.items():
+        if not path.exists() or path.read_text() != text:
+            path.write_text(text)
+    return plugin
+
+
+def check_slips() -> None:
+    """The slips operators' own examples (tests/mutation/slips.py, ``check``)."""
+    subprocess.run([sys.executable, str(SLIPS)], check=True, stdout=subprocess.DEVNULL)
+
+
 # -- one target ----------------------------------------------------------------------------
 def cosmic_ray(*args, cwd, env, log):
     cmd = [sys.executable, "-m", "cosmic_ray.cli", *map(str, args)]
@@ -122,19 +178,66 @@ def sample_out(db: Path, fraction: float) -> None:
                       "VALUES (?, ?, ?, ?, ?)", out)
 
 
+def restrict(db: Path, functions: dict[str, list[str]], operators: str | None = None) -> None:
+    """Only the mutants inside the named functions or classes (innermost enclosing definition,
+    fnmatch patterns) of the modules listed, and only the operators matching the regular
+    expression ``operators``; mark the others skipped."""
+    def targeted(module, where, op):
+        return ((module not in functions or any(fnmatch.fnmatchcase(where or "", f)
+                                                for f in functions[module]))
+                and (operators is None or re.fullmatch(operators, op) is not None))
+    with sqlite3.connect(db) as c:
+        rows = list(c.execute(
+            "SELECT s.job_id, s.module_path, s.definition_name, s.operator_name FROM mutation_specs s "
+            "LEFT JOIN work_results r ON r.job_id = s.job_id WHERE r.job_id IS NULL"))
+        out = [("SKIPPED", "not targeted", None, None, job) for job, module, where, op in rows
+               if not targeted(module, where, op)]
+        c.executemany("INSERT INTO work_results (worker_outcome, output, test_outcome, diff, job_id) "
+                      "VALUES (?, ?, ?, ?, ?)", out)
+
+
+_KEY = "s.module_path, s.operator_name, s.occurrence, s.start_pos_row, s.start_pos_col"
+
+
+def carry_results(old: Path, new: Path) -> int:
+    """Copy the outcomes of mutants tested in the old session (same modules: same mutant for the
+    same module, operator, occurrence and position) into the new one, where it tests them too:
+    a new operator, target option or sample adds mutants without testing the old ones again."""
+    with sqlite3.connect(old) as c:
+        done = {tuple(k): v for *k, v in (
+            (*r[:5], r[5:]) for r in c.execute(
+                f"SELECT {_KEY}, r.worker_outcome, r.output, r.test_outcome, r.diff "
+                "FROM mutation_specs s JOIN work_results r ON r.job_id = s.job_id "
+                "WHERE r.worker_outcome != 'SKIPPED'"))}
+    with sqlite3.connect(new) as c:
+        todo = list(c.execute(f"SELECT s.job_id, {_KEY} FROM mutation_specs s LEFT JOIN work_results r "
+                              "ON r.job_id = s.job_id WHERE r.job_id IS NULL"))
+        out = [(*done[tuple(key)], job) for job, *key in todo if tuple(key) in done]
+        c.executemany("INSERT INTO work_results (worker_outcome, output, test_outcome, diff, job_id) "
+                      "VALUES (?, ?, ?, ?, ?)", out)
+    return len(out)
+
+
 def run_target(name: str, spec: dict, cfg: dict, workdir: Path, retest: bool, fresh: bool,
-               sample: float | None = None, survivors_only: bool = False) -> None:
+               sample: float | None = None, survivors_only: bool = False,
+               plan_only: bool = False, operators: str | None = None) -> dict | None:
     home = workdir / name
     tree, db, stamp = home / "tree", home / "session.sqlite", home / "fingerprint.json"
     log = home / "cosmic-ray.log"
     home.mkdir(parents=True, exist_ok=True)
+    fraction = sample if sample is not None else spec.get("sample")
+    functions = spec.get("functions", {})
     fp = fingerprint(spec["modules"])
-    same = (stamp.exists() and json.loads(stamp.read_text()).get("modules") == fp
-            and db.exists() and not fresh)
+    session = {"modules": fp, "operators": operators_fingerprint(cfg, spec), "sample": fraction,
+               "functions": functions, "only_operators": operators}
+    old = json.loads(stamp.read_text()) if stamp.exists() and db.exists() and not fresh else {}
+    same = old == session
+    # Same modules, other operators, sample or functions: a new session that keeps the outcomes.
+    carry = not same and old.get("modules") == fp
     make_tree(tree)  # fresh sources every time: an interrupted run may have left a mutant in place
     if retest and not same:
-        raise SystemExit(f"{name}: the mutated modules changed since the session began; "
-                         "run without --retest-survivors for a new session")
+        raise SystemExit(f"{name}: the mutated modules, operators, sample or functions changed "
+                         "since the session began; run without --retest-survivors first")
     tests = " ".join(spec["tests"])
     python = sys.executable
     config = {
@@ -143,21 +246,35 @@ def run_target(name: str, spec: dict, cfg: dict, workdir: Path, retest: bool, fr
         "excluded-modules": [],
         "test-command": f"nice -n 10 {python} -m pytest -x -q -p no:cacheprovider {tests}",
         "distributor": {"name": "local"},
-        "filters": {"operators-filter": {"exclude-operators": cfg.get("exclude-operators", [])}},
+        "filters": {"operators-filter": {"exclude-operators": excluded(cfg, spec)}},
     }
     (home / "cosmic-ray.toml").write_text(_toml({"cosmic-ray": config}))
-    env = dict(os.environ, PYTHONPATH=str(tree), VIBROFEED_MUTATION="1")
+    path = [str(tree)] + ([str(make_plugin(home))] if cfg.get("slips", True) else [])
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(path), VIBROFEED_MUTATION="1")
     env.pop("PYTHONSTARTUP", None)
     if not same:
+        if cfg.get("slips", True):  # the provider must load, or its operators silently vanish
+            subprocess.run([sys.executable, "-c", "import cosmic_ray.plugins as p, sys; "
+                            "sys.exit('slips' not in p.OPERATOR_PROVIDERS)"], cwd=tree, env=env,
+                           check=True)
+        previous = home / "previous.sqlite"
+        if carry:
+            db.replace(previous)
         db.unlink(missing_ok=True)
+        stamp.unlink(missing_ok=True)
         cosmic_ray("init", home / "cosmic-ray.toml", db, cwd=tree, env=env, log=log)
         subprocess.run([sys.executable, "-m", "cosmic_ray.tools.filters.operators_filter",
                         db, home / "cosmic-ray.toml"], cwd=tree, env=env, check=True,
                        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        fraction = sample if sample is not None else spec.get("sample")
+        if functions or operators:
+            restrict(db, functions, operators)
         if fraction is not None and fraction < 1:
             sample_out(db, float(fraction))
-        stamp.write_text(json.dumps({"modules": fp, "sample": fraction}))
+        if carry:
+            kept = carry_results(previous, db)
+            previous.unlink()
+            print(f"{name}: new session, {kept} outcomes kept from the last one", flush=True)
+        stamp.write_text(json.dumps(session))
         # The sources as mutated, for the report (the repository may move on meanwhile).
         shutil.rmtree(home / "sources", ignore_errors=True)
         for f in module_files(spec["modules"]):
@@ -165,10 +282,13 @@ def run_target(name: str, spec: dict, cfg: dict, workdir: Path, retest: bool, fr
             dest.parent.mkdir(parents=True, exist_ok=True)
             shutil.copy2(f, dest)
     # The unmutated copy must pass, or every mutant would count as killed.
+    t_base = time.monotonic()
     base = subprocess.run(config["test-command"].split(), cwd=tree, env=env, capture_output=True,
                           text=True)
     if base.returncode != 0:
         raise SystemExit(f"{name}: the tests fail on the unmutated copy:\n{base.stdout[-3000:]}")
+    if plan_only:
+        return plan_figures(name, db, time.monotonic() - t_base)
     deferred = []
     if retest:
         with sqlite3.connect(db) as c:
@@ -189,8 +309,31 @@ def run_target(name: str, spec: dict, cfg: dict, workdir: Path, retest: bool, fr
     spent = time.monotonic() - t0
     times = json.loads((home / "wall.json").read_text()) if (home / "wall.json").exists() else {}
     times["last_exec_s"] = spent
-    times["total_exec_s"] = times.get("total_exec_s", 0.0) * (same or retest) + spent
+    times["total_exec_s"] = times.get("total_exec_s", 0.0) * (same or retest or carry) + spent
     (home / "wall.json").write_text(json.dumps(times))
+    return None
+
+
+def plan_figures(name: str, db: Path, base_s: float) -> dict:
+    """Mutants of a target (all, in the sample, still to test) and the time the rest takes at
+    most: one run of the target's tests each (a killed mutant often stops earlier, at -x)."""
+    with sqlite3.connect(db) as c:
+        ops = {}
+        for op, worker, output in c.execute(
+                "SELECT s.operator_name, r.worker_outcome, r.output FROM mutation_specs s "
+                "LEFT JOIN work_results r ON r.job_id = s.job_id"):
+            filtered = worker == "SKIPPED" and output not in ("sampled out", "not targeted")
+            if filtered:
+                continue
+            o = ops.setdefault(op.split("/")[0] if op.startswith("core/") else op, [0, 0, 0])
+            o[0] += 1
+            o[1] += worker != "SKIPPED"
+            o[2] += worker is None
+    total, tested, pending = (sum(v[i] for v in ops.values()) for i in range(3))
+    slips = {k: v[1] for k, v in ops.items() if k.startswith("slips/")}
+    print(f"{name}: {total} mutants, {tested} in the sample ({pending} to test; slips {slips}); "
+          f"tests {base_s:.1f} s: at most {pending * base_s / 3600:.2f} h", flush=True)
+    return dict(total=total, tested=tested, pending=pending, base_s=base_s)
 
 
 def _toml(d: dict, prefix: str = "") -> str:
@@ -321,6 +464,12 @@ def main(argv=None) -> int:
                     help="with --retest-survivors: leave the untested mutants for later")
     ap.add_argument("--fresh", action="store_true", help="start new sessions")
     ap.add_argument("--report", action="store_true", help="only print the figures")
+    ap.add_argument("--operators", metavar="REGEX", default=None,
+                    help="test only the mutants of the operators matching REGEX (whole name, e.g. "
+                         "'slips/.*'); the others wait for a run without it, which keeps these outcomes")
+    ap.add_argument("--plan", action="store_true",
+                    help="set the sessions up and time the tests once: print each target's mutants "
+                         "and the most its untested ones take; test no mutant")
     ap.add_argument("--min-score", type=float, default=None,
                     help="exit 1 when a target scores below this (0-1)")
     ap.add_argument("--sample", type=float, default=None,
@@ -334,12 +483,18 @@ def main(argv=None) -> int:
         ap.error(f"unknown target(s) {', '.join(unknown)}; known: {', '.join(targets)}")
     args.workdir.mkdir(parents=True, exist_ok=True)
     if not args.report:
+        if cfg.get("slips", True):
+            check_slips()
         with ThreadPoolExecutor(max(1, args.jobs)) as pool:
             futures = [pool.submit(run_target, n, targets[n], cfg, args.workdir,
                                    args.retest_survivors, args.fresh, args.sample,
-                                   args.survivors_only) for n in names]
-            for f in futures:
-                f.result()
+                                   args.survivors_only, args.plan, args.operators) for n in names]
+            plans = [f.result() for f in futures]
+        if args.plan:
+            pending = sum(p["pending"] * p["base_s"] for p in plans)
+            print(f"all: {sum(p['tested'] for p in plans)} mutants in the samples, at most "
+                  f"{pending / 3600:.1f} h on one core")
+            return 0
     score = report(names, args.workdir, cfg)
     if args.min_score is not None and not score >= args.min_score:
         print(f"lowest target score {100 * score:.1f} % is below {100 * args.min_score:.0f} % "

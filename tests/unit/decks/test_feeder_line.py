@@ -14,7 +14,15 @@ from vibrofeed.decks import Deck
 from vibrofeed.engine.outlet import LineOutlet, gravity_vector
 from vibrofeed.errors import ParameterError
 from vibrofeed.geometry import prepare_bulk_feeder, track_mesh
-from vibrofeed.line import Section, combined, joint_motion, joint_steps, section_from, section_mesh
+from vibrofeed.line import (
+    Section,
+    combined,
+    joint_motion,
+    joint_steps,
+    section_drive,
+    section_from,
+    section_mesh,
+)
 from vibrofeed.parameters import resolve
 from vibrofeed.results.layout import REJECTS
 
@@ -114,6 +122,27 @@ def test_wiper_underside_follows_the_floor_at_its_height():
     assert len(under) == 4 and np.allclose(np.sort(np.abs(under[:, 1])), 2.1e-4, rtol=0, atol=TOL)
 
 
+def test_no_vertex_of_a_section_lies_below_its_floor():
+    s = section(drop_from=0.25, drop_to=0.5, drop_width=2.5e-4, wiper_height=3.5e-4, wiper_at=0.7,
+                wiper_length=3e-4)
+    v, _ = section_mesh(s)
+    assert (v[:, 2] >= s.floor_z(v[:, 1]) - TOL).all()
+
+
+def test_a_drop_needs_a_length_and_must_leave_a_floor():
+    assert section(drop_from=0.25, drop_to=0.5, drop_width=2.5e-4).has_drop
+    assert not section(drop_from=0.3, drop_to=0.3, drop_width=2.5e-4).has_drop  # no length
+    assert not section(drop_from=0.25, drop_to=0.5, drop_width=4.2e-4).has_drop  # as wide as the track
+
+
+def test_each_section_has_its_own_drive():
+    p = {"freq": 100.0, "amp_t": 1e-5, "amp_n": 2e-5, "phase": 30.0, "waveform": 2,
+         "s2_freq": 120.0, "s2_amp_t": 3e-5, "s2_amp_n": 4e-5, "s2_phase": 45.0}
+    assert section_drive(p, 1) == p
+    assert section_drive(p, 2) == {**p, "freq": 120.0, "amp_t": 3e-5, "amp_n": 4e-5, "phase": 45.0,
+                                   "waveform": 0}  # section 2 runs a sine
+
+
 def test_section_joins_section_one_with_a_step_down():
     v1, t1 = track_mesh(L1, W1, 1e-3, gate_width=4.2e-4, gate_x=0.6 * L1)
     s = section()
@@ -167,14 +196,18 @@ def test_a_single_section_is_the_bulk_feeder_unchanged(tmp_path):
 @pytest.mark.parametrize("given, words", [
     ({"s2_width": 3e-4}, "narrower than section 1's exit"),
     ({"s2_width": 2e-4}, "narrower than a part"),
+    # spheres: the largest is 4.35e-4 m across (the exit, 4.5e-4 m, takes it)
+    ({"size_spread": 0.45, "gate_width": 4.5e-4, "s2_width": 4.3e-4}, "narrower than a part"),
     ({"s2_step": 2e-5, "s2_phase": -30}, "must step down by more than"),
     ({"s2_step": 3e-4}, "not a small step"),
     ({"s2_amp_t": 2.6e-4}, "joint opens"),
+    ({"amp_t": 2.5e-5, "s2_amp_t": 1.75e-4}, "joint opens"),  # by exactly half a part
     ({"s2_wiper_height": 2e-4}, "lower than a part's thickness"),
     ({"s2_wiper_height": 7e-4}, "not below the walls"),
     ({"s2_wiper_height": 4e-4, "s2_wiper_at": 0.99}, "runs past the outlet"),
     ({"s2_drop_to": 0.5, "s2_drop_width": 1e-4}, "less than half a part"),
     ({"s2_drop_to": 0.5, "s2_drop_width": 5e-4}, "narrower than s2_width"),
+    ({"s2_drop_to": 0.5, "s2_drop_width": 4.2e-4}, "narrower than s2_width"),  # as wide
     ({"s2_wall_height": 1e-4}, "no higher than a part's centre"),
     ({"waveform": 1}, "sines"),
     ({"hamaker": 1e-19}, "section 1's floor only"),

@@ -20,6 +20,7 @@ from vibrofeed.geometry import (
     prepare_bulk_feeder,
     shape_code,
     track_mesh,
+    wall_stations,
 )
 from vibrofeed.mesh import write_stl
 
@@ -108,6 +109,17 @@ def test_gate_width_and_taper():
 def test_a_gate_that_does_not_fit_is_refused():
     with pytest.raises(ParameterError, match="gate"):
         track_mesh(L, W, H, gate_width=2e-4, gate_x=L - 1e-4)
+
+
+def test_wall_stations_are_at_most_the_spacing_apart_and_a_taper_may_end_at_the_outlet():
+    # default spacing: the track width, at most 1 mm; the stations end exactly at the outlet
+    for length, width in ((0.02, 2e-3), (0.0105, 4e-4)):
+        xs, _ = wall_stations(length, width)
+        assert xs[0] == 0.0 and xs[-1] == length
+        assert np.diff(xs).max() <= min(width, 1e-3) * (1 + 1e-12)
+    # a taper ending exactly at the outlet edge fits (binary fractions: exact sums)
+    xs, half = wall_stations(1.0, 0.5, gate_width=0.25, gate_x=0.875)
+    assert xs[-1] == 1.0 and half[-1] == 0.125
 
 
 def test_catch_face_is_a_unit_rectangle_facing_down(tmp_path):

@@ -152,3 +152,15 @@ def test_the_fragments_of_a_body_being_deleted_are_no_part():
     parts, incomplete = aggregate(atoms, CLUMP, 5)
     assert parts["id"].tolist() == [100, 101] and incomplete == 0
     assert np.abs(parts["orientation"] - q[:2]).max() < 1e-12
+
+
+def test_a_frame_of_only_fragments_has_no_parts_with_the_shapes_of_parts():
+    # the last body being deleted: every atom left is a fragment (body -1)
+    q = random_quaternions(1, seed=9)
+    atoms = clump_atoms(CLUMP, q, np.zeros((1, 3)), np.zeros((1, 3)), np.zeros((1, 3)))
+    atoms["molecule"][:] = -1
+    parts, incomplete = aggregate(atoms, CLUMP, 5)
+    assert incomplete == 0
+    assert {k: v.shape for k, v in parts.items()} == {
+        "id": (0,), "species": (0,), "radius": (0,), "mass": (0,), "orientation": (0, 4),
+        "position": (0, 3), "velocity": (0, 3), "angular_velocity": (0, 3), "force": (0, 3)}

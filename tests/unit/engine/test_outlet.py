@@ -1,6 +1,7 @@
 """Outlet events and the mass balance (vibrofeed.engine.outlet) on known trajectories."""
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -51,6 +52,15 @@ def test_crossing_when_rising_after_the_plane_or_never_above_it():
     tau, _, _ = ballistic_crossing(np.array([[0.0, 0, -1e-3]]), np.array([[0, 0, -0.1]]), 0.0,
                                    np.zeros(3))
     assert abs(tau[0] + 1e-2) < 1e-16
+
+
+
+def test_a_part_that_never_reached_the_plane_raises_no_warning():
+    # its D < 0 is clamped before the square root: no 'invalid value' RuntimeWarning per frame
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        tau, _, _ = ballistic_crossing(np.array([[0.0, 0, -1e-3]]), np.array([[0, 0, 0.01]]), 0.0, G)
+    assert tau[0] == 0
 
 
 def frame(ids, x, z, vz=-0.3):

@@ -11,7 +11,7 @@ from bulk_synthetic import JOINT, OUTLET_X, RADIUS, S2_LENGTH, bed, feeder, line
 from helpers import parts, write_bulk_result
 from vibrofeed.postproc import FeedRate
 from vibrofeed.postproc.feedrate import LINE_KEYS, SUMMARY_KEYS, period_velocities
-from vibrofeed.postproc.line import bed_pass, drift, drifts, tooling, unsteady
+from vibrofeed.postproc.line import batch_cuts, bed_pass, drift, drifts, tooling, unsteady
 from vibrofeed.results.reader import Result
 
 FREQ = 100.0
@@ -92,17 +92,19 @@ def hand_line(path, rows, times):
                                     outlet={"outlet_x": EDGE, "catch_z": -3e-4, "method": "synthetic"}))
 
 
+MM = 1e-3
+FLICKER_TIMES = [0.0, 0.01, 0.02, 0.03, 0.045]                # the last interval uneven
+FLICKER_ROWS = [
+    {1: 5.9 * MM, 2: 5.9 * MM, 3: 6.1 * MM},
+    {1: 6.1 * MM, 2: 6.1 * MM, 3: 6.2 * MM, 4: 5.98 * MM},   # 4 inserted between frames
+    {1: 5.95 * MM, 2: 5.8 * MM, 3: 6.3 * MM, 4: 6.02 * MM},
+    {1: 6.2 * MM, 2: 5.7 * MM, 4: 6.1 * MM, 5: 5.99 * MM},   # 3 removed, 5 inserted
+    {1: 6.3 * MM, 2: 5.6 * MM, 4: 6.2 * MM},                 # 5 removed before crossing
+]
+
+
 def test_a_part_counts_once_at_its_last_crossing_if_it_stays_beyond_the_joint(tmp_path):
-    mm = 1e-3
-    times = [0.0, 0.01, 0.02, 0.03, 0.045]                # the last interval uneven
-    rows = [
-        {1: 5.9 * mm, 2: 5.9 * mm, 3: 6.1 * mm},
-        {1: 6.1 * mm, 2: 6.1 * mm, 3: 6.2 * mm, 4: 5.98 * mm},   # 4 inserted between frames
-        {1: 5.95 * mm, 2: 5.8 * mm, 3: 6.3 * mm, 4: 6.02 * mm},
-        {1: 6.2 * mm, 2: 5.7 * mm, 4: 6.1 * mm, 5: 5.99 * mm},   # 3 removed, 5 inserted
-        {1: 6.3 * mm, 2: 5.6 * mm, 4: 6.2 * mm},                 # 5 removed before crossing
-    ]
-    with hand_line(tmp_path / "flicker.h5", rows, times) as r:
+    with hand_line(tmp_path / "flicker.h5", FLICKER_ROWS, FLICKER_TIMES) as r:
         crossings, counts = bed_pass(r, np.arange(5), [JOINT], EDGE)
     times_1, ids_1 = crossings[0]
     # 1 crosses, comes back, crosses again: counted once, at the second crossing (between
@@ -113,6 +115,21 @@ def test_a_part_counts_once_at_its_last_crossing_if_it_stays_beyond_the_joint(tm
     assert times_1 == pytest.approx([0.015, 0.022], abs=1e-12)
     # parts over each section per frame: x < 6 mm on section 1, 6 .. 11 mm on section 2
     assert counts.tolist() == [[2, 1], [1, 3], [2, 2], [2, 2], [1, 2]]
+
+
+@pytest.mark.parametrize("per_block", [2, 3])
+def test_the_pass_in_blocks_of_a_few_frames_gives_the_same_answer(tmp_path, monkeypatch, per_block):
+    # a long run is read in blocks of frames overlapping by one: every pair is seen once
+    from vibrofeed.postproc import line as pl
+
+    with hand_line(tmp_path / "flicker.h5", FLICKER_ROWS, FLICKER_TIMES) as r:
+        (times, ids), = bed_pass(r, np.arange(5), [JOINT], EDGE)[0]
+        counts = bed_pass(r, np.arange(5), [JOINT], EDGE)[1]
+        monkeypatch.setattr(pl, "_BLOCK_VALUES", 4 * r.n_slots * per_block)
+        (times_b, ids_b), = bed_pass(r, np.arange(5), [JOINT], EDGE)[0]
+        counts_b = bed_pass(r, np.arange(5), [JOINT], EDGE)[1]
+    assert ids.tolist() == [4, 1] and ids_b.tolist() == ids.tolist()
+    assert times_b.tolist() == times.tolist() and counts_b.tolist() == counts.tolist()
 
 
 def test_a_part_below_the_catch_plane_crosses_nothing(tmp_path):
@@ -297,6 +314,11 @@ def test_drift_compares_the_thirds_with_the_scatter_about_a_line():
     assert not drifts(0.02, 0.02 * (1 + 1e-15), 0.0)                   # equal up to round-off
 
 
+def test_drift_takes_the_means_of_the_thirds_not_their_medians():
+    first, last, _ = drift([1.0, 1.0, 4.0, 2.0, 2.0, 2.0, 3.0, 3.0, 6.0])  # medians 1 and 3
+    assert (first, last) == pytest.approx((2.0, 4.0), abs=1e-12)
+
+
 def test_a_draining_bed_conveyed_at_a_steady_speed_is_steady(tmp_path):
     # the demo's case: a pre-filled bed, no inlet, every part at the same speed: the
     # hold-up falls as the bed drains, which is no drift (a store without inflow)
@@ -372,3 +394,8 @@ def test_unsteady_says_every_drift():
         "(more than 3 standard errors: 3 mm/s); the hold-up on section 2 falls 6.0 -> 2.5 parts over "
         "the window (more than 3 standard errors: 0.6 parts)")
     assert unsteady(trends[1:2]) is None and unsteady([]) is None
+
+
+def test_a_window_shorter_than_two_periods_is_one_batch():
+    assert batch_cuts(0.0, 0.01, 100.0, 10).tolist() == [0.0, 0.01]  # one period at 100 Hz
+    assert len(batch_cuts(0.0, 0.1, 100.0, 4)) == 5  # ten periods: four batches
