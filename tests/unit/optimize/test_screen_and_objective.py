@@ -153,3 +153,22 @@ def test_the_screens_reasons_group_refusals_without_their_numbers():
                       "more than half")
     assert _kind("parameter s2_step=-2e-05 m: must step down; also this") == \
         "parameter check: parameter s2_step=# m: must step down"
+
+
+def test_objective_columns_and_a_target_of_zero():
+    from vibrofeed.optimize.search import objective_keys
+
+    assert objective_keys(study()) == ["objective"]
+    s2 = parse('deck = "bulk_feeder"\n[variables]\namp_n = { low = 1e-5, high = 1e-4 }\n[objective]\n'
+               'maximize = ["parts_per_s", "singulated_fraction"]\n', "s.toml")
+    assert objective_keys(s2) == ["objective", "objective_2"]
+    zero = parse('deck = "bulk_feeder"\n[variables]\namp_n = { low = 1e-5, high = 1e-4 }\n[objective]\n'
+                 'maximize = "parts_per_s"\nat_least = { cv_interarrival = 0 }\n', "s.toml")
+    # a target of 0 has no scale of its own: the shortfall is absolute
+    assert target_margins(zero, {"cv_interarrival": 0.3}) == [pytest.approx(-0.3, rel=1e-12)]
+
+
+def test_skewed_replicates_mean_is_not_their_median():
+    mean, err = _mean_and_error([10.0, 10.0, 16.0], [None, None, None])
+    assert mean == pytest.approx(12.0, rel=1e-12)  # the median would be 10
+    assert err == pytest.approx(math.sqrt(12.0) / math.sqrt(3), rel=1e-12)

@@ -101,3 +101,34 @@ def test_a_study_needs_variables_and_an_objective():
         parse('deck = "bulk_feeder"\n[objective]\nmaximize = "parts_per_s"\n', "s.toml")
     with pytest.raises(InputError, match="maximize must name a metric"):
         parse('deck = "bulk_feeder"\n[variables]\nfreq = { low = 50, high = 60 }\n', "s.toml")
+
+
+@pytest.mark.parametrize("change, words", [
+    (('require = ["s2_amp_t >= 2 * amp_t", "abs(s2_amp_t - amp_t) < 2e-4"]', 'require = "s2_amp_t > 0"'),
+     "require must list inequalities as strings"),
+    (('"s2_amp_t >= 2 * amp_t"', '"s2_amp_t >= >= 2"'), "is not an inequality"),
+    (("freq = { low = 50, high = 200, log = true }", "freq = { low = 50, high = inf }"), "needs numbers low < high"),
+    (("freq = { low = 50, high = 200, log = true }", "freq = { low = nan, high = 200 }"), "needs numbers low < high"),
+    (("max_acceleration = 6.0", "max_acceleration = 0"), "must be a number > 0"),
+    (('maximize = "singulated_rate"', 'maximize = ["parts_per_s", "singulated_fraction", "doubles_rate"]'),
+     "or two (a Pareto front)"),
+    (("seeds = 4", "seeds = -1"), "seeds must be a whole number >= 0"),
+    (("seed = 11", "seed = 11\nranks_per_run = 0"), "ranks_per_run must be a whole number >= 1"),
+])
+def test_more_refusals_at_their_boundaries(change, words):
+    text = GOOD.replace(*change)
+    assert text != GOOD
+    with pytest.raises(InputError) as err:
+        parse(text, "study.toml")
+    assert words in str(err.value) and "\n" not in str(err.value)
+
+
+def test_defaults_and_two_objectives():
+    s = parse('deck = "bulk_feeder"\n[variables]\nfreq = { low = 50, high = 60 }\n[objective]\n'
+              'maximize = ["parts_per_s", "singulated_fraction"]\n', "s.toml")
+    assert s.multi and s.maximize == ["parts_per_s", "singulated_fraction"]
+    assert s.budget == {"runs": 20, "seeds": 6, "screen": 256, "confirm": 3, "replicates": 3}
+    assert s.seed == 5489 and s.ranks_per_run == 1 and s.target_error is None and s.at_least == {}
+    # zero is a bound a study may state (0 <= seeds, confirm)
+    s0 = parse(GOOD.replace("seeds = 4", "seeds = 0"), "s.toml")
+    assert s0.budget["seeds"] == 0
