@@ -103,12 +103,15 @@ def test_a_study_needs_variables_and_an_objective():
         parse('deck = "bulk_feeder"\n[variables]\nfreq = { low = 50, high = 60 }\n', "s.toml")
 
 
+FREQ = "freq = { low = 50, high = 200, log = true }"
+
+
 @pytest.mark.parametrize("change, words", [
     (('require = ["s2_amp_t >= 2 * amp_t", "abs(s2_amp_t - amp_t) < 2e-4"]', 'require = "s2_amp_t > 0"'),
      "require must list inequalities as strings"),
     (('"s2_amp_t >= 2 * amp_t"', '"s2_amp_t >= >= 2"'), "is not an inequality"),
-    (("freq = { low = 50, high = 200, log = true }", "freq = { low = 50, high = inf }"), "needs numbers low < high"),
-    (("freq = { low = 50, high = 200, log = true }", "freq = { low = nan, high = 200 }"), "needs numbers low < high"),
+    ((FREQ, "freq = { low = 50, high = inf }"), "needs numbers low < high"),
+    ((FREQ, "freq = { low = nan, high = 200 }"), "needs numbers low < high"),
     (("max_acceleration = 6.0", "max_acceleration = 0"), "must be a number > 0"),
     (('maximize = "singulated_rate"', 'maximize = ["parts_per_s", "singulated_fraction", "doubles_rate"]'),
      "or two (a Pareto front)"),
