@@ -172,3 +172,22 @@ def test_skewed_replicates_mean_is_not_their_median():
     mean, err = _mean_and_error([10.0, 10.0, 16.0], [None, None, None])
     assert mean == pytest.approx(12.0, rel=1e-12)  # the median would be 10
     assert err == pytest.approx(math.sqrt(12.0) / math.sqrt(3), rel=1e-12)
+
+
+def test_confirmation_reports_the_targets_mean_too():
+    s = parse('deck = "bulk_feeder"\n[variables]\namp_n = { low = 1e-5, high = 1e-4 }\n[objective]\n'
+              'maximize = "singulated_rate"\nat_least = { parts_per_s = 25 }\n', "s.toml")
+    rows = [{"job": 10000, "stage": "confirm", "objective": 20.0, "objective_err": 1.0, "parts_per_s": 28.0},
+            {"job": 10001, "stage": "confirm", "objective": 22.0, "objective_err": 1.0, "parts_per_s": 30.0}]
+    (entry,) = _confirmed(s, [{"amp_n": 1e-5}], rows)
+    assert entry["parts_per_s"][0] == pytest.approx(29.0, rel=1e-12)
+    assert entry["parts_per_s"][1] == pytest.approx(1.0, rel=1e-12)  # the scatter: sd 1.414 / sqrt 2
+
+
+def test_an_unreadable_study_file_says_why(tmp_path):
+    from vibrofeed.errors import InputError
+    from vibrofeed.optimize.spec import load
+
+    with pytest.raises(InputError) as err:
+        load(tmp_path / "missing.toml")
+    assert str(err.value) == f"cannot read study file {tmp_path / 'missing.toml'}: No such file or directory"
