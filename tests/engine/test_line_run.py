@@ -165,7 +165,7 @@ def test_recirculated_rejects_come_back_at_the_inlet(tmp_path, ranks):
     with crossing + delay <= t(k-1); each returned part is a new one that appears at the track
     start; and the balance, now with the returns in ``inserted``, is exact at every frame."""
     out, delay = tmp_path / "returns.h5", 0.02
-    params = {**LINE, "recirculate": 1, "return_delay": delay, "t_end": 0.3}
+    params = {**LINE, "recirculate": 1, "return_delay": delay, "t_end": 0.22}
     vibrofeed("run", "bulk_feeder", "-q", "-o", out, "-n", ranks,
               *[a for k, v in params.items() for a in ("-p", f"{k}={v}")], check=True)
     report = check_file(out)
