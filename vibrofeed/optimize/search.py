@@ -36,9 +36,9 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import shlex
 import sys
-import time
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -93,12 +93,12 @@ def from_unit(spec: StudySpec, u: np.ndarray) -> dict:
     for v, x in zip(spec.variables, u):
         if v.kind == "choice":
             out[v.name] = v.choices[min(int(x * len(v.choices)), len(v.choices) - 1)]
-        elif v.log:
-            out[v.name] = math.exp(math.log(v.low) + x * (math.log(v.high) - math.log(v.low)))
+            continue
+        if v.log:
+            value = math.exp(math.log(v.low) + x * (math.log(v.high) - math.log(v.low)))
         else:
-            out[v.name] = v.low + x * (v.high - v.low)
-        out[v.name] = int(round(out[v.name])) if v.kind == "int" else (
-            out[v.name] if v.kind == "choice" else float(out[v.name]))
+            value = v.low + x * (v.high - v.low)
+        out[v.name] = int(round(value)) if v.kind == "int" else float(value)
     return out
 
 
@@ -116,12 +116,17 @@ def to_unit(spec: StudySpec, setting: dict) -> np.ndarray:
 
 
 # ------------------------------------------------------------------ one setting
+def deck_params(spec: StudySpec, setting: dict) -> dict:
+    """A setting with the study's fixed values, as ``vibrofeed run -p`` takes them."""
+    return {name: value_text(v) for name, v in {**spec.fixed, **setting}.items()}
+
+
 class Setting:
     """A design setting made into deck values, checked and screened."""
 
     def __init__(self, spec: StudySpec, deck, setting: dict):
         self.setting = setting
-        self.params = {name: value_text(v) for name, v in {**spec.fixed, **setting}.items()}
+        self.params = deck_params(spec, setting)
         self.values, self.refused, self.screened = None, "", None
         try:
             self.values = resolve(deck, self.params)
@@ -142,7 +147,7 @@ class Setting:
     def slowest(self) -> float:
         """The models' speed of the slowest section (-inf unknown): the screen's ranking."""
         speeds = [d.speed for d in self.screened.drives] if self.screened else []
-        return min((s for s in speeds if s is not None), default=-math.inf) if speeds else -math.inf
+        return min((s for s in speeds if s is not None), default=-math.inf)
 
 
 def _kind(refusal: str) -> str:
@@ -171,15 +176,13 @@ def screen_space(spec: StudySpec, deck) -> tuple[list[dict], dict]:
     # the fastest feasible setting first, then each next one as far as possible from those chosen
     ok.sort(key=lambda s: -s.slowest)
     chosen: list[Setting] = []
+    picked: list[np.ndarray] = []
     units = [to_unit(spec, s.setting) for s in ok]
     while ok and len(chosen) < spec.budget["seeds"]:
-        if not chosen:
-            k = 0
-        else:
-            picked = np.array([to_unit(spec, c.setting) for c in chosen])
-            k = int(np.argmax([np.min(np.linalg.norm(picked - u, axis=1)) for u in units]))
+        k = 0 if not picked else int(np.argmax([np.min(np.linalg.norm(np.array(picked) - u, axis=1))
+                                                for u in units]))
         chosen.append(ok.pop(k))
-        units.pop(k)
+        picked.append(units.pop(k))
     return [c.setting for c in chosen], counts
 
 
@@ -242,17 +245,16 @@ class Study:
             study_name="vibrofeed", storage=storage, sampler=sampler, load_if_exists=True,
             directions=[O.direction(n) for n in spec.maximize])
         self.dists = distributions(spec)
-        self.parameters = spec.parameters
         self.ruled_out = 0
+        self.searched = 0  # search runs finished (in the ledger)
         self.in_flight = 0  # search runs started and not finished
         self.live: dict = {}  # trial number -> the Trial asked in this session, until told
-        self.started_at = time.monotonic()
         self.walls: list[float] = []
 
     # -- trials
     def job(self, index: int, setting: dict, stage: str, replicate: int, seed_index: int,
             extra: dict | None = None) -> Job:
-        params = {name: value_text(v) for name, v in {**self.spec.fixed, **setting, **(extra or {})}.items()}
+        params = deck_params(self.spec, {**setting, **(extra or {})})
         seed = None
         if "seed" in self.deck.tunables:
             seed = self.spec.seed + SEED_OFFSET[stage] + seed_index
@@ -278,18 +280,18 @@ class Study:
         reused); a trial left running is told failed and its setting asked again."""
         import optuna
 
-        searched = lambda: sum(r.get("stage") == "search" for r in ledger.rows.values())  # noqa: E731
+        self.searched = sum(r.get("stage") == "search" for r in ledger.rows.values())
         for t in self.study.trials:
             setting = {n: t.params[n] for n in self.spec.names if n in t.params}
             if t.state == optuna.trial.TrialState.RUNNING:
                 self.study.tell(t.number, state=optuna.trial.TrialState.FAIL)
                 self.study.enqueue_trial(setting, user_attrs={"again": t.number})
-            elif t.user_attrs.get("dem") and t.state.is_finished() and t.number not in ledger.rows \
-                    and t.state == optuna.trial.TrialState.COMPLETE:
+            elif (t.state == optuna.trial.TrialState.COMPLETE and t.user_attrs.get("dem")
+                  and t.number not in ledger.rows):
                 self.in_flight += 1
                 yield self.search_job(t.number, setting)
         in_a_row = 0
-        while searched() + self.in_flight < self.runs:
+        while self.searched + self.in_flight < self.runs:
             trial = self.study.ask(self.dists)
             setting = {n: trial.params[n] for n in self.spec.names}
             s = Setting(self.spec, self.deck, setting)
@@ -406,17 +408,11 @@ def optimize(spec_path, output=None, workers: int = 1, budget: int | None = None
                          f"mpirun started {comm.Get_size()}")
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "runs").mkdir(exist_ok=True)
-    lock = F.lock(folder)
+    lock = F.lock(folder, "study")
     try:
-        F.clear_leftovers(folder)
-        for p in (folder / "runs").glob(".vibrofeed-*"):
-            import shutil
-
-            shutil.rmtree(p, ignore_errors=True)
+        F.clear_leftovers(folder, "runs")
         return _run(spec, deck, folder, runs, workers, quiet, comm, out, spec_path)
     finally:
-        import os
-
         os.close(lock)
 
 
@@ -478,18 +474,18 @@ def _run(spec, deck, folder, runs, workers, quiet, comm, out, spec_path) -> int:
     def run_one(ev: Evaluation):
         return run_job(ev.job, folder, deck, spec.ranks_per_run, parameters, st.command)
 
-    def record(ev: Evaluation, answer) -> dict:
+    def completed(ev: Evaluation, answer) -> dict:
+        """A finished run's row with its stage, trial and objective columns."""
         row, computed = answer
         row.update({"stage": ev.stage, "trial": ev.trial})
         row.update(objective_row(spec, row))
-        ledger.add(row)
         if computed and row.get("wall_s"):
             st.walls.append(float(row["wall_s"]))
         return row
 
     def execute(items, finished):
         if comm is None:
-            batch.run_local(items, workers, lambda ev: run_one(ev), finished=finished)
+            batch.run_local(items, workers, run_one, finished=finished)
         else:  # the sweep's group leaders run the jobs: they get the Job, not the Evaluation
             evs: dict[int, Evaluation] = {}
 
@@ -508,13 +504,12 @@ def _run(spec, deck, folder, runs, workers, quiet, comm, out, spec_path) -> int:
 
     # 2. the search
     def searched(ev, answer):
-        row, computed = answer
-        row.update({"stage": ev.stage, "trial": ev.trial})
-        row.update(objective_row(spec, row))
+        row = completed(ev, answer)
         st.in_flight -= 1
         st.tell(ev.trial, row)  # then the ledger: a kill between is mended on resume (search_items)
-        record(ev, answer)
-        done = sum(r.get("stage") == "search" for r in ledger.rows.values())
+        ledger.add(row)
+        st.searched += 1
+        done = st.searched
         eta = _eta(st, runs - done, max(workers, groups(comm, spec)))
         st.say(f"run {done}/{runs} [{_label(spec, ev.job.setting)}]: {_summary(spec, row)}; "
                f"{_best_so_far(spec, ledger.rows.values())}; models ruled out "
@@ -526,7 +521,9 @@ def _run(spec, deck, folder, runs, workers, quiet, comm, out, spec_path) -> int:
         if ev.stage == "search":
             return searched(ev, answer)
         pending["n"] -= 1
-        st.say(f"{ev.label}: {_summary(spec, record(ev, answer))}")
+        row = completed(ev, answer)
+        ledger.add(row)
+        st.say(f"{ev.label}: {_summary(spec, row)}")
 
     def later(evs):
         for ev in evs:

@@ -50,12 +50,10 @@ from __future__ import annotations
 import ast
 import math
 import operator
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..errors import InputError
-from ..sweep.spec import KeyReader, fingerprint, key_lines, scalar
+from ..sweep.spec import KeyReader, fingerprint, parse_toml, read_file, scalar, target_error
 
 TOP_KEYS = ("deck", "ranks_per_run", "seed", "description", "target_error", "fixed", "variables",
             "constraints", "objective", "budget", "robustness")
@@ -147,9 +145,7 @@ class StudySpec:
         return len(self.maximize) > 1
 
     def where(self, *path) -> str:
-        while path and path not in self.lines:
-            path = path[:-1]
-        return f"{self.source}:{self.lines[path]}" if path else str(self.source)
+        return KeyReader(self.source, self.lines).where(*path)
 
 
 def _evaluate(node, values: dict) -> float:
@@ -166,22 +162,12 @@ def _evaluate(node, values: dict) -> float:
 
 
 def load(path) -> StudySpec:
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"cannot read study file {path}: {getattr(exc, 'strerror', None) or exc}") from None
-    return parse(text, path)
+    return parse(read_file(path, "study file"), Path(path))
 
 
 def parse(text: str, source: Path | str = "study.toml") -> StudySpec:
     source = Path(source)
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"{source}: not valid TOML: {exc}") from None
-    lines = key_lines(text)
-    r = KeyReader(source, lines)
+    data, r = parse_toml(text, source)
     r.ONCE = "a parameter is fixed or a design variable, not both"
     for key in data:
         if key not in TOP_KEYS:
@@ -208,15 +194,12 @@ def parse(text: str, source: Path | str = "study.toml") -> StudySpec:
     maximize, at_least = _objective(data.get("objective", {}), r)
     budget = _budget(data.get("budget", {}), r)
     robustness = _robustness(data.get("robustness", {}), r, {v.name for v in variables})
-    target = data.get("target_error")
-    if target is not None and not (_number(target) and 0 < target < 1):
-        r.fail(("target_error",), f"target_error must be a number in (0, 1) (the feed rate's "
-                                  f"relative error a run stops at), got {target!r}")
+    target = target_error(data, r)
     return StudySpec(source=source, text=text, data=data, deck=data["deck"].strip(),
                      ranks_per_run=ranks, seed=seed, description=str(data.get("description", "")),
                      fixed=fixed, variables=variables, constraints=constraints,
                      inequalities=inequalities, maximize=maximize, at_least=at_least, budget=budget,
-                     robustness=robustness, lines=lines, target_error=target)
+                     robustness=robustness, lines=r.lines, target_error=target)
 
 
 def _number(value) -> bool:

@@ -67,9 +67,9 @@ def check_folder(folder: Path, spec: SweepSpec) -> bool:
     return True
 
 
-def lock(folder: Path):
+def lock(folder: Path, what: str = "sweep"):
     """Hold ``folder``'s lock for this process (released when it exits, even by SIGKILL);
-    UsageError when another sweep holds it."""
+    UsageError when another ``what`` (a sweep, a study) holds it."""
     import fcntl
 
     fd = os.open(folder / LOCK_NAME, os.O_RDWR | os.O_CREAT, 0o644)
@@ -77,19 +77,19 @@ def lock(folder: Path):
         fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
     except BlockingIOError:
         os.close(fd)
-        raise UsageError(f"another vibrofeed sweep is running in {folder}; wait for it "
+        raise UsageError(f"another vibrofeed {what} is running in {folder}; wait for it "
                          "or give another -o DIR") from None
     return fd
 
 
-def clear_leftovers(folder: Path) -> list[Path]:
-    """Remove what a killed sweep can leave behind: half-written summary or
+def clear_leftovers(folder: Path, runs: str = "jobs") -> list[Path]:
+    """Remove what a killed sweep (or study) can leave behind: half-written summary or
     manifest copies (``.NAME.*.tmp``, never renamed into place) and the runs'
-    scratch folders (``jobs/.vibrofeed-*``). Call with the lock held."""
+    scratch folders (``<runs>/.vibrofeed-*``). Call with the lock held."""
     import shutil
 
     gone = [p for p in folder.glob(".*.tmp") if p.is_file()]
-    gone += [p for p in (folder / "jobs").glob(".vibrofeed-*") if p.is_dir()]
+    gone += [p for p in (folder / runs).glob(".vibrofeed-*") if p.is_dir()]
     for p in gone:
         if p.is_dir():
             shutil.rmtree(p, ignore_errors=True)

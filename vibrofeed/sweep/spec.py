@@ -206,14 +206,17 @@ def scalar(value) -> bool:
     return isinstance(value, int | float | str) and not isinstance(value, bool)
 
 
+def read_file(path, what: str) -> str:
+    """The text of a TOML file (a sweep file, a study file); InputError saying why not."""
+    try:
+        return Path(path).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"cannot read {what} {path}: {getattr(exc, 'strerror', None) or exc}") from None
+
+
 def load(path) -> SweepSpec:
     """Read and check a sweep file; InputError naming the line of a problem."""
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"cannot read sweep file {path}: {getattr(exc, 'strerror', None) or exc}") from None
-    return parse(text, path)
+    return parse(read_file(path, "sweep file"), Path(path))
 
 
 class KeyReader:
@@ -253,25 +256,36 @@ class KeyReader:
         return value
 
 
-def parse(text: str, source: Path | str = "sweep.toml") -> SweepSpec:
-    source = Path(source)
+def parse_toml(text: str, source: Path) -> tuple[dict, KeyReader]:
+    """(the parsed TOML, a reader that names the line of each key); InputError when not TOML."""
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"{source}: not valid TOML: {exc}") from None
-    lines = key_lines(text)
-    r = KeyReader(source, lines)
+    return data, KeyReader(source, key_lines(text))
+
+
+def target_error(data: dict, r: KeyReader) -> float | None:
+    """The file's ``target_error`` (the feed rate's relative error a run stops at), or None."""
+    target = data.get("target_error")
+    if target is not None and (isinstance(target, bool) or not isinstance(target, int | float)
+                               or not 0 < target < 1):
+        r.fail(("target_error",), f"target_error must be a number in (0, 1) (the feed rate's "
+                                  f"relative error a run stops at), got {target!r}")
+    return target
+
+
+def parse(text: str, source: Path | str = "sweep.toml") -> SweepSpec:
+    source = Path(source)
+    data, r = parse_toml(text, source)
+    lines = r.lines
     numbers = _top_level(data, r)
     fixed = _fixed(data, r)
     axes = _grid_axes(data, r) + _zip_axes(data, r) + _point_axes(data, r)
     if "seed" in r.owner and r.owner["seed"][0] != "fixed" and numbers["replicates"] > 1:
         r.fail(r.owner["seed"], "seed is varied and replicates > 1: replicates set the seeds "
                                 "(seed, seed+1, ...); fix seed or set replicates = 1")
-    target = data.get("target_error")
-    if target is not None and (isinstance(target, bool) or not isinstance(target, int | float)
-                               or not 0 < target < 1):
-        r.fail(("target_error",), f"target_error must be a number in (0, 1) (the feed rate's "
-                                  f"relative error a run stops at), got {target!r}")
+    target = target_error(data, r)
     return SweepSpec(source=source, text=text, data=data, deck=data["deck"].strip(),
                      ranks_per_run=numbers["ranks_per_run"], replicates=numbers["replicates"],
                      description=data.get("description", ""), fixed=fixed, axes=axes, lines=lines,
