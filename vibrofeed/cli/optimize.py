@@ -31,24 +31,10 @@ def add_arguments(p) -> None:
 
 
 def run(args) -> int:
-    from ..engine import batch
     from ..optimize.search import optimize
     from ..sweep.execute import serve
+    from .options import dispatched
 
-    comm = batch.world()
-    if args.output is not None:
-        from .outputs import folder_destination
-
-        folder_destination("-o", args.output, create=False, parents=True)
-    if comm is not None and comm.Get_rank() != 0:
-        return serve(comm)
-    if comm is not None and args.jobs > 1:
-        from ..errors import UsageError
-
-        raise UsageError("-j: under mpirun the groups of ranks_per_run ranks are the workers; drop -j")
-    try:
-        return optimize(args.study, args.output, workers=args.jobs, budget=args.budget,
-                        resume=args.resume, quiet=args.quiet, comm=comm, out=sys.stdout)
-    finally:
-        if comm is not None:
-            batch.release(comm)
+    return dispatched(args, serve, lambda comm: optimize(
+        args.study, args.output, workers=args.jobs, budget=args.budget, resume=args.resume,
+        quiet=args.quiet, comm=comm, out=sys.stdout))

@@ -28,6 +28,26 @@ ranks = count("MPI ranks")
 jobs = count("jobs")
 
 
+def dispatched(args, serve: Callable, main: Callable) -> int:
+    """A command whose runs spread over the ranks of an ``mpirun`` (sweep, optimize): ``-o``
+    checked first; the other ranks ``serve(comm)`` until rank 0, running ``main(comm)`` (comm
+    None without MPI), releases them."""
+    from ..engine import batch
+
+    comm = batch.world()
+    if args.output is not None:
+        from .outputs import folder_destination
+
+        folder_destination("-o", args.output, create=False, parents=True)
+    if comm is not None and comm.Get_rank() != 0:
+        return serve(comm)
+    try:
+        return main(comm)
+    finally:
+        if comm is not None:
+            batch.release(comm)
+
+
 def no_effect(option: str, why: str) -> None:
     """One warning line for an option the command was given but will not use (the rest
     of the request is carried out): ``vibrofeed: warning: OPTION has no effect: WHY``."""

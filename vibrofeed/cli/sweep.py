@@ -27,19 +27,9 @@ def add_arguments(p) -> None:
 
 
 def run(args) -> int:
-    from ..engine import batch
     from ..sweep.execute import serve, sweep
+    from .options import dispatched
 
-    comm = batch.world()
-    if args.output is not None:
-        from .outputs import folder_destination
-
-        folder_destination("-o", args.output, create=False, parents=True)
-    if comm is not None and comm.Get_rank() != 0:
-        return serve(comm)
-    try:
-        return sweep(args.sweep, args.output, workers=args.jobs, retry_failed=args.retry_failed,
-                     dry_run=args.dry_run, quiet=args.quiet, comm=comm, out=sys.stdout)
-    finally:
-        if comm is not None:
-            batch.release(comm)
+    return dispatched(args, serve, lambda comm: sweep(
+        args.sweep, args.output, workers=args.jobs, retry_failed=args.retry_failed,
+        dry_run=args.dry_run, quiet=args.quiet, comm=comm, out=sys.stdout))

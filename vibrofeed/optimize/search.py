@@ -402,6 +402,8 @@ def optimize(spec_path, output=None, workers: int = 1, budget: int | None = None
         raise UsageError(f"--budget {runs}: give 1 to {CONFIRM_BASE - 1} DEM runs")
     folder = Path(output if output is not None else Path("results") / Path(spec_path).stem).absolute()
     _check_folder(folder, spec, resume)
+    if comm is not None and workers > 1:
+        raise UsageError("-j: under mpirun the groups of ranks_per_run ranks are the workers; drop -j")
     groups = 1 if comm is None else comm.Get_size() // spec.ranks_per_run
     if comm is not None and groups < 1:
         raise UsageError(f"ranks_per_run = {spec.ranks_per_run} needs at least that many ranks; "
