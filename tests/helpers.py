@@ -26,6 +26,26 @@ def vibrofeed(*args, cwd=None, check=False, timeout=600):
     return proc
 
 
+def frames_now(path: Path) -> int:
+    """Frames in a result file another process is writing (no HDF5 file lock)."""
+    import h5py
+
+    try:
+        with h5py.File(path, "r", locking=False) as f:
+            return len(f["particles/parts/position/step"])
+    except (OSError, KeyError):
+        return 0
+
+
+def stamp(path: Path) -> tuple:
+    """Which file this is: a run made again would replace it by another (inode, mtime, start)."""
+    import h5py
+
+    st = path.stat()
+    with h5py.File(path, "r") as f:
+        return st.st_ino, st.st_mtime_ns, str(f["parameters/run"].attrs["started"])
+
+
 def liggghts_text(deck_text, folder, variables, dump, extra=(), timeout=600):
     """Run a deck's text by hand, `liggghts -in` in ``folder`` with ``-var deck_dir`` and
     ``variables`` (name -> value); returns (stdout, the text of the dump file ``dump`` the deck

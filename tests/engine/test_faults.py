@@ -16,20 +16,11 @@ from pathlib import Path
 import h5py
 import pytest
 
-from helpers import vibrofeed
+from helpers import frames_now, vibrofeed
 from vibrofeed.results.check import check_file
 from vibrofeed.results.reader import Result
 
 LONG = ["-p", "t_end=20", "-p", "output_dt=2e-5"]
-
-
-def frames_now(path: Path) -> int:
-    """Frames in a file another process is writing (no HDF5 file lock)."""
-    try:
-        with h5py.File(path, "r", locking=False) as f:
-            return len(f["particles/parts/position/step"])
-    except (OSError, KeyError):
-        return 0
 
 
 def children(pid: int) -> list[int]:

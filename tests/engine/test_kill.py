@@ -7,20 +7,11 @@ import sys
 import time
 from pathlib import Path
 
-import h5py
 import pytest
 
+from helpers import frames_now
 from vibrofeed.results.check import check_file
 from vibrofeed.results.reader import Result
-
-
-def frames_now(path: Path) -> int:
-    """Frames in a file another process is writing (no HDF5 file lock)."""
-    try:
-        with h5py.File(path, "r", locking=False) as f:
-            return len(f["particles/parts/position/step"])
-    except (OSError, KeyError):
-        return 0
 
 
 def children(pid: int) -> list[int]:

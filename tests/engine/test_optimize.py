@@ -16,10 +16,9 @@ import sys
 import time
 from pathlib import Path
 
-import h5py
 import pytest
 
-from helpers import DECKS, vibrofeed
+from helpers import DECKS, stamp, vibrofeed
 from vibrofeed.postproc import Transport
 from vibrofeed.results.reader import Result
 from vibrofeed.sweep import summary as S
@@ -128,12 +127,6 @@ def _search_rows(out: Path) -> int:
         return sum(r["stage"] == "search" for r in S.read(out, stem="study")[0])
     except (OSError, KeyError, ValueError):
         return 0
-
-
-def stamp(path: Path) -> tuple:
-    st = path.stat()
-    with h5py.File(path, "r") as f:
-        return st.st_ino, st.st_mtime_ns, str(f["parameters/run"].attrs["started"])
 
 
 def test_sigkill_then_resume_finishes_without_running_a_finished_run_again(tmp_path):

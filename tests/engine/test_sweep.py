@@ -20,7 +20,7 @@ from pathlib import Path
 import h5py
 import pytest
 
-from helpers import DECKS, vibrofeed
+from helpers import DECKS, stamp, vibrofeed
 from vibrofeed.postproc import Transport
 from vibrofeed.postproc.feedrate import FeedRate
 from vibrofeed.results.reader import Result
@@ -48,13 +48,6 @@ def failing_deck(tmp_path: Path) -> Path:
     at = text.index("\ntimestep")
     deck.write_text(text[:at] + "\n" + FAILING + text[at:])
     return deck
-
-
-def stamp(path: Path) -> tuple:
-    """Which file this is: a job run again would replace it by another (inode, mtime)."""
-    st = path.stat()
-    with h5py.File(path, "r") as f:
-        return st.st_ino, st.st_mtime_ns, str(f["parameters/run"].attrs["started"])
 
 
 def mtimes(folder: Path) -> dict:

@@ -10,12 +10,10 @@ import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 
-import h5py
 import pytest
 
-from helpers import vibrofeed
+from helpers import frames_now, vibrofeed
 from vibrofeed.results.check import check_file
 from vibrofeed.results.reader import Result
 
@@ -57,15 +55,6 @@ def test_an_unreachable_target_runs_to_t_end_and_says_so(tmp_path):
     assert t_last == pytest.approx(t_end, abs=0.005)                  # s: to a frame
     assert reason.startswith("t_end (target error 0.001 not reached at t = 0.3 s: ")
     assert "stopped early" not in proc.stdout and f"({reason})" in proc.stdout
-
-
-def frames_now(path: Path) -> int:
-    """Frames in a file the worker is writing (no HDF5 file lock)."""
-    try:
-        with h5py.File(path, "r", locking=False) as f:
-            return len(f["particles/parts/position/step"])
-    except (OSError, KeyError):
-        return 0
 
 
 def test_a_run_stopped_while_it_checks_its_target_leaves_a_valid_file(tmp_path):
