@@ -148,6 +148,35 @@ def write_bulk_result(path, frames, events=None, counts=None, track=None, variab
     return path
 
 
+def write_line_frames(path, frames, inserted, written, returns=False):
+    """A two-section line result (outlet at 18 mm, joint at 10 mm, catch plane at -0.5 mm;
+    section 2 standing still: its recorded motion is zeros) from ``frames`` of (ids,
+    positions), each through the real LineOutlet with ``inserted[k]`` parts inserted; the
+    frame's counts are written with ``written[k]`` over them (the test's own counts)."""
+    from vibrofeed.engine.outlet import LineOutlet, gravity_vector
+    from vibrofeed.results.layout import REJECTS
+    from vibrofeed.results.writer import ResultWriter
+
+    w = ResultWriter(path, deck_name="synthetic_line", deck_path="synthetic_line.liggghts",
+                     deck_text="# synthetic line\n",
+                     variables={"sections": ("2", "-", "sections", "1"), "s2_freq": ("100", "Hz", "", "100"),
+                                **{k: ("0", "", "", "0") for k in ("s2_amp_t", "s2_amp_n", "s2_phase")}},
+                     derived={"dt_used": 1e-6}, engine_version="LIGGGHTS (synthetic)", seed=1,
+                     run_id=hashlib.sha256(str(path).encode()).hexdigest(),
+                     outlet={"outlet_x": 0.018, "catch_z": -5e-4, "method": "synthetic"}, line=True,
+                     sections=2, returns=returns)
+    o = LineOutlet(0.018, -5e-4, gravity_vector(9.81, 0.0), (0.0, 0.01))
+    for k, (ids, x) in enumerate(frames):
+        p = parts(ids, x, radius=1.5e-4)
+        events, rejects, counts = o.step(0.01 * k, p, inserted[k])
+        if rejects is not None:
+            w.write_events(rejects, REJECTS)
+        w.write_frame(k, 0.01 * k, p, np.zeros(3), np.zeros(3), counts={**counts, **written[k]},
+                      section_surfaces=[(np.zeros(3), np.zeros(3))])
+    w.finish("complete")
+    return path
+
+
 def write_conveyor(path, times, lifetimes, speeds, amp=0.0, freq=50.0, seed=0, radius=5e-4):
     """A many-part result whose answers are known by construction.
 

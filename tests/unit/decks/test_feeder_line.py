@@ -24,7 +24,6 @@ from vibrofeed.line import (
     section_mesh,
 )
 from vibrofeed.parameters import resolve
-from vibrofeed.results.layout import REJECTS
 
 L1, W1 = 0.01, 1.2e-3
 TOL = 1e-12
@@ -264,31 +263,10 @@ def test_rejects_and_exits_add_up_by_construction():
 
 def write_line_result(path, rejected_counts):
     """A two-frame line result: part 1 stays, part 2 falls off section 2's side in frame 2."""
-    import hashlib
+    from helpers import write_line_frames
 
-    from helpers import parts
-    from vibrofeed.results.writer import ResultWriter
-
-    w = ResultWriter(path, deck_name="synthetic_line", deck_path="synthetic_line.liggghts",
-                     deck_text="# synthetic line\n",
-                     # section 2 stands still (amplitudes 0): its recorded motion is zeros
-                     variables={"sections": ("2", "-", "sections", "1"), "s2_freq": ("100", "Hz", "", "100"),
-                                **{k: ("0", "", "", "0") for k in ("s2_amp_t", "s2_amp_n", "s2_phase")}},
-                     derived={"dt_used": 1e-6}, engine_version="LIGGGHTS (synthetic)", seed=1,
-                     run_id=hashlib.sha256(str(path).encode()).hexdigest(),
-                     outlet={"outlet_x": 0.018, "catch_z": -5e-4, "method": "synthetic"}, line=True,
-                     sections=2)
-    o = LineOutlet(0.018, -5e-4, gravity_vector(9.81, 0.0), (0.0, 0.01))
-    for k, z2 in enumerate([1e-4, -6e-4]):
-        p = parts([1, 2], [[1e-3, 0, 1e-4], [0.012, 2e-4, z2]], radius=1.5e-4)
-        events, rejects, counts = o.step(0.01 * k, p, 2)
-        if rejects is not None:
-            w.write_events(rejects, REJECTS)
-        w.write_frame(k, 0.01 * k, p, np.zeros(3), np.zeros(3),
-                      counts={**counts, "rejected": rejected_counts[k]},
-                      section_surfaces=[(np.zeros(3), np.zeros(3))])
-    w.finish("complete")
-    return path
+    frames = [([1, 2], [[1e-3, 0, 1e-4], [0.012, 2e-4, z2]]) for z2 in (1e-4, -6e-4)]
+    return write_line_frames(path, frames, [2, 2], [{"rejected": n} for n in rejected_counts])
 
 
 def test_a_line_result_is_checked_with_its_rejects(tmp_path):

@@ -3,19 +3,16 @@ when, the insertion commands the driver gives (one new fix per frame with parts 
 fixes removed only with the next setup), the parameters refused, and the ``returned`` count
 in the result: read back, checked (never above ``rejected``, never decreasing) and reported."""
 
-import hashlib
 
 import numpy as np
 import pytest
 
-from helpers import DECKS, parts
+from helpers import DECKS, write_line_frames
 from vibrofeed.decks import Deck
-from vibrofeed.engine.outlet import LineOutlet, gravity_vector
 from vibrofeed.engine.returns import Returns, due_count
 from vibrofeed.errors import ParameterError
 from vibrofeed.geometry import _is_prime
 from vibrofeed.parameters import resolve
-from vibrofeed.results.layout import REJECTS
 
 
 class Engine:
@@ -125,30 +122,10 @@ def test_a_recirculating_line_passes():
 def write_returning_line(path, returned, inserted=(2, 2, 3)):
     """Three frames of a recirculating line: part 2 falls off section 2's side in frame 2 and
     comes back as part 3 in frame 3 (``returned`` and ``inserted`` per frame, as the test says)."""
-    from vibrofeed.results.writer import ResultWriter
-
-    w = ResultWriter(path, deck_name="synthetic_line", deck_path="synthetic_line.liggghts",
-                     deck_text="# synthetic line\n",
-                     variables={"sections": ("2", "-", "sections", "1"), "s2_freq": ("100", "Hz", "", "100"),
-                                **{k: ("0", "", "", "0") for k in ("s2_amp_t", "s2_amp_n", "s2_phase")}},
-                     derived={"dt_used": 1e-6}, engine_version="LIGGGHTS (synthetic)", seed=1,
-                     run_id=hashlib.sha256(str(path).encode()).hexdigest(),
-                     outlet={"outlet_x": 0.018, "catch_z": -5e-4, "method": "synthetic"}, line=True,
-                     sections=2, returns=True)
-    o = LineOutlet(0.018, -5e-4, gravity_vector(9.81, 0.0), (0.0, 0.01))
     frames = [([1, 2], [[1e-3, 0, 1e-4], [0.012, 2e-4, 1e-4]]),
               ([1, 2], [[1e-3, 0, 1e-4], [0.012, 2e-4, -6e-4]]),
               ([1, 3], [[1e-3, 0, 1e-4], [3e-4, 0, 2e-4]])]
-    for k, (ids, x) in enumerate(frames):
-        p = parts(ids, x, radius=1.5e-4)
-        events, rejects, counts = o.step(0.01 * k, p, inserted[k])
-        if rejects is not None:
-            w.write_events(rejects, REJECTS)
-        w.write_frame(k, 0.01 * k, p, np.zeros(3), np.zeros(3),
-                      counts={**counts, "returned": returned[k]},
-                      section_surfaces=[(np.zeros(3), np.zeros(3))])
-    w.finish("complete")
-    return path
+    return write_line_frames(path, frames, inserted, [{"returned": n} for n in returned], returns=True)
 
 
 def test_a_recirculating_lines_result_counts_its_returns_and_is_checked(tmp_path):
