@@ -1,11 +1,15 @@
 """``vibrofeed optimize-report``: a study's answer, its convergence, its Pareto front and which
 design variables mattered, read from its folder (while it runs, or after).
 
+With two objectives the report gives the search's Pareto front (``front``: each member's
+setting, search run and values; :func:`vibrofeed.optimize.search.pareto_front`, the front the
+study confirms from).
+
 Figures (with ``--plot DIR``): ``convergence.png`` (each search run's objective with its
 error, the best so far, and the confirmed best with its error band), ``pareto.png`` (two
-objectives: every run and the front), ``importance.png`` (Optuna's importance of each
-design variable for the first objective, over the search's finished runs: PED-ANOVA by
-default; needs a few runs).
+objectives: every run that measured both, those missing an ``at_least`` target hollow, and
+the study's front), ``importance.png`` (Optuna's importance of each design variable for the
+first objective, over the search's finished runs: PED-ANOVA by default; needs a few runs).
 """
 
 from __future__ import annotations
@@ -17,7 +21,16 @@ from pathlib import Path
 from ..errors import UsageError
 from ..sweep import summary as S
 from . import objective as O
-from .search import JOURNAL, STEM, STUDY_JSON, answer_text
+from .search import (
+    JOURNAL,
+    STEM,
+    STUDY_JSON,
+    answer_text,
+    front_entries,
+    non_dominated,
+    pareto_front,
+    target_margins,
+)
 from .spec import parse
 
 
@@ -33,6 +46,13 @@ def read(folder) -> tuple[dict, list[dict], object]:
 
 
 def importances(folder, spec) -> dict:
+    """Each design variable's importance for the first objective over the search runs that
+    measured it (not the placeholders told for a setting the models ruled out or a run that
+    measured nothing). The importance evaluator ranks trials by a target it takes as lower
+    is better (PED-ANOVA looks at the lowest quantile), so a maximised metric is negated:
+    what matters is what reaches its best values, not its worst."""
+    import warnings
+
     import optuna
     from optuna.storages import JournalStorage
     from optuna.storages.journal import JournalFileBackend
@@ -41,13 +61,18 @@ def importances(folder, spec) -> dict:
     storage = JournalStorage(JournalFileBackend(str(Path(folder) / JOURNAL)))
     study = optuna.load_study(study_name="vibrofeed", storage=storage)
     done = [t for t in study.trials if t.state == optuna.trial.TrialState.COMPLETE
-            and "ruled_out" not in t.user_attrs]
+            and "ruled_out" not in t.user_attrs and t.constraints.get("measured", 0.0) <= 0]
     if len(done) < 4 or len(spec.variables) < 2:
         return {}
+    sign = -1.0 if O.direction(spec.maximize[0]) == "maximize" else 1.0
+    measured = optuna.create_study(directions=study.directions)
+    measured.add_trials(done)
     try:
-        return optuna.importance.get_param_importances(
-            study, target=lambda t: t.values[0],
-            params=[v.name for v in spec.variables])
+        with warnings.catch_warnings():  # "computes the importances ... to achieve low target values"
+            warnings.filterwarnings("ignore", message=".*low `target` values")
+            return optuna.importance.get_param_importances(
+                measured, target=lambda t: sign * t.values[0],
+                params=[v.name for v in spec.variables])
     except (RuntimeError, ValueError):
         return {}
 
@@ -57,7 +82,8 @@ def report(folder, plot: Path | None = None) -> dict:
     rep = {"text": answer_text(spec, doc, rows), "confirmed": doc.get("confirmed"),
            "robustness": doc.get("robustness"), "screen": doc.get("screen"),
            "ruled_out": doc.get("ruled_out", 0), "runs": len(rows),
-           "importance": importances(folder, spec)}
+           "importance": importances(folder, spec),
+           "front": front_entries(spec, rows) if spec.multi else None}
     if plot is not None:
         rep["figures"] = figures(spec, doc, rows, rep["importance"], Path(plot))
     return rep
@@ -108,11 +134,16 @@ def figures(spec, doc, rows, importance, folder: Path) -> list[Path]:
     out.append(_save(fig, folder / "convergence.png"))
     if spec.multi:
         fig, ax = plt.subplots(figsize=(5.2, 4.4))
-        pts = [(r["objective"], r["objective_2"]) for r in search
-               if r.get("objective") is not None and r.get("objective_2") is not None]
+        measured = [r for r in search if r.get("objective") is not None and r.get("objective_2") is not None]
+        short = [r for r in measured if any(m > 0 for m in target_margins(spec, r))]
+        pts = [(r["objective"], r["objective_2"]) for r in measured if r not in short]
         if pts:
             ax.scatter(*zip(*pts), s=14, color="0.5", label="search runs")
-            front = _front(pts, spec)
+        if short:
+            ax.scatter([r["objective"] for r in short], [r["objective_2"] for r in short], s=14,
+                       facecolors="none", edgecolors="0.5", label="missing a target")
+        front = sorted((r["objective"], r["objective_2"]) for r in pareto_front(spec, rows))
+        if front:  # the study's front: runs that count (the targets reached), as it confirms them
             ax.plot(*zip(*front), "o-", color="C3", label="Pareto front")
         ax.set_xlabel(spec.maximize[0])
         ax.set_ylabel(spec.maximize[1])
@@ -132,10 +163,7 @@ def figures(spec, doc, rows, importance, folder: Path) -> list[Path]:
 
 def _front(points, spec):
     """The non-dominated points, sorted along the first objective."""
-    sign = [1 if O.direction(n) == "maximize" else -1 for n in spec.maximize]
-    keep = [p for p in points if not any(all(s * q[i] >= s * p[i] for i, s in enumerate(sign))
-                                         and q != p for q in points)]
-    return sorted(set(keep))
+    return sorted(set(p for p, keep in zip(points, non_dominated(points, spec.maximize)) if keep))
 
 
 def _save(fig, path: Path) -> Path:

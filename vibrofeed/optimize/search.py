@@ -19,9 +19,10 @@ maintained, and Ax brings PyTorch for a budget of tens of runs.
    rerun reuses a result that completed), ``-j`` at a time or across the groups of an
    ``mpirun``; a failed run is recorded and told as failed, and the study goes on.
 3. **Confirm**: the ``budget.confirm`` best settings (ranked one standard error towards
-   worse, so a lucky noisy run does not win; with two objectives, the Pareto front) are run
-   ``budget.replicates`` times with fresh seeds; the confirmed value is the mean of those
-   runs alone (the search's run was selected for being high) with its standard error.
+   worse, so a lucky noisy run does not win; with two objectives, the first of the Pareto
+   front, :func:`pareto_front`) are run ``budget.replicates`` times with fresh seeds; the
+   confirmed value is the mean of those runs alone (the search's run was selected for being
+   high) with its standard error.
 4. **Robustness**: the confirmed best at each value ``[robustness]`` lists, one parameter
    at a time; the spread of the objective says how much the design depends on them.
 
@@ -29,7 +30,8 @@ Every DEM run is a row of ``DIR/study.csv`` / ``DIR/study.h5`` (the sweep's ledg
 "study"): ``job`` (search: the trial's number; confirm: 10000 + 100 x rank + replicate;
 robustness: 20000 + k), ``stage``, the parameters, status, metrics, ``objective`` (and
 ``objective_2``) with errors. ``DIR/study.json`` holds the study file, the screen and, at
-the end, the answer (:func:`answer`).
+the end, the answer (:func:`answer_text`; with two objectives ``front``, the search's Pareto
+front).
 """
 
 from __future__ import annotations
@@ -219,6 +221,53 @@ def setting_index(setting: dict) -> int:
     return int(hashlib.sha256(text.encode()).hexdigest()[:8], 16) % 1_000_000
 
 
+def _counts(spec: StudySpec, row: dict, keys: list[str]) -> bool:
+    """Whether a search run counts for the answer: it measured ``keys`` and reaches every
+    target (the trials the sampler is told as feasible)."""
+    return (row.get("stage") == "search" and all(row.get(k) is not None for k in keys)
+            and all(m <= 0 for m in target_margins(spec, row)))
+
+
+def _ranked(spec: StudySpec, rows: list[dict]) -> list[dict]:
+    """Rows best first by the first objective one standard error towards worse."""
+    name = spec.maximize[0]
+    return sorted(rows, key=lambda r: O.cautious(r["objective"], r.get("objective_err"), name),
+                  reverse=O.direction(name) == "maximize")
+
+
+def non_dominated(points: list[tuple], names: list[str]) -> list[bool]:
+    """Which points (one value per metric of ``names``) no other point dominates: another
+    dominates a point when it is at least as good on every metric (each in its own
+    direction) and differs from it; equal points are both kept."""
+    sign = [1.0 if O.direction(n) == "maximize" else -1.0 for n in names]
+    return [not any(q != p and all(s * a >= s * b for s, a, b in zip(sign, q, p)) for q in points)
+            for p in points]
+
+
+def pareto_front(spec: StudySpec, rows: list[dict]) -> list[dict]:
+    """Two objectives: the search runs on the Pareto front, best first as confirmation takes
+    them. A run takes part when it measured both objectives and reaches every ``at_least``
+    target (as the sampler is told: the others are infeasible); it is on the front when no
+    such run dominates it on the values as measured (each metric's own direction). The
+    front is then ordered by the first objective one standard error towards worse."""
+    keys = objective_keys(spec)
+    rows = [r for r in rows if _counts(spec, r, keys)]
+    keep = non_dominated([tuple(float(r[k]) for k in keys) for r in rows], spec.maximize)
+    return _ranked(spec, [r for r, k in zip(rows, keep) if k])
+
+
+def front_entries(spec: StudySpec, rows: list[dict]) -> list[dict]:
+    """The Pareto front as study.json and optimize-report give it: each member's setting,
+    its search run (job, seed) and its values with their errors (as measured by that run)."""
+    out = []
+    for r in pareto_front(spec, rows):
+        entry = {"setting": {n: r[n] for n in spec.names}, "job": r["job"], "seed": r.get("seed")}
+        for key, metric in zip(objective_keys(spec), spec.maximize):
+            entry[metric] = (r[key], r.get(f"{key}_err"))
+        out.append(entry)
+    return out
+
+
 def _placeholder(spec: StudySpec) -> list[float]:
     """The values told for a setting with nothing measured: the worst, so that even a
     sampler that ignores constraints learns to avoid it."""
@@ -341,15 +390,12 @@ class Study:
     # -- ranking
     def best_settings(self, ledger_rows: list[dict], k: int) -> list[dict]:
         """The k best searched settings by the cautious value (one objective: value minus one
-        error), reaching every target; two objectives: the Pareto front of the trials."""
-        name = self.spec.maximize[0]
-        rows = [r for r in ledger_rows if r.get("stage") == "search" and r.get("objective") is not None
-                and all(m <= 0 for m in target_margins(self.spec, r))]
+        error), reaching every target; two objectives: the first k of the Pareto front
+        (:func:`pareto_front`), in the same order."""
         if self.spec.multi:
-            front = {t.number for t in self.study.best_trials}
-            rows = [r for r in rows if r["job"] in front]
-        rows.sort(key=lambda r: O.cautious(r["objective"], r.get("objective_err"), name),
-                  reverse=O.direction(name) == "maximize")
+            rows = pareto_front(self.spec, ledger_rows)
+        else:
+            rows = _ranked(self.spec, [r for r in ledger_rows if _counts(self.spec, r, ["objective"])])
         return [{n: r[n] for n in self.spec.names} for r in rows[:k]]
 
     # -- progress
@@ -544,6 +590,8 @@ def _run(spec, deck, folder, runs, workers, quiet, comm, out, spec_path) -> int:
             yield batch.WAIT
         doc["ruled_out"] = ruled_before + st.ruled_out
         _write_json(folder, doc)
+        if spec.multi:
+            doc["front"] = front_entries(spec, list(ledger.rows.values()))
         best = st.best_settings(list(ledger.rows.values()), spec.budget["confirm"])
         doc["best"] = best
         if best:
@@ -669,6 +717,13 @@ def answer_text(spec: StudySpec, doc: dict, rows: list[dict]) -> str:
         lines.append(f"screen: {screen_['feasible']} of {screen_['screened']} settings feasible "
                      f"({screen_['refused_by_checks']} refused by the parameter checks, "
                      f"{screen_['ruled_out_by_models']} ruled out by the models)")
+    if spec.multi:
+        front = front_entries(spec, rows)
+        lines.append(f"Pareto front of the search: {len(front)} setting(s) (confirmation takes the "
+                     f"first {min(len(front), spec.budget['confirm'])})")
+        for f in front:
+            lines.append(f"  {_label(spec, f['setting'])}: "
+                         + ", ".join(f"{m} {_fmt(*f[m])}" for m in spec.maximize))
     confirmed = doc.get("confirmed") or []
     if not confirmed:
         lines.append("no confirmed design")
