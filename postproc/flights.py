@@ -3,6 +3,11 @@
 The gap of a part is the height of its lowest point above the surface plane,
 ``gap = z - radius - z_surface(t)``, for decks whose surface is the plane
 z = 0 displaced by ``observables/surface/position`` (the single-part decks).
+A multisphere part (a chip or disc: the result has a body template) is not a
+sphere of its recorded ``radius`` (the sphere enclosing the clump): its lowest
+point is its lowest sphere's, ``z + min_i ([R (t_i - mean t)]_z - r_i)`` with R
+its orientation (FORMAT.md, "Parts are bodies"), and its ``force`` is not
+recorded (NaN): its contact is told from the gap, as for results without force.
 
 Flight events are reconstructed between frames rather than read off them, so
 they do not depend on the frame spacing:
@@ -23,6 +28,17 @@ they do not depend on the frame spacing:
   extrapolating the contact force of the last frames in contact to zero. That
   needs the recorded ``force`` and the body forces of the deck (gravity along
   the incline, ``normal_force``), which come from the result's parameters.
+  Without a recorded force, the gap tells contact (below a tolerance) and
+  the lift-off is where the free flight seen after the contact, traced back
+  over the frames of the contact, last meets the surface.
+
+Following the surface between frames needs frames close enough: a cubic
+through its position and velocity at frames ``h`` apart is off by up to
+``A (w h)^4 / 384``, 1e-3 of its amplitude A at eight frames per period, and
+frames a period apart see it at one phase (standing still). A result whose
+surface moves normal to itself and whose frames are more than
+:data:`MAX_FRAME_PERIODS` of a period apart is refused (``InputError``), not
+analysed into flights it cannot resolve.
 
 The model these events are compared with is the rigid part on a vibrating
 plate of Khan & Sarma, "Vibratory Assembly Update: Part Transportation
@@ -36,10 +52,29 @@ import math
 import numpy as np
 from scipy.interpolate import CubicHermiteSpline, PPoly
 
+from ..errors import InputError
 from ..models.constants import G
+from ..rotations import quaternion_matrices
 from .base import AnalysisBase
 
 LIFT_OFF_MIN_FRAMES = 3  # contact must last this many frames to count as sustained
+# Longest frame interval [periods] over which the surface's motion is followed (module
+# docstring): eight frames per period.
+MAX_FRAME_PERIODS = 1 / 8
+
+
+def lowest_depth(result, where, slots, radius) -> np.ndarray:
+    """How far below its centre a part's lowest point lies [m] at the (frame, slot) pairs:
+    its ``radius`` for a sphere; for a clump (the result's body template), its lowest
+    sphere's bottom, its spheres turned by the part's orientation (module docstring)."""
+    template = result.body_template
+    if template is None:
+        return radius
+    t = np.asarray(template, dtype=float)
+    offsets = t[:, :3] - t[:, :3].mean(axis=0)
+    rot = quaternion_matrices(result.gather("orientation", where, slots))
+    heights = np.einsum("nj,kj->nk", rot[:, 2, :], offsets)
+    return (t[:, 3][None, :] - heights).max(axis=1)
 
 
 def _normal_gravity(result) -> float:
@@ -62,6 +97,8 @@ def _contact_force(result, where, slots) -> np.ndarray | None:
         mass = result.gather("mass", where, slots)
     except KeyError:
         return None
+    if len(force) and not np.isfinite(force[:, 2]).any():
+        return None  # not recorded: the force of clumps is NaN (FORMAT.md, "Parts are bodies")
     press = float(result.parameters.get("normal_force", 0.0))
     return force[:, 2] + mass * _normal_gravity(result) + press
 
@@ -77,8 +114,9 @@ class Flights(AnalysisBase):
         The part followed; default: the lowest id in the result.
     contact_tolerance:
         Gap [m] above which a frame counts as airborne when the result holds
-        no force to tell contact from flight. Default: 0.2 % of the part's
-        radius, well above the elastic overlap under the part's weight.
+        no force to tell contact from flight (nor does a clump's). Default:
+        0.2 % of the part's radius (a clump's: of its spheres'), well above the
+        elastic overlap under the part's weight.
 
     Results (after :meth:`run`): ``part_id``; ``time``, ``gap`` and
     ``contact_force`` (frames where the part exists; ``contact_force`` None
@@ -111,10 +149,13 @@ class Flights(AnalysisBase):
         radius = r.gather("radius", where, slots)
         zs = r.read("surface_position", frames=where)[:, 2]
         vs = r.read("surface_velocity", frames=where)[:, 2]
-        gap = z - radius - zs
+        self._check_frames(t, zs, vs)
+        depth = lowest_depth(r, where, slots, radius)
+        gap = z - depth - zs
         g_n = _normal_gravity(r)
         fc = _contact_force(r, where, slots)
-        tol = (0.002 * float(np.nanmax(radius)) if self.contact_tolerance is None
+        sphere = radius if r.body_template is None else r.body_template[:, 3]
+        tol = (0.002 * float(np.nanmax(sphere)) if self.contact_tolerance is None
                else self.contact_tolerance)
         # Touching: overlapping (gap <= 0) or pushed (a damped contact can pull
         # at the very end, so force alone is not enough, nor is the gap alone
@@ -122,7 +163,7 @@ class Flights(AnalysisBase):
         contact = (gap <= 0) | (fc > 0) if fc is not None else gap <= tol
 
         # Working state of the event search (neither settings nor answers).
-        self._t, self._z, self._vz, self._r, self._g, self._fc = t, z, vz, radius, g_n, fc
+        self._t, self._z, self._vz, self._r, self._g, self._fc = t, z, vz, depth, g_n, fc
         self._surface = CubicHermiteSpline(t, zs, vs) if len(t) > 1 else None
         # An impact: the part leaves again within a few contact times.
         self._max_impact = 20 * r.derived.get("t_contact", 1e-5)
@@ -178,6 +219,20 @@ class Flights(AnalysisBase):
         res.airborne_fraction = float(res.durations.sum() / (t[-1] - t[0])) if n > 1 else 0.0
         res.max_gap = float(np.max(gap)) if n else float("nan")
 
+    def _check_frames(self, t, zs, vs) -> None:
+        """Refuse frames too far apart to follow a surface moving normal to itself (module
+        docstring); a still surface is followed at any spacing."""
+        freq = float(self.result.parameters.get("freq", 0.0))
+        if len(t) < 2 or not freq > 0 or not (np.ptp(zs) > 0 or np.any(vs != 0)):
+            return
+        longest = float(np.max(np.diff(t)))
+        if longest * freq > MAX_FRAME_PERIODS * (1 + 1e-9):
+            raise InputError(
+                f"flights: frames {longest * 1e3:.3g} ms apart cannot follow a surface vibrating at "
+                f"{freq:g} Hz (period {1e3 / freq:.3g} ms): the events between frames need at least "
+                f"{round(1 / MAX_FRAME_PERIODS)} frames per period (output_dt <= "
+                f"{MAX_FRAME_PERIODS / freq:.3g} s)")
+
     def _conclude(self) -> None:
         res = self.results
         rows = [(t_land, self._w_in(t_land), self._restitution(k))
@@ -226,7 +281,11 @@ class Flights(AnalysisBase):
         between the frames around it, or extrapolated from the last two if it
         is still positive at the last frame in contact. (LIGGGHTS' damped
         contact can pull briefly after that, so the part separates a little
-        later; the model's lift-off is where the support vanishes.)
+        later; the model's lift-off is where the support vanishes.) Otherwise
+        the root of the flight seen after the contact, traced back over its last
+        interval; without a recorded force, over every interval of the contact
+        back to its first frame (the gap of a tangential lift-off grows like
+        (t - t_l)^3 and stays below the tolerance for many frames).
         """
         t, fc = self._t, self._fc
         if fc is not None and b - a + 1 >= LIFT_OFF_MIN_FRAMES:
@@ -239,6 +298,12 @@ class Flights(AnalysisBase):
                 slope = (fc[b] - fc[b - 1]) / (t[b] - t[b - 1])
                 return float(min(max(t[b] - fc[b] / slope, t[b]), t[b + 1])), "lift-off"
         up = self._backward_root(b + 1)
+        if up is None and fc is None:
+            for segment in range(b - 1, a - 1, -1):
+                roots = self._roots(b + 1, segment)
+                if len(roots):
+                    up = float(roots[-1])
+                    break
         return (float(up) if up is not None else float(t[b + 1])), "rebound"
 
     # -- impacts ----------------------------------------------------------------------

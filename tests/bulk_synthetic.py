@@ -10,6 +10,14 @@ at its exit time (one outlet event, exact), is seen falling beyond the edge at
 the first frame at or after that (flying on at twice its speed), and is gone
 from the next one. Parts whose exit
 time is after the last frame stay on the track.
+
+Real runs are less tidy, and :func:`feeder` can write each of their untidy features
+(all off by default): the frames of a run whose ``t_end`` is not a whole number of
+``output_dt`` (:func:`run_frames`: a shorter last interval), or that alias the vibration
+(any ``frame_times``, e.g. every period); parts put on the track downstream of the inlet
+between frames (``insert_x``) and parts removed between frames without being seen falling
+(``seen_falling=False``); multisphere bodies written as the engine writes them
+(``clumps=True`` with a ``body_template``, e.g. :func:`chip_template`).
 """
 
 from __future__ import annotations
@@ -26,7 +34,8 @@ G = 9.81
 
 def feeder(path, frame_times, exit_times, speed=0.02, amp=0.0, freq=100.0, radius=RADIUS,
            mass=1e-7, lanes=None, orientations=None, body_template=None, variables=None,
-           outlet_x=OUTLET_X, seed=0, tipped=None, track=None):
+           outlet_x=OUTLET_X, seed=0, tipped=None, track=None, insert_x=0.0, seen_falling=True,
+           clumps=False):
     """Write the result file (module docstring); returns ``path``.
 
     ``speed``, ``mass``, ``radius``: scalars or one value per part; ``lanes``:
@@ -35,6 +44,15 @@ def feeder(path, frame_times, exit_times, speed=0.02, amp=0.0, freq=100.0, radiu
     edge, in the event and the falling frame (default: ``orientations``);
     ``track``: the track mesh (vertices, triangles), if any. The parts are
     shuffled at every frame.
+
+    Real runs' features (module docstring), off by default: ``insert_x`` (scalar or per
+    part, m): where along the track each part is put on it (0: the inlet), at the time
+    its schedule puts it there, so between frames; ``seen_falling=False``: a part is
+    deleted between its exit and the next frame (its outlet event stands, no frame sees
+    it past the edge); ``clumps=True`` (with ``body_template``): each row is a body as the
+    engine writes it (FORMAT.md, "Parts are bodies"): ``radius`` the sphere about the
+    centre that encloses the clump, its centre where its lowest sphere rests on the track
+    (z = 0), force NaN (not recorded).
     """
     rng = np.random.default_rng(seed)
     frame_times = np.asarray(frame_times, dtype=float)
@@ -42,6 +60,14 @@ def feeder(path, frame_times, exit_times, speed=0.02, amp=0.0, freq=100.0, radiu
     n = len(exit_times)
     speed, mass, radius = (np.broadcast_to(np.asarray(v, dtype=float), (n,)) for v in (speed, mass, radius))
     lanes = np.zeros(n) if lanes is None else np.asarray(lanes, dtype=float)
+    insert_x = np.broadcast_to(np.asarray(insert_x, dtype=float), (n,))
+    height = radius
+    if clumps:
+        if body_template is None:
+            raise ValueError("clumps=True needs a body_template")
+        q = np.tile([1.0, 0, 0, 0], (n, 1)) if orientations is None else np.asarray(orientations, float)
+        radius = np.full(n, enclosing_radius(body_template))
+        height = lowest_depth(body_template, q)
     w = 2 * np.pi * freq
     t_last = frame_times[-1]
     # The frame that reports each exit: the first at or after it.
@@ -49,9 +75,9 @@ def feeder(path, frame_times, exit_times, speed=0.02, amp=0.0, freq=100.0, radiu
     frames, counts = [], []
     for j, t in enumerate(frame_times):
         track_x = outlet_x - speed * (exit_times - t)
-        on_track = (track_x >= 0) & (exit_times > t)
-        inserted = (track_x >= 0) | (exit_times <= t)
-        falling = report == j
+        on_track = (track_x >= insert_x) & (exit_times > t)
+        inserted = (track_x >= insert_x) | (exit_times <= t)
+        falling = (report == j) & seen_falling
         present = np.nonzero(on_track | falling)[0]
         present = rng.permutation(present)
         dt_fall = np.where(falling[present], t - exit_times[present], 0.0)
@@ -59,14 +85,15 @@ def feeder(path, frame_times, exit_times, speed=0.02, amp=0.0, freq=100.0, radiu
         # conveying-velocity measurement may pick up), without the track's motion.
         x = np.where(falling[present], outlet_x + 2 * speed[present] * dt_fall,
                      track_x[present] + amp * np.sin(w * t))
-        z = np.where(falling[present], CATCH_Z - G / 2 * dt_fall ** 2 - 1e-6, radius[present])
+        z = np.where(falling[present], CATCH_Z - G / 2 * dt_fall ** 2 - 1e-6, height[present])
         vx = np.where(falling[present], 2 * speed[present], speed[present] + amp * w * np.cos(w * t))
         vz = np.where(falling[present], -G * dt_fall, 0.0)
         m = len(present)
         parts = {"id": present + 1, "species": np.ones(m, int), "radius": radius[present],
                  "mass": mass[present], "position": np.column_stack([x, lanes[present], z]),
                  "velocity": np.column_stack([vx, np.zeros(m), vz]),
-                 "angular_velocity": np.zeros((m, 3)), "force": np.zeros((m, 3))}
+                 "angular_velocity": np.zeros((m, 3)),
+                 "force": np.full((m, 3), np.nan) if clumps else np.zeros((m, 3))}
         if orientations is not None:
             q = np.asarray(orientations, dtype=float)[present]
             if tipped is not None:
@@ -91,6 +118,43 @@ def feeder(path, frame_times, exit_times, speed=0.02, amp=0.0, freq=100.0, radiu
     return write_bulk_result(path, frames, events=events, counts=counts, variables=base,
                              body_template=body_template, surface=surface, track=track,
                              outlet={"outlet_x": outlet_x, "catch_z": CATCH_Z, "method": "synthetic"})
+
+
+def run_frames(t_end, output_dt, t0=0.0):
+    """The frame times of a run as the engine writes them: the state after setup at ``t0``,
+    then one frame every ``output_dt`` and one at ``t_end`` (a shorter last interval when
+    ``t_end - t0`` is not a whole number of ``output_dt``; the last segment runs the steps
+    that are left). Frame k is k whole intervals after ``t0``, as steps k * output_every."""
+    whole = int(np.floor((t_end - t0) / output_dt * (1 + 1e-12)))
+    times = t0 + output_dt * np.arange(whole + 1)
+    if t_end - times[-1] > 1e-9 * output_dt:
+        times = np.r_[times, t_end]
+    return times
+
+
+def chip_template(per_side=2, r_s=7.5e-5, pitch=1e-4):
+    """A square chip of ``per_side`` x ``per_side`` spheres of radius ``r_s`` [m], ``pitch``
+    apart in the body's xy plane (z its thin axis): (n, 4) x, y, z, r as
+    ``parameters/body_template`` holds it (listed row by row, as LIGGGHTS numbers them)."""
+    c = (np.arange(per_side) - (per_side - 1) / 2) * pitch
+    return np.array([[x, y, 0.0, r_s] for y in c for x in c])
+
+
+def enclosing_radius(template):
+    """The radius of the sphere about a clump's centre (its spheres' mean) that encloses it [m]."""
+    t = np.asarray(template, dtype=float)
+    return float((np.linalg.norm(t[:, :3] - t[:, :3].mean(axis=0), axis=1) + t[:, 3]).max())
+
+
+def lowest_depth(template, quaternions):
+    """(N,) how far below its centre each body's lowest point lies [m], turned by its
+    quaternion (w, x, y, z): the centre's height when it rests on the plane z = 0."""
+    from vibrofeed.rotations import quaternion_matrices
+
+    t = np.asarray(template, dtype=float)
+    offsets = t[:, :3] - t[:, :3].mean(axis=0)
+    z = np.einsum("nj,kj->nk", quaternion_matrices(np.asarray(quaternions, float))[:, 2, :], offsets)
+    return (t[:, 3][None, :] - z).max(axis=1)
 
 
 def poisson_times(rate, t0, t1, rng):

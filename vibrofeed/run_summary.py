@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from .errors import InputError
 from .postproc import Flights, Transport
 from .results.reader import Result
 
@@ -48,11 +49,15 @@ def run_summary(run) -> str:
             bits.append(f"mean speed {_si(v, 'm/s')} along x" if v == v  # NaN: no part stayed
                         else "no part on the track through the second half (mean speed n/a)")
         if n == 1 and r.n_frames > 2:
-            fl = Flights(r).run().results
-            period = 1.0 / float(r.parameters.get("freq", 1.0))
-            hops = int((fl.durations >= 0.05 * period).sum())  # shorter: rebounds
-            rebounds = fl.n_hops - hops
-            bits.append(f"{hops} hops" + (f" (+{rebounds} short rebounds)" if rebounds else "")
-                        + f", airborne {fl.airborne_fraction:.0%} of the time, "
-                        f"highest {_si(fl.max_gap, 'm')}")
+            try:
+                fl = Flights(r).run().results
+            except InputError as exc:  # frames too far apart to follow the hops: say so, not fail
+                bits.append(f"hops not counted ({exc})")
+            else:
+                period = 1.0 / float(r.parameters.get("freq", 1.0))
+                hops = int((fl.durations >= 0.05 * period).sum())  # shorter: rebounds
+                rebounds = fl.n_hops - hops
+                bits.append(f"{hops} hops" + (f" (+{rebounds} short rebounds)" if rebounds else "")
+                            + f", airborne {fl.airborne_fraction:.0%} of the time, "
+                            f"highest {_si(fl.max_gap, 'm')}")
     return head + " | " + ", ".join(bits)
