@@ -147,9 +147,12 @@ def plan(spec: SweepSpec, deck: Deck | None = None) -> list[Job]:
         if has_seed:
             base = setting.get("seed", deck.tunables["seed"].default)
             try:
-                seed = int(float(base)) + r
+                x = float(base)
             except ValueError:
-                seed = None  # resolve refuses it below, naming it
+                x = math.nan
+            # not a whole number: run as written, so that resolve refuses it below, naming it
+            # (never truncated: 7.5 is no seed 7)
+            seed = int(x) + r if x.is_integer() else None
             if seed is not None:
                 params["seed"] = str(seed)
         try:

@@ -139,7 +139,18 @@ _KEY = re.compile(rf"^\s*({_PART}(?:\s*\.\s*{_PART})*)\s*=(.*)$")
 
 
 def _split_dotted(key: str) -> list[str]:
-    return [part.strip().strip("\"'") for part in re.findall(r"\"[^\"]*\"|'[^']*'|[^.]+", key)]
+    """The parts of a dotted key (``a . "b.c"``: a, b.c): bare or quoted, whitespace
+    around the dots ignored, as TOML reads them."""
+    parts = re.findall(r"\"[^\"]*\"|'[^']*'|[^.\s\"']+", key)
+    return [part[1:-1] if part[:1] in "\"'" else part for part in parts]
+
+
+def _record(lines: dict[tuple, int], path: tuple, number: int) -> None:
+    """``path`` is on line ``number``, and so are the tables of its prefixes that no line
+    has named yet (``g.h = 1`` makes table ``g`` there)."""
+    for k in range(1, len(path)):
+        lines.setdefault(path[:k], number)
+    lines[path] = number
 
 
 def _open_brackets(value: str) -> int:
@@ -187,11 +198,11 @@ def key_lines(text: str) -> dict[tuple, int]:
                 table = path + (index,)
             else:
                 table = path
-            lines[table] = number
+            _record(lines, table, number)
             continue
         key = _KEY.match(raw)
         if key:
-            lines[table + tuple(_split_dotted(key[1]))] = number
+            _record(lines, table + tuple(_split_dotted(key[1])), number)
             value = key[2]
             for quotes in ('"""', "'''"):
                 if value.count(quotes) % 2 == 1:
@@ -395,7 +406,10 @@ def describe_change(old: dict, new: dict) -> str:
                 out[name] = v
         return out
 
+    def same(k):  # as the fingerprint compares them: 1 and 1.0 (or true) differ
+        return k in a and k in b and json.dumps(a[k], sort_keys=True) == json.dumps(b[k], sort_keys=True)
+
     a, b = flat(old), flat(new)
-    changed = sorted(k for k in a.keys() | b.keys() if a.get(k, object()) != b.get(k, object()))
+    changed = sorted(k for k in a.keys() | b.keys() if not same(k))
     shown = ", ".join(changed[:6]) + (f" and {len(changed) - 6} more" if len(changed) > 6 else "")
     return shown or "its content"

@@ -300,3 +300,64 @@ def test_the_snapshot_follows_the_journal_within_the_interval(tmp_path, monkeypa
     ledger.add(row(1))
     assert csv_jobs(tmp_path) == [0, 1] and not (tmp_path / S.JOURNAL_NAME).exists()
     ledger.close()
+
+
+# ------------------------------------------------------------------ how each column is stored
+INTS = ("job", "replicate", "seed", "n_parts", "n_events")  # whole numbers in every row
+
+
+def typed_rows():
+    return [row(job, n_parts=300 + job, n_events=np.int64(288 + job), parts_per_s=2.0,
+                mixed=[4, 4.5, 5][job], reason=None) for job in range(3)]
+
+
+def test_an_integer_column_reads_back_as_int_from_the_journal_and_the_snapshot(tmp_path):
+    ledger = S.Ledger(tmp_path, PARAMS, {})
+    for r in typed_rows():
+        ledger.add(r)
+    from_journal = S.read(tmp_path)[0]
+    ledger.close()
+    assert not (tmp_path / S.JOURNAL_NAME).exists()
+    from_snapshot = S.read(tmp_path)[0]
+    for rows in (from_journal, from_snapshot):
+        for job, r in enumerate(rows):
+            got = {c: r[c] for c in INTS}
+            assert got == {"job": job, "replicate": job % 2, "seed": 100 + job, "n_parts": 300 + job,
+                           "n_events": 288 + job}
+            # int, never 288.0 (== 288 in Python: the type is the test) nor "288" nor a numpy int
+            assert {c: type(v) for c, v in got.items()} == dict.fromkeys(INTS, int)
+            # a float column holding whole values stays float; a column of ints and floats is float
+            assert type(r["parts_per_s"]) is float and type(r["a"]) is float and type(r["mixed"]) is float
+            assert r["mixed"] == [4.0, 4.5, 5.0][job]
+            assert r["reason"] is None and type(r["file"]) is str
+
+
+def test_an_integer_column_is_int64_in_the_hdf5_file_and_written_without_a_point_in_the_csv(tmp_path):
+    import h5py
+
+    S.write(tmp_path, typed_rows(), PARAMS, {})
+    with h5py.File(tmp_path / S.H5_NAME, "r") as f:
+        jobs = f["jobs"]
+        assert {c: jobs[c].dtype for c in INTS} == dict.fromkeys(INTS, np.dtype(np.int64))
+        assert jobs["parts_per_s"].dtype == np.float64 and jobs["mixed"].dtype == np.float64
+        assert jobs["reason"].dtype == np.float64 and np.isnan(jobs["reason"][()]).all()  # no row needed it
+        assert h5py.check_string_dtype(jobs["file"].dtype) is not None
+        assert jobs["n_events"][()].tolist() == [288, 289, 290]
+    with open(tmp_path / S.CSV_NAME, newline="") as f:
+        table = list(csv.DictReader(f))
+    assert [r["n_events"] for r in table] == ["288", "289", "290"]
+    assert [r["seed"] for r in table] == ["100", "101", "102"]
+    assert [r["job"] for r in table] == ["0", "1", "2"]
+    assert [int(r["n_parts"]) for r in table] == [300, 301, 302]       # int() reads every one
+    assert [r["parts_per_s"] for r in table] == ["2.0"] * 3            # a float keeps its point
+    assert [r["mixed"] for r in table] == ["4", "4.5", "5"]           # each value as it was given
+    assert [r["reason"] for r in table] == ["", "", ""]
+
+
+def test_one_missing_value_makes_an_integer_column_float_and_none_reads_none(tmp_path):
+    rows = typed_rows()
+    rows[1]["n_events"] = None
+    S.write(tmp_path, rows, PARAMS, {})
+    back = S.read(tmp_path)[0]
+    assert [r["n_events"] for r in back] == [288.0, None, 290.0]
+    assert type(back[0]["n_events"]) is float and type(back[0]["n_parts"]) is int

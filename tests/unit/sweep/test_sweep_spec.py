@@ -487,3 +487,229 @@ def test_report_maps_keep_every_parameter_of_a_zipped_axis():
     assert len(part) == 15 and {e["parameters"]["phase"] for e in part} == {2}
     assert {(e["parameters"]["n_parts"], e["parameters"]["surface_energy"]) for e in part} == {
         (f, g) for f in (100, 200, 300) for g in (0.0, 1e-4, 2e-4, 4e-4, 8e-4)}
+
+
+# ------------------------------------------------------------------ reading the file
+def test_a_sweep_file_that_is_not_utf8_is_refused_naming_the_file(tmp_path):
+    from vibrofeed.sweep.spec import load
+
+    path = tmp_path / "latin.toml"
+    text = 'deck = "bulk_feeder"\ndescription = "débit"\n'
+    path.write_bytes(text.encode("latin-1"))  # é is the one byte 0xe9, not UTF-8
+    with pytest.raises(InputError) as info:
+        load(path)
+    message = str(info.value)
+    # the file, then why: the byte and where (21 + 16 bytes precede the é), on one line
+    assert message.startswith(f"cannot read sweep file {path}: "), message
+    assert "can't decode byte 0xe9 in position 37" in message and "\n" not in message
+    assert info.value.__cause__ is None and info.value.__suppress_context__  # no traceback chained
+    path.write_text(text, encoding="utf-8")
+    assert load(path).description == "débit"
+
+
+def test_a_sweep_file_that_cannot_be_read_is_refused_naming_the_file_and_why(tmp_path):
+    from vibrofeed.sweep.spec import load
+
+    for path, why in ((tmp_path / "none.toml", "No such file or directory"), (tmp_path, "Is a directory")):
+        with pytest.raises(InputError) as info:
+            load(path)
+        assert str(info.value) == f"cannot read sweep file {path}: {why}"
+
+
+# ------------------------------------------------------------------ deep key paths
+@pytest.mark.parametrize("text, line, words", [
+    # a nested table's key: its full dotted path, its own line (not its table's)
+    ('deck = "bulk_feeder"\n[zip.stroke]\nfreq = [50, 100]\namp_t = []\n', 4,
+     "zip.stroke.amp_t must be a non-empty list of values, got []"),
+    ('deck = "bulk_feeder"\n[zip.stroke]\nfreq = [50, 100]\n\namp_t = [1e-4, 1e-4]\n', 5,
+     "zip.stroke.amp_t lists a value twice"),
+    ('deck = "bulk_feeder"\n[zip.stroke]\nfreq = [50, 100]\namp_t = [1e-4, true]\n', 4,
+     "zip.stroke.amp_t: True is not a number or a string"),
+    ('deck = "bulk_feeder"\n[zip]\nstroke.freq = [50, 100]\nstroke.amp_t = [1e-4]\n', 4,
+     "zip.stroke: amp_t has 1 values, the lists before it 2"),
+    ('deck = "bulk_feeder"\nzip.stroke.freq = [50, 50]\n', 2, "zip.stroke.freq lists a value twice"),
+    # a quoted part holding a dot, spaces around the dots (TOML ignores them)
+    ('deck = "bulk_feeder"\n[zip."s.1"]\nfreq = [50, 100]\namp_t = [1e-4]\n', 4,
+     "zip.s.1: amp_t has 1 values"),
+    ('deck = "bulk_feeder"\n[ zip . "s.1" ]\nfreq = [50, 100]\namp_t = [1e-4]\n', 4,
+     "zip.s.1: amp_t has 1 values"),
+    # a dotted key where one value is wanted: the line of the dotted key, not of its table
+    ('deck = "bulk_feeder"\n[fixed]\nt_end = 1\ng.h = 2\n', 4, "[fixed] g must be one number or string"),
+    ('deck = "bulk_feeder"\n[grid]\nphase = [0, 90]\nx.y = [1]\n', 4, "x must be a non-empty list of values"),
+    ('deck = "bulk_feeder"\n[[point]]\nmu = 0.3\n[[point]]\nphase = 0\nx.y = 1\n', 6,
+     "[[point]] x must be one number or string"),
+    ('deck = "bulk_feeder"\n\nfoo.bar = 1\n', 3, "unknown key 'foo'"),
+    # inline tables: no line of their own keys, so the line of the key holding the table
+    ('deck = "bulk_feeder"\n[zip]\n\ns = { freq = [50, 50] }\n', 4, "zip.s.freq lists a value twice"),
+    ('deck = "bulk_feeder"\n\npoint = [{ mu = 0.3 }, { mu = [1, 2] }]\n', 3,
+     "[[point]] mu must be one number or string, got [1, 2]"),
+    # the second [[point]] table's key, not the first one's
+    ('deck = "bulk_feeder"\n[[point]]\nmu = 0.3\n[[point]]\nphase = 0\nmu = [1, 2]\n', 6,
+     "[[point]] mu must be one number or string, got [1, 2]"),
+])
+def test_a_nested_key_is_named_by_its_full_path_and_its_own_line(text, line, words):
+    message = refused(text)
+    assert message.startswith(f"s.toml:{line}: "), message
+    assert words in message, message
+
+
+@pytest.mark.parametrize("text, line, words", [
+    ('deck = "bulk_feeder"\n[[point]]\nmu = 0.3\n[[point]]\nmu = 0.4\nfill_to = 1.5\n', 6,
+     "job 1 (mu=0.4 fill_to=1.5): parameter fill_to=1.5 must be in [0, 1]"),
+    ('deck = "bulk_feeder"\n[zip.stroke]\nfreq = [100, 200]\n\namp_n = [1e-4, 2e-2]\n', 5,
+     "job 1 (freq=200 amp_n=0.02): parameter amp_n=0.02 m must be in [0, 0.01]"),
+])
+def test_a_job_refused_by_the_deck_names_the_deep_key_that_set_the_value(text, line, words):
+    message = refused(text, exc=ParameterError, planned=True)
+    assert message.startswith(f"s.toml:{line}: "), message
+    assert words in message, message
+
+
+def test_a_key_path_is_placed_on_its_own_line_else_on_the_nearest_one_above_it():
+    text = ('deck = "bulk_feeder"\n'       # 1
+            '[fixed]\n'                    # 2
+            't_end = 0.5\n'                # 3
+            '[zip.stroke]\n'               # 4
+            'freq = [50, 100]\n'           # 5
+            'amp_t = [\n'                  # 6
+            '  2e-4,\n'
+            '  5e-5,\n'
+            ']\n'
+            '[[point]]\n'                  # 10
+            'mu = 0.3\n'                   # 11
+            '[[point]]\n'                  # 12
+            'mu = 0.4\n'                   # 13
+            'fill_to = 0.5\n')             # 14
+    spec = spec_of(text)
+    assert spec.line_of("zip", "stroke", "amp_t") == 6
+    assert spec.line_of("zip", "stroke", "amp_t", 1) == 6   # a value of the list: the list's line
+    assert spec.line_of("zip", "stroke", "nothing") == 4    # not in the file: its table's line
+    assert spec.line_of("point", 1, "fill_to") == 14 and spec.line_of("point", 0, "mu") == 11
+    assert spec.line_of("point", 1, "mu") == 13 and spec.line_of("point", 1) == 12
+    assert spec.line_of("fixed", "t_end") == 3
+    assert spec.line_of("nowhere", "at", "all") is None and spec.line_of() is None
+    assert spec.where("zip", "stroke", "amp_t") == "s.toml:6" and spec.where("nowhere") == "s.toml"
+    # where each parameter is set: a zipped one under its group, a point's at its first point
+    assert spec.place("amp_t") == ("zip", "stroke", "amp_t") and spec.place("t_end") == ("fixed", "t_end")
+    assert spec.place("fill_to") == ("point", 1, "fill_to") and spec.place("mu") == ("point", 0, "mu")
+    assert spec.place("unknown") == ()
+
+
+def test_key_lines_split_dotted_paths_as_toml_does():
+    text = ('[ a . "b.c" ]\n'       # 1
+            "x . 'y.z' = 1\n"       # 2
+            '"q r".s = 2\n')        # 3
+    lines = key_lines(text)
+    assert lines[("a", "b.c")] == 1 and lines[("a", "b.c", "x", "y.z")] == 2
+    assert lines[("a", "b.c", "q r", "s")] == 3
+    # the tables a dotted key makes are on its line
+    assert lines[("a", "b.c", "x")] == 2 and lines[("a", "b.c", "q r")] == 3
+
+
+# ------------------------------------------------------------------ replicates and their seeds
+def test_each_replicate_runs_the_base_seed_plus_its_number():
+    spec = spec_of('deck = "bulk_feeder"\nreplicates = 3\n[fixed]\nseed = 40\n[grid]\namp_n = [5e-5, 1e-4]\n')
+    jobs = P.plan(spec)
+    assert [(j.index, j.replicate, j.seed) for j in jobs] == [
+        (0, 0, 40), (1, 1, 41), (2, 2, 42), (3, 0, 40), (4, 1, 41), (5, 2, 42)]
+    for j in jobs:
+        # the run is given that seed, checked as vibrofeed run checks it
+        assert j.params["seed"] == j.values["seed"] == str(40 + j.replicate)
+        assert j.label(spec.varied) == f"amp_n={j.setting['amp_n']} seed={40 + j.replicate}"
+    for setting in (jobs[:3], jobs[3:]):
+        assert len({j.seed for j in setting}) == 3          # replicates differ by their seed alone
+        assert len({j.run_id for j in setting}) == 3 and len({j.file for j in setting}) == 3
+        assert {j.setting["amp_n"] for j in setting} == {setting[0].setting["amp_n"]}
+
+
+def test_the_base_seed_is_the_decks_default_a_whole_float_or_the_only_replicate():
+    default = int(P.find_deck(spec_of('deck = "bulk_feeder"\n')).tunables["seed"].default)
+    jobs = P.plan(spec_of('deck = "bulk_feeder"\nreplicates = 2\n'))
+    assert [j.seed for j in jobs] == [default, default + 1]
+    jobs = P.plan(spec_of('deck = "bulk_feeder"\nreplicates = 2\n[fixed]\nseed = 7.0\n'))
+    assert [(j.seed, j.params["seed"]) for j in jobs] == [(7, "7"), (8, "8")]
+    (only,) = P.plan(spec_of('deck = "bulk_feeder"\n[fixed]\nseed = 9\n'))
+    assert (only.replicate, only.seed, only.params["seed"]) == (0, 9, "9")
+
+
+def test_a_seed_that_is_not_a_whole_number_is_refused_not_truncated():
+    # vibrofeed run -p seed=7.5 refuses it: a sweep must not run seeds 7 and 8 instead
+    message = refused('deck = "bulk_feeder"\nreplicates = 2\n[fixed]\nseed = 7.5\n', ParameterError,
+                      planned=True)
+    assert message.startswith("s.toml:4: job 0: parameter seed=7.5 must be an integer"), message
+    assert "(2 of 2 jobs are invalid)" in message
+
+
+# ------------------------------------------------------------------ expected cost
+@pytest.mark.parametrize("values, want", [
+    ({}, 1.0),                                                  # one part for one second
+    ({"t_end": "2", "n_parts": "3"}, 6.0),
+    ({"t_end": "abc", "n_parts": "3"}, 3.0),                   # not a number: the default 1 s
+    ({"t_end": "inf", "n_parts": "3"}, 3.0),                   # not finite: the default
+    ({"t_end": "nan", "n_parts": "3"}, 3.0),
+    ({"t_end": "2", "n_parts": "many"}, 2.0),                  # the default: one part
+    ({"t_end": "2", "n_parts": "0"}, 2.0),                     # at least one part
+    ({"t_end": "2", "n_parts": "0.5"}, 2.0),
+    ({"t_end": "2", "n_parts": "1.5"}, 3.0),
+    ({"t_end": "2", "n_parts": "3", "inlet_rate": "fast"}, 6.0),   # the default: no inlet
+    ({"t_end": "2", "n_parts": "3", "inlet_rate": "10"}, 46.0),    # 3 + 10/s x 2 s parts
+    ({"t_end": "2", "inlet_rate": "10"}, 42.0),                # no n_parts: one, and the inlet's 20
+    ({"t_end": "2", "n_parts": "3", "dt": "fine"}, 6.0),       # no timestep given: not divided
+    ({"t_end": "2", "n_parts": "3", "dt": "0"}, 6.0),
+    ({"t_end": "2", "n_parts": "3", "dt": "-1e-6"}, 6.0),
+    ({"t_end": "2", "n_parts": "3", "dt": "inf"}, 6.0),
+    ({"t_end": "2", "n_parts": "3", "dt": "0.5"}, 12.0),
+])
+def test_the_expected_cost_takes_the_default_of_a_value_that_is_not_a_number(values, want):
+    assert P.cost(values) == pytest.approx(want, rel=1e-12)
+
+
+# ------------------------------------------------------------------ another sweep in the folder
+FIXED = {f"p{k}": 1.0 for k in range(9)}
+
+
+def _edited(n):
+    """The fixed values of a sweep file, the first ``n`` of them (p0, p1...) edited."""
+    fixed = {k: (2.0 if i < n else v) for i, (k, v) in enumerate(FIXED.items())}
+    return {"deck": "bulk_feeder", "fixed": fixed}
+
+
+@pytest.mark.parametrize("n, words", [
+    (0, "its content"),
+    (1, "fixed.p0"),
+    (5, "fixed.p0, fixed.p1, fixed.p2, fixed.p3, fixed.p4"),
+    (6, "fixed.p0, fixed.p1, fixed.p2, fixed.p3, fixed.p4, fixed.p5"),             # six: all named
+    (7, "fixed.p0, fixed.p1, fixed.p2, fixed.p3, fixed.p4, fixed.p5 and 1 more"),  # the seventh counted
+    (9, "fixed.p0, fixed.p1, fixed.p2, fixed.p3, fixed.p4, fixed.p5 and 3 more"),
+])
+def test_the_change_names_up_to_six_keys_and_counts_the_rest(n, words):
+    from vibrofeed.sweep.spec import describe_change
+
+    assert describe_change(_edited(0), _edited(n)) == words
+
+
+def test_the_change_names_added_removed_nested_and_retyped_keys():
+    from vibrofeed.sweep.spec import describe_change
+
+    old = {"deck": "bulk_feeder", "replicates": 2, "fixed": {"t_end": 1}, "zip": {"s": {"freq": [50, 100]}},
+           "point": [{"mu": 0.3}]}
+    new = {"deck": "bulk_feeder", "fixed": {"t_end": 1.0, "seed": 3}, "zip": {"s": {"freq": [50, 200]}},
+           "point": [{"mu": 0.3}, {"mu": 0.4}]}
+    # t_end 1 -> 1.0 is another sweep file (another fingerprint): it is named too
+    assert describe_change(old, new) == "fixed.seed, fixed.t_end, point, replicates, zip.s.freq"
+    assert fingerprint({"fixed": {"t_end": 1}}) != fingerprint({"fixed": {"t_end": 1.0}})
+
+
+def test_a_folder_of_a_sweep_changed_in_seven_keys_names_six_and_counts_one(tmp_path):
+    lines = "".join(f"p{k} = {k}\n" for k in range(9))
+    text = 'deck = "single_part"\n[fixed]\n' + lines
+    spec = parse(text, tmp_path / "s.toml")
+    folder = tmp_path / "out"
+    folder.mkdir()
+    F.write_manifest(folder, spec, [], "single_part.liggghts")
+    edited = parse('deck = "single_part"\n[fixed]\n' + "".join(
+        f"p{k} = {k + 100 if k < 7 else k}\n" for k in range(9)), tmp_path / "s.toml")
+    with pytest.raises(UsageError) as info:
+        F.check_folder(folder, edited)
+    assert ("differs in fixed.p0, fixed.p1, fixed.p2, fixed.p3, fixed.p4, fixed.p5 and 1 more); "
+            "its results would be mixed") in str(info.value)
