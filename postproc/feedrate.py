@@ -107,6 +107,7 @@ from .line import (
     trend,
     unsteady,
 )
+from .path import along, bowl_of, is_bowl, outlet_x, path_end  # noqa: F401  (outlet_x: imported from here)
 
 # Frames read at once: blocks of at most this many slot values.
 _BLOCK_VALUES = 1 << 22
@@ -146,15 +147,6 @@ def outlet_events(result, t_lo: float = -math.inf, t_hi: float = math.inf) -> di
     keep = (ev["time"] > t_lo) & (ev["time"] <= t_hi)
     order = np.argsort(ev["time"][keep], kind="stable")
     return {name: np.asarray(values)[keep][order] for name, values in ev.items()}
-
-
-def outlet_x(result) -> float:
-    """x of the outlet edge [m]: the table's attribute, else the deck's track_length."""
-    plane = result.outlet_plane or {}
-    x = plane.get("outlet_x", math.nan)
-    if not math.isfinite(x):
-        x = float(result.parameters.get("track_length", math.nan))
-    return x
 
 
 def values_at(result, frames, ids, names) -> dict[str, np.ndarray]:
@@ -321,6 +313,14 @@ def dilute_limit(parameters) -> tuple[float | None, str]:
     missing = [name for name in MODEL_NEEDS if name not in parameters]
     if missing:
         return None, f"the result lacks {', '.join(missing)}"
+    if is_bowl(parameters):  # the bowl's drive as the helix's centre line sees it
+        from ..bowl import track_drive
+
+        drive = track_drive(float(parameters["amp_t"]), float(parameters["amp_n"]),
+                            float(parameters["phase"]), float(parameters["freq"]),
+                            float(parameters["helix_angle"]), bowl_of(parameters).r_mid)
+        parameters = {**parameters, "amp_t": drive.amp_t, "amp_n": drive.amp_n,
+                      "phase": drive.phase, "incline": drive.incline}
     try:
         state = transport(parameters)
     except (KeyError, ValueError) as exc:
@@ -387,8 +387,7 @@ def period_velocities(result, frames, axis: int = 0, x_max: float = math.inf,
     for a in range(0, len(chain) - 1, per_block - 1):
         block = chain[a:a + per_block]
         ids = result.read("id", frames=block)
-        x = result.read("position", frames=block)[..., axis]
-        track_x = x - result.read("surface_position", frames=block)[:, axis][:, None]
+        track_x, x = along(result, block, axis)
         t = result.time[block]
         same = (ids[:-1] == ids[1:]) & (ids[:-1] != L.ID_FILL) & even[a:a + len(block) - 1, None]
         same &= (track_x[:-1] <= x_max) & (track_x[1:] <= x_max)
@@ -574,7 +573,7 @@ class FeedRate(AnalysisBase):
         key = np.asarray(frames, dtype=np.int64).tobytes()
         if getattr(self, "_pass_key", None) != key:
             result = self.result
-            edge = outlet_x(result)
+            edge = path_end(result)
             bounds = section_bounds(result.parameters, edge)
             out, rejects = result.outlet, result.rejects
             self._pass = bed_pass(result, frames, [lo for lo, _ in bounds[1:]], edge,
@@ -624,7 +623,7 @@ class FeedRate(AnalysisBase):
 
     def _velocities(self, frames: np.ndarray, t_a: float, t_b: float) -> None:
         r = self.results
-        edge = outlet_x(self.result)
+        edge = path_end(self.result)
         window = frames[(self.times >= t_a - 1e-12) & (self.times <= t_b + 1e-12)]
         x_mid, v, interval, (m, alias) = period_velocities(self.result, window, self.axis,
                                                            edge if math.isfinite(edge) else math.inf)
@@ -656,7 +655,7 @@ class FeedRate(AnalysisBase):
         and ``rejects_by_tooling`` for a line; for any result its drift over the window
         (``bed``, ``bed_trends``, ``unsteady``)."""
         r, result = self.results, self.result
-        edge = outlet_x(result)
+        edge = path_end(result)
         bounds = section_bounds(result.parameters, edge)
         rejects = result.rejects
         crossings, counts = self._bed_pass(frames)

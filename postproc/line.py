@@ -28,6 +28,7 @@ import numpy as np
 
 from ..line import section_from
 from ..results import layout as L
+from .path import along
 
 # Frames read at once: blocks of at most this many slot values (as feedrate's).
 _BLOCK_VALUES = 1 << 22
@@ -101,8 +102,7 @@ def bed_pass(result, frames, joints, edge: float, gone_ids=(), gone_times=(), ax
     for a in range(0, max(len(frames) - 1, 1), per_block - 1):
         block = frames[a:a + per_block]
         ids = result.read("id", frames=block)
-        x = result.read("position", frames=block)[..., axis]
-        x = x - result.read("surface_position", frames=block)[:, axis][:, None]
+        x = along(result, block, axis)[0]
         t = result.time[block]
         which = section_index(x, joints, edge)
         # A part below the catch plane, still falling, is no longer on a section.

@@ -173,7 +173,9 @@ def _is_prime(n: int) -> bool:
 
 def insertion_seeds(seed: int, count: int) -> list[int]:
     """``count`` distinct primes above 10000 and below 2**31 derived from ``seed``:
-    LIGGGHTS' insertion and particle-template fixes take only such seeds."""
+    LIGGGHTS' insertion and particle-template fixes take only such seeds. The mapping is
+    periodic: ``seed`` and ``seed + 200 000`` give the same primes (2**31 holds no more
+    starting points 9973 apart)."""
     base = 10007 + (seed % 200_000) * 9973
     out: list[int] = []
     n = base
@@ -245,4 +247,37 @@ def prepare_bulk_feeder(values: Mapping[str, str], folder: str | Path) -> Prepar
     if section_2 is not None:
         vertices, triangles = combined((vertices, triangles), section_2)
     return Prepared(variables={"mesh_dir": str(folder.resolve())}, track=(vertices, triangles),
+                    body_template=template)
+
+
+def prepare_bowl_feeder(values: Mapping[str, str], folder: str | Path) -> Prepared:
+    """Write the bowl feeder's geometry for one run into ``folder`` and describe it.
+
+    Files: ``bowl.stl`` (the bowl at rest, vibrofeed.bowl), ``catch.stl``, the clump
+    templates and ``prepared.in`` as for the bulk feeder, which here also holds the bowl's
+    derived geometry (``bowl_*``) and the region ``track_fill`` of the pre-fill along the
+    track. The bowl's parameters are checked first (vibrofeed.bowl.check_bowl).
+    """
+    from .bowl import bowl_from, bowl_mesh, check_bowl, write_bowl
+
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    names = ("bowl_diameter", "track_width", "helix_angle", "turns", "wall_height", "cone_angle",
+             "cross_tilt", "lip_height", "chute_length", "part_size", "part_thickness", "size_spread")
+    numbers = {name: _number(values, name) for name in names}
+    numbers["shape"] = shape_code(values.get("shape", "0"))
+    check_bowl(numbers)
+    size, thickness = numbers["part_size"], numbers["part_thickness"]
+    write_stl(*catch_face(), folder / "catch.stl", "catch")
+    templates = {"chip": chip_template(size, thickness), "disc": disc_template(size, thickness)}
+    for name, rows in templates.items():
+        write_template(rows, folder / f"{name}.multisphere", name)
+    lines = ["# written by vibrofeed.geometry.prepare_bowl_feeder for one run\n"]
+    lines += [f"variable n_sph_{name} equal {len(rows)}\n" for name, rows in templates.items()]
+    seed = int(_number(values, "seed")) if "seed" in values else 5489
+    lines += [f"variable seed_{k} equal {p}\n" for k, p in enumerate(insertion_seeds(seed, 6), 1)]
+    lines += write_bowl({**{k: str(v) for k, v in numbers.items()}}, folder)
+    (folder / "prepared.in").write_text("".join(lines))
+    template = {0: None, 1: templates["chip"], 2: templates["disc"]}[numbers["shape"]]
+    return Prepared(variables={"mesh_dir": str(folder.resolve())}, track=bowl_mesh(bowl_from(numbers)),
                     body_template=template)

@@ -1,7 +1,7 @@
 """Indexed triangle meshes: built over shared vertices, written as binary STL (numpy-stl).
 
-The track of the bulk feeder (:mod:`vibrofeed.geometry`) and a feeder line's further
-sections (:mod:`vibrofeed.line`) are built with these.
+The track of the bulk feeder (:mod:`vibrofeed.geometry`), a feeder line's further
+sections (:mod:`vibrofeed.line`) and the bowl (:mod:`vibrofeed.bowl`) are built with these.
 """
 
 from __future__ import annotations
@@ -27,10 +27,22 @@ class MeshBuilder:
             self.vertices.append(key)
         return self.index[key]
 
+    def triangle(self, a, b, c) -> None:
+        """A triangle; none where two corners are one vertex (a face of zero height)."""
+        t = tuple(self.vertex(p) for p in (a, b, c))
+        if len(set(t)) == 3:
+            self.triangles.append(t)
+
+    def polygon(self, corners) -> None:
+        """A convex planar polygon as a fan of triangles from its first corner (corners in
+        order around it; collinear corners keep whole edges shared with neighbours)."""
+        for k in range(1, len(corners) - 1):
+            self.triangle(corners[0], corners[k], corners[k + 1])
+
     def quad(self, a, b, c, d) -> None:
         """Two triangles a-b-c, a-c-d (corners in order around the quad)."""
-        i, j, k, m = (self.vertex(p) for p in (a, b, c, d))
-        self.triangles += [(i, j, k), (i, k, m)]
+        self.triangle(a, b, c)
+        self.triangle(a, c, d)
 
     def mesh(self) -> tuple[np.ndarray, np.ndarray]:
         return (np.array(self.vertices, dtype=np.float64).reshape(-1, 3),

@@ -13,6 +13,7 @@ import re
 import warnings
 from collections.abc import Callable, Mapping
 
+from .bowl import check_bowl
 from .decks import RESERVED, Deck
 from .errors import ParameterError
 from .line import check_line
@@ -159,6 +160,14 @@ RULES: dict[str, Callable[[float], str | None]] = {
     "s2_drop_width": _non_negative,
     "s2_wiper_height": _non_negative,
     "s2_wiper_at": _between(0, 1, lo_open=False),
+    # the bowl feeder (decks/bowl_feeder.liggghts; vibrofeed.bowl)
+    "n_track": _integer(lo=0),
+    "bowl_diameter": _positive_up_to(0.5, "a micro-part bowl is cm across; lengths are in metres"),
+    "cone_angle": _between(0, 45, lo_open=False, hi_open=False),
+    "helix_angle": _between(0, 45, why="the track climbs: 0 < helix_angle < 45 deg"),
+    "turns": _positive,
+    "lip_height": _non_negative,
+    "chute_length": _positive,
 }
 # Section 2's drive and walls are section 1's kind: the same limits.
 SECTION_2_TWINS = {"s2_length": "track_length", "s2_width": "track_width",
@@ -280,6 +289,7 @@ def _check_relations(p: Mapping[str, float]) -> None:
                 f"{frames:.3g} frames (limit {MAX_FRAMES:.0e}); raise output_dt or shorten t_end")
     _check_bulk_feeder(p)
     check_line(p)
+    check_bowl(p)
     _check_surface_forces(p)
     dt = p.get("dt", 0.0)
     if dt > 0:

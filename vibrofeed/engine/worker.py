@@ -313,6 +313,24 @@ def surface_state(lmp, section: int = 1) -> tuple[list, list]:
     return [lmp.variable(n) for n in names[0]], [lmp.variable(n) for n in names[1]]
 
 
+def surface_rotation(lmp) -> tuple[list, list]:
+    """A rotating surface's (angle, angular velocity) as rotation vectors about z, from the
+    deck's ``L.ROTATION_VARIABLES``; collective, on every rank."""
+    angle, rate = (lmp.variable(n) for n in L.ROTATION_VARIABLES)
+    return [0.0, 0.0, angle], [0.0, 0.0, rate]
+
+
+def rotating(lmp) -> bool:
+    """Whether the deck's surface turns (it defines both ``L.ROTATION_VARIABLES``); one of them
+    alone is refused before anything runs."""
+    have = [lmp.has_variable(n) for n in L.ROTATION_VARIABLES]
+    if any(have) and not all(have):
+        missing = [n for n, h in zip(L.ROTATION_VARIABLES, have) if not h]
+        raise DeckError(f"the deck defines its surface's rotation only in part: {', '.join(missing)} "
+                        "missing (docs/decks.md)")
+    return all(have)
+
+
 def recorded_sections(lmp, spec: dict) -> int:
     """The sections whose motion the deck defines: 1, or a line's 2, 3, ... (s<k>_surface_x
     defined for k = 2 ... n). A line (``sections`` > 1) whose deck does not define them cannot be
@@ -412,7 +430,8 @@ def set_up(lmp, spec: dict) -> None:
     lmp.command("variable vibrofeed_time equal time")
 
 
-def open_writer(spec: dict, derived: dict, ranks: int, natoms: int, bulk, sections: int = 1):
+def open_writer(spec: dict, derived: dict, ranks: int, natoms: int, bulk, sections: int = 1,
+                turns: bool = False):
     """Rank 0's result writer, flushed also when LIGGGHTS ends the process."""
     from ..results.writer import ResultWriter
 
@@ -424,7 +443,7 @@ def open_writer(spec: dict, derived: dict, ranks: int, natoms: int, bulk, sectio
         engine_version=engine_version(spec["log"]), seed=spec.get("seed"),
         ranks=ranks, command=spec.get("command", ""), run_id=spec.get("run_id", ""),
         capacity_hint=max(natoms // (bulk.n_spheres if bulk else 1), 1), sections=sections,
-        target_error=spec.get("target_error"),
+        target_error=spec.get("target_error"), rotating=turns,
         **({} if bulk is None else {"track": bulk.track, "outlet": bulk.outlet.attributes(),
                                     "body_template": bulk.template, "line": bulk.line,
                                     "track_sections": bulk.track_sections,
@@ -458,9 +477,11 @@ class Frames:
     """Takes the frames: the particles (or a bulk deck's bodies, outlet events and
     mass balance) to rank 0's writer; warns once when parts go missing."""
 
-    def __init__(self, lmp, comm, writer, bulk, report: Reporter, sections: int = 1):
+    def __init__(self, lmp, comm, writer, bulk, report: Reporter, sections: int = 1,
+                 turns: bool = False):
         self.lmp, self.comm, self.writer, self.bulk, self.report = lmp, comm, writer, bulk, report
         self.sections = sections  # whose motion is recorded: section 1 and a line's further ones
+        self.turns = turns  # the surface also rotates (a bowl): its angle and rate are recorded
         self.counts = None  # the mass balance of the last frame (bulk decks, rank 0)
         self.commands: list[str] = []  # to give before the next segment (a line's returns)
         self._lost_reported = False
@@ -470,12 +491,14 @@ class Frames:
         lmp = self.lmp
         pos, vel = surface_state(lmp)
         further = [surface_state(lmp, k) for k in range(2, self.sections + 1)]
+        rotation = surface_rotation(lmp) if self.turns else None
         step = int(round(lmp.variable("vibrofeed_step")))
         t = lmp.variable("vibrofeed_time")
         if self.bulk is None:
             parts = gather_parts(lmp, self.comm)
             if self.writer is not None:
-                self.writer.write_frame(step, t, parts, pos, vel, section_surfaces=further)
+                self.writer.write_frame(step, t, parts, pos, vel, section_surfaces=further,
+                                        surface_rotation=rotation)
             return t
         got = self.bulk.frame(lmp, self.comm, t)
         returns = self.bulk.returns
@@ -487,7 +510,8 @@ class Frames:
                 self.writer.write_events(events)
             if rejects is not None:
                 self.writer.write_events(rejects, L.REJECTS)
-            self.writer.write_frame(step, t, parts, pos, vel, counts=counts, section_surfaces=further)
+            self.writer.write_frame(step, t, parts, pos, vel, counts=counts, section_surfaces=further,
+                                    surface_rotation=rotation)
             self.counts = counts
             lost = counts["lost"]
             if lost and not self._lost_reported:
@@ -651,6 +675,7 @@ def run(spec: dict, heartbeat: Heartbeat | None = None, on_term: OnTerminate | N
     n_steps, every, dt, is_bulk = read_contract(lmp)
     target = target_error(spec, is_bulk, comm)
     sections = recorded_sections(lmp, spec)
+    turns = rotating(lmp)
     derived = derived_constants(lmp, spec["constants"])
 
     report("setup")
@@ -659,8 +684,8 @@ def run(spec: dict, heartbeat: Heartbeat | None = None, on_term: OnTerminate | N
     if is_bulk:
         bulk = BulkFrames(lmp, spec)
         bulk.template_from_first_body(lmp, comm)
-    writer = (open_writer(spec, derived, comm.size, lmp.natoms, bulk, sections) if comm.rank == 0
-              else None)
+    writer = (open_writer(spec, derived, comm.size, lmp.natoms, bulk, sections, turns)
+              if comm.rank == 0 else None)
     if on_term is not None:
         on_term.writer = writer
 
@@ -669,7 +694,7 @@ def run(spec: dict, heartbeat: Heartbeat | None = None, on_term: OnTerminate | N
     n_frames = 1 + len(segs)
     report("run", n_steps=n_steps, dt=dt, output_every=every, n_frames=n_frames,
            natoms=lmp.natoms)
-    frames = Frames(lmp, comm, writer, bulk, report, sections)
+    frames = Frames(lmp, comm, writer, bulk, report, sections, turns)
     done, wall, taken = run_segments(lmp, frames, segs, report, target)
 
     for message in bulk_warnings(bulk):

@@ -75,6 +75,9 @@ class FrameData:
     # surface_* (one section).
     section_position: np.ndarray | None = None
     section_velocity: np.ndarray | None = None
+    # a rotating surface (the bowl): its angle [rad] and rate [rad s-1] about z through the origin
+    surface_angle: float = 0.0
+    surface_rate: float = 0.0
 
     def __len__(self) -> int:
         return len(self.ids)
@@ -150,11 +153,15 @@ def read_frame(result, index: int) -> FrameData:
     except KeyError:  # a result without bodies: every part is a sphere, unrotated
         orientation = np.tile((1.0, 0.0, 0.0, 0.0), (len(frame), 1))
     position, velocity = section_motion(result, index)
+    angle = rate = 0.0
+    if result.rotating:
+        angle = float(result.read("surface_angle", frames=index)[2])
+        rate = float(result.read("surface_angular_velocity", frames=index)[2])
     return FrameData(
         index=index, n_frames=n, time=frame.time, ids=frame.ids,
         orientation=np.asarray(orientation, dtype=float).reshape(len(frame), 4),
         surface_position=position[0], surface_velocity=velocity[0],
-        section_position=position, section_velocity=velocity,
+        section_position=position, section_velocity=velocity, surface_angle=angle, surface_rate=rate,
         **{name: frame[name] for name in FIELDS})
 
 
@@ -297,21 +304,38 @@ def vertex_sections(result) -> np.ndarray | None:
 
 
 def track_mesh(result, frame: FrameData):
-    """(vertices, triangles) of the track at the frame (its rest mesh moved by the surface
-    position: each vertex by its own section's), or None when the run has no track mesh (the
-    single-part deck's plane)."""
+    """(vertices, triangles) of the track at the frame (its rest mesh turned by the surface's
+    angle about z, for a bowl, then moved by the surface position: each vertex by its own
+    section's), or None when the run has no track mesh (the single-part deck's plane)."""
     rows = vertex_sections(result)
     if rows is None:
         return None
     vertices, triangles = result.track_mesh
-    return (np.asarray(vertices, dtype=float) + frame.sections_position[rows],
-            np.asarray(triangles))
+    return (_turned(np.asarray(vertices, dtype=float), frame.surface_angle)
+            + frame.sections_position[rows], np.asarray(triangles))
+
+
+def _turned(points: np.ndarray, angle: float) -> np.ndarray:
+    """``points`` (V, 3) turned by ``angle`` [rad] about the z axis through the origin."""
+    if angle == 0.0:
+        return points
+    c, s = np.cos(angle), np.sin(angle)
+    return np.column_stack([c * points[:, 0] - s * points[:, 1], s * points[:, 0] + c * points[:, 1],
+                            points[:, 2]])
 
 
 def track_velocity(result, frame: FrameData) -> np.ndarray | None:
-    """(V, 3) the velocity of each track vertex at the frame [m s-1]: its section's."""
+    """(V, 3) the velocity of each track vertex at the frame [m s-1]: its section's, plus a
+    bowl's rate x r at the vertex where it turns."""
     rows = vertex_sections(result)
-    return None if rows is None else frame.sections_velocity[rows]
+    if rows is None:
+        return None
+    velocity = frame.sections_velocity[rows]
+    if frame.surface_rate:
+        placed = _turned(np.asarray(result.track_mesh[0], dtype=float), frame.surface_angle)
+        velocity = velocity + frame.surface_rate * np.column_stack(
+            [-placed[:, 1], placed[:, 0], np.zeros(len(placed))])
+    return velocity
 
 
 def part_sections(result, frame: FrameData) -> np.ndarray:

@@ -365,7 +365,18 @@ class _Checker:
                                                   f"(sections = {self.sections})")
 
     def section_surface(self, group: str):
-        for name, (_, comps, unit) in L.SURFACE_ELEMENTS.items():
+        elements = dict(L.SURFACE_ELEMENTS)
+        g = self.f.get(group)
+        rotation = [n for n in L.ROTATION_ELEMENTS if isinstance(g, h5py.Group) and n in g]
+        if rotation and group != L.SURFACE:
+            self.error(f"{group}/{rotation[0]}", "only the first section's surface may rotate")
+        elif rotation and len(rotation) < len(L.ROTATION_ELEMENTS):
+            missing = [n for n in L.ROTATION_ELEMENTS if n not in rotation]
+            self.error(group, f"a rotating surface records {', '.join(L.ROTATION_ELEMENTS)}: "
+                              f"{', '.join(missing)} missing")
+        elif rotation:
+            elements.update(L.ROTATION_ELEMENTS)
+        for name, (_, comps, unit) in elements.items():
             path = f"{group}/{name}"
             v = self.time_series(path, comps, unit)
             if v is None:
@@ -572,9 +583,62 @@ class _Physics:
             return dt if math.isfinite(dt) and dt > 0 else None
         return None
 
+    def bowl_drive(self) -> None:
+        """A rotating surface (the bowl) turned and lifted as its drive says (FORMAT.md, "What
+        check checks": Drives): riggle and viblin add the rate's step sums as wiggle does, so
+        the angle is :func:`sine_drive`'s x for the amplitude amp_t / r_mid [rad] and the lift
+        its z; the rates are the movers' own."""
+        g = self.f.get(L.SURFACE)
+        if not isinstance(g, h5py.Group) or "angle" not in g:
+            return
+        step = self.f.get(f"{L.PARTS}/position/step")
+        time = self.f.get(f"{L.PARTS}/position/time")
+        if step is None or time is None or len(step) == 0:
+            return
+        step, time = step[()], time[()]
+        motion = {e: g.get(f"{e}/value") for e in ("angle", "angular_velocity", "position", "velocity")}
+        if any(not isinstance(m, h5py.Dataset) or m.shape != (len(step), 3) for m in motion.values()):
+            return  # missing or misshapen: reported with the layout
+        names = ("freq", "amp_t", "amp_n", "phase", "bowl_diameter", "track_width")
+        missing = [n for n in names if n not in self.p]
+        if missing:
+            self.c.error(L.SURFACE, f"the bowl's drive ({', '.join(missing)}) is not among the "
+                                    "recorded parameters: its motion cannot be verified")
+            return
+        dt = self.time_step(step, time)
+        if dt is None:
+            self.c.error(L.SURFACE, "no time step recorded (derived/dt_used): the bowl's motion "
+                                    "cannot be verified")
+            return
+        p = self.p
+        theta_amp = p["amp_t"] / (p["bowl_diameter"] / 2 - p["track_width"] / 2)
+        pos, vel = sine_drive(p["freq"], theta_amp, p["amp_n"], p["phase"], dt, step, time)
+        omega = 2 * math.pi * p["freq"]
+        zero = np.zeros_like(pos[:, 0])
+        for element, want, scale, unit, atol in (
+                ("angle", np.column_stack([zero, zero, pos[:, 0]]), theta_amp, "rad", 1e-15),
+                ("angular_velocity", np.column_stack([zero, zero, vel[:, 0]]), theta_amp * omega,
+                 "rad/s", 1e-12),
+                ("position", np.column_stack([zero, zero, pos[:, 2]]), p["amp_n"], "m",
+                 DRIVE_ATOL["position"]),
+                ("velocity", np.column_stack([zero, zero, vel[:, 2]]), p["amp_n"] * omega, "m/s",
+                 DRIVE_ATOL["velocity"])):
+            got = motion[element][()]
+            tol = DRIVE_RTOL * scale + atol
+            off = np.abs(got - want).max(axis=1)
+            bad = np.nonzero(~(off <= tol))[0]  # NaN fails too
+            if len(bad):
+                j = int(bad[0])
+                self.c.error(f"{L.SURFACE}/{element}/value",
+                             f"the bowl's {element} at frame {j} (t = {time[j]:g} s) is "
+                             f"{np.array2string(got[j], precision=4)} {unit}, its drive gives "
+                             f"{np.array2string(want[j], precision=4)} {unit} (off by {off[j]:.3g}, "
+                             f"beyond {tol:.3g} {unit}: {DRIVE_RTOL:g} of the amplitude)")
+
     def run(self) -> None:
         self.step()
         self.drives()
+        self.bowl_drive()
         if not all(f"{L.PARTS}/{n}/value" in self.f for n in ("id", "position", "velocity", "mass")):
             return
         ids = self.f[f"{L.PARTS}/id/value"]

@@ -20,7 +20,10 @@ FORMAT_NAME = "vibrofeed-result"
 # 1.5: a line that recirculates its rejects counts them back (mass balance ``returned``);
 # optional in 1.5 (files without them stay valid): parameters/run@stop_reason, why the engine
 # ended the run, and @target_error, the feed rate's relative error a run was told to stop at.
-FORMAT_VERSION = (1, 5)
+# 1.6: a rotating surface (the bowl feeder) also records its rotation about the z axis through
+# the origin in SURFACE: ``angle`` and ``angular_velocity`` (optional elements: files without
+# them are valid, their surface does not rotate).
+FORMAT_VERSION = (1, 6)
 SECTIONS_SINCE = (1, 4)  # the first format that records a line's sections
 
 PARTS = "particles/parts"
@@ -110,6 +113,16 @@ SURFACE_ELEMENTS = {
     "position": ("f8", 3, "m"),
     "velocity": ("f8", 3, "m s-1"),
 }
+# A rotating surface (a bowl: its deck defines ROTATION_VARIABLES) also records its rotation
+# about the z axis through the origin as a rotation vector (0, 0, angle) and its rate, in
+# SURFACE beside position and velocity: the surface at frame k is its rest mesh turned by the
+# angle about z, then moved by the position.
+ROTATION_ELEMENTS = {
+    "angle": ("f8", 3, "rad"),
+    "angular_velocity": ("f8", 3, "rad s-1"),
+}
+ROTATION_VARIABLES = ("surface_angle", "surface_wz")  # [rad], [rad/s] about +z
+ROTATION_SINCE = (1, 6)
 # A feeder line (parameter `sections` > 1) records each further section's motion as its own
 # observable beside SURFACE, with the same elements: section k >= 2 under surface_s<k> (the
 # s<k>_* names of its parameters). Section 1 stays SURFACE, so what reads a single track reads

@@ -281,10 +281,11 @@ class Result:
 
     # -- reading by window ----------------------------------------------------------
     FIELDS = (*L.PART_ELEMENTS, *L.OPTIONAL_PART_ELEMENTS, "surface_position", "surface_velocity",
-              "time", "step")
+              "surface_angle", "surface_angular_velocity", "time", "step")
     """Names :meth:`read` knows: the per-part elements (``ids`` is an alias of
-    ``id``), the surface's motion and the frames' time and step; a feeder line's
-    further sections too, as ``surface_s<k>_position`` and ``surface_s<k>_velocity``."""
+    ``id``), the surface's motion (a rotating surface's angle and angular velocity about z
+    too: zeros where the surface does not rotate) and the frames' time and step; a feeder
+    line's further sections too, as ``surface_s<k>_position`` and ``surface_s<k>_velocity``."""
 
     def _dataset(self, name: str):
         """(dataset, per_part) of a field name; (None, True) for an optional
@@ -297,6 +298,9 @@ class Result:
             return (None if group is None else group["value"]), True
         if name.startswith("surface_") and name[len("surface_"):] in L.SURFACE_ELEMENTS:
             return self.file[L.SURFACE][name[len("surface_"):]]["value"], False
+        if name.startswith("surface_") and name[len("surface_"):] in L.ROTATION_ELEMENTS:
+            group = self.file[L.SURFACE].get(name[len("surface_"):])
+            return (None if group is None else group["value"]), False
         section = _SECTION_FIELD.fullmatch(name)
         if section and int(section[1]) >= 2 and section[2] in L.SURFACE_ELEMENTS:
             k = int(section[1])
@@ -325,6 +329,9 @@ class Result:
         >>> r.read("surface_position", frames=-1)            # (3,)
         """
         ds, per_part = self._dataset(name)
+        if ds is None and not per_part:  # a surface that does not rotate: zeros, one per frame
+            times = self.read("time", frames)
+            return np.zeros((*np.shape(times), 3))
         if ds is None:  # absent optional element: its default where a part is
             return self._default(name, self.read("id", frames, slots))
         f = _normalise(frames, ds.shape[0])
@@ -367,6 +374,11 @@ class Result:
         out = np.full((*np.shape(ids), comps), np.nan)
         out[np.asarray(ids) != L.ID_FILL] = L.IDENTITY_QUATERNION
         return out
+
+    @property
+    def rotating(self) -> bool:
+        """Whether the surface turns about z (a bowl: its angle is recorded, format 1.6)."""
+        return "angle" in self.file[L.SURFACE]
 
     def recorded(self, name: str, frames=None) -> bool:
         """Whether per-part field ``name`` holds values, judged at the first (selected) frame

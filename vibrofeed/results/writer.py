@@ -172,6 +172,9 @@ class ResultWriter:
     track_sections:
         ``(V,)`` the section (1-based) of each vertex of ``track``, stored as
         ``L.TRACK_SECTION``: at frame k a vertex sits at rest + its section's position.
+    rotating:
+        the surface also turns about the z axis (a bowl): records ``L.ROTATION_ELEMENTS`` in
+        ``L.SURFACE``; every frame then gives ``surface_rotation``.
     target_error:
         the feed rate's relative error the run stops at (``--target-error``), recorded as
         ``parameters/run@target_error``; :meth:`finish` records why it stopped.
@@ -184,7 +187,8 @@ class ResultWriter:
                  command: str = "", run_id: str = "", capacity_hint: int = 1,
                  max_delay: float = 0.25, track=None, body_template=None,
                  outlet: Mapping | None = None, line: bool = False, sections: int = 1,
-                 track_sections=None, returns: bool = False, target_error: float | None = None):
+                 track_sections=None, returns: bool = False, target_error: float | None = None,
+                 rotating: bool = False):
         if returns and not line:
             raise ValueError("returns without a line: only a feeder line has rejects to return")
         self.path = str(path)
@@ -192,7 +196,8 @@ class ResultWriter:
         self.frames = 0          # frames handed over
         self.written = 0         # frames on disk
         self.max_delay = max_delay
-        # (step, time, {name: row}, surface_pos, surface_vel, counts, further sections' (pos, vel))
+        # (step, time, {name: row}, surface_pos, surface_vel, counts, further sections' (pos, vel),
+        #  the rotation (angle, rate) or None)
         self._pending: list = []
         self._pending_events: list = []  # (table path, event table) handed over, not yet written
         self.events = 0          # events handed over
@@ -205,6 +210,7 @@ class ResultWriter:
         if int(sections) < 1:
             raise ValueError(f"sections must be >= 1, got {sections}")
         self.sections = int(sections)
+        self.rotating = bool(rotating)
 
         self.file = h5py.File(self.path, "w")
         f = self.file
@@ -219,6 +225,8 @@ class ResultWriter:
         # one {element: value dataset} per section, section 1 first
         self._surfaces = [{name: f[L.surface_path(k)][name]["value"] for name in L.SURFACE_ELEMENTS}
                           for k in range(1, self.sections + 1)]
+        self._rotation = ({name: f[L.SURFACE][name]["value"] for name in L.ROTATION_ELEMENTS}
+                          if self.rotating else None)
         self._edges = f[L.PARTS]["box/edges/value"]
         self._step = f[L.PARTS]["position/step"]
         self._time = f[L.PARTS]["position/time"]
@@ -335,7 +343,10 @@ class ResultWriter:
         # each section's motion: H5MD time series sampled with the parts (hard-linked step, time)
         for k in range(1, self.sections + 1):
             obs = f.create_group(L.surface_path(k))
-            for name, (dtype, comps, unit) in L.SURFACE_ELEMENTS.items():
+            elements = dict(L.SURFACE_ELEMENTS)
+            if k == 1 and self.rotating:
+                elements.update(L.ROTATION_ELEMENTS)
+            for name, (dtype, comps, unit) in elements.items():
                 g = obs.create_group(name)
                 value = g.create_dataset("value", shape=(0, comps), maxshape=(None, comps),
                                          dtype=dtype, chunks=(max(cf, 256), comps))
@@ -425,7 +436,7 @@ class ResultWriter:
     # -- frames -------------------------------------------------------------------
     def write_frame(self, step: int, time: float, parts: Mapping[str, np.ndarray],
                     surface_position, surface_velocity, counts: Mapping[str, int] | None = None,
-                    section_surfaces=()) -> None:
+                    section_surfaces=(), surface_rotation=None) -> None:
         """Hand over one frame; it reaches the disk within ``max_delay`` seconds.
 
         ``parts`` holds per-particle arrays with the same row order:
@@ -437,13 +448,21 @@ class ResultWriter:
         one that recirculates.
         ``surface_position``, ``surface_velocity`` are section 1's motion (3,) [m, m s-1];
         ``section_surfaces`` the further sections' ``(position, velocity)``, section 2 first,
-        one per section beyond the first the writer records (``sections``).
+        one per section beyond the first the writer records (``sections``);
+        ``surface_rotation`` the rotating surface's ``(angle, angular_velocity)`` (3,) [rad,
+        rad s-1] (a writer made ``rotating`` needs it, any other refuses it).
         """
         further = [(np.asarray(p, dtype="f8").reshape(3), np.asarray(v, dtype="f8").reshape(3))
                    for p, v in section_surfaces]
         if len(further) != self.sections - 1:  # before any state changes: the frame is refused
             raise ValueError(f"the writer records {self.sections} section(s): give the motion of "
                              f"{self.sections - 1} further section(s), got {len(further)}")
+        if (surface_rotation is not None) != self.rotating:
+            raise ValueError("a rotating surface's frame needs surface_rotation" if self.rotating
+                             else "surface_rotation given, but the writer's surface does not rotate")
+        rotation = None
+        if surface_rotation is not None:
+            rotation = tuple(np.asarray(x, dtype="f8").reshape(3) for x in surface_rotation)
         slots = self.slots.assign(parts["id"])  # refuses duplicate ids
         # (slots, values) per element, scattered into the batch's block when
         # written: one pass over the values here (a copy: the caller may reuse
@@ -465,7 +484,7 @@ class ResultWriter:
                 self._pending_since = _time.monotonic()
             self._pending.append((int(step), float(time), rows,
                                   np.asarray(surface_position, dtype="f8"),
-                                  np.asarray(surface_velocity, dtype="f8"), counts, further))
+                                  np.asarray(surface_velocity, dtype="f8"), counts, further, rotation))
             self.frames += 1
             due = _time.monotonic() - self._pending_since >= self.max_delay
         if due:
@@ -540,6 +559,9 @@ class ResultWriter:
             motion = [(f[3], f[4]) if k == 0 else f[6][k - 1] for f in self._pending]
             self._append(surface["position"], k0, np.array([m[0] for m in motion]))
             self._append(surface["velocity"], k0, np.array([m[1] for m in motion]))
+        if self._rotation is not None:
+            self._append(self._rotation["angle"], k0, np.array([f[7][0] for f in self._pending]))
+            self._append(self._rotation["angular_velocity"], k0, np.array([f[7][1] for f in self._pending]))
         self._append(self._edges, k0, np.tile(L.BOX_EDGES_PLACEHOLDER, (n, 1)))
         # step/time last: a frame counts once its step is there.
         self._append(self._time, k0, np.array([f[1] for f in self._pending], dtype="f8"))

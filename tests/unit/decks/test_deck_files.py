@@ -11,13 +11,16 @@ from vibrofeed.errors import InputError
 VOCABULARY = ["density", "youngs", "poisson", "restitution", "t_end", "output_dt", "dt", "seed"]
 # ... and every deck with a vibrating surface (all but the pull-off test) also:
 VIBRATION = ["freq", "amp_t", "amp_n", "phase", "incline", "mu"]
+# ... where the bowl's track climbs at its helix angle instead of an incline
+SLOPE = {"bowl_feeder": "helix_angle"}
 
 
 def test_every_deck_declares_the_shared_vocabulary_with_units():
-    assert {"single_part", "bulk_feeder", "pulloff"} <= set(available())
+    assert {"single_part", "bulk_feeder", "bowl_feeder", "pulloff"} <= set(available())
     for name in available():
         deck = Deck.find(name)
-        wanted = VOCABULARY + (VIBRATION if name != "pulloff" else [])
+        wanted = VOCABULARY + ([SLOPE.get(name, v) if v == "incline" else v for v in VIBRATION]
+                               if name != "pulloff" else [])
         for var in wanted:
             assert var in deck.variables, f"{name} lacks {var}"
             assert deck.variables[var].unit, f"{name}: {var} has no [unit]"

@@ -97,6 +97,14 @@ BULK = {
     "s2_drop_width": (0, True, INF, False, None),
     "s2_wiper_height": (0, True, INF, False, None),
     "s2_wiper_at": (0, True, 1, False, None),
+    # the bowl feeder (vibrofeed.bowl)
+    "n_track": (0, True, INF, False, "integers"),
+    "bowl_diameter": (0, False, 0.5, True, None),
+    "cone_angle": (0, True, 45, True, None),
+    "helix_angle": (0, False, 45, False, None),
+    "turns": (0, False, INF, False, None),
+    "lip_height": (0, True, INF, False, None),
+    "chute_length": (0, False, INF, False, None),
 }
 ALL = {**BOUNDS, **BULK}
 

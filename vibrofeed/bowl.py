@@ -1,0 +1,415 @@
+"""The vibratory bowl feeder's geometry, its drive seen from the track, and its checks.
+
+A bowl (decks/bowl_feeder.liggghts) is a cylinder of radius ``bowl_diameter / 2`` with a
+conical bottom (down towards the wall by ``cone_angle``, so the pile moves outwards) and a
+helical track on its inner wall: a shelf ``track_width`` wide rising at ``helix_angle``
+(at its centre line) for ``turns`` turns, its floor tilted down towards the wall by
+``cross_tilt``, with an optional lip ``lip_height`` along its open (inner) edge. Below the
+first turn a riser closes the shelf down to the bottom (a real bowl's first turn is cut
+into its wall), so no part wedges under the ramp. At its top the track goes on as a
+straight chute, the helix's tangent, ``chute_length`` long, with a wall on both sides,
+through a slot in the bowl's wall; parts leave over the chute's end.
+
+Frame: z up the bowl's axis (the axis is x = y = 0), gravity -z; the track climbs
+counter-clockwise seen from above (increasing polar angle theta), and ends at
+theta = -90 degrees, so the chute runs along +x, at y = -(its centre line radius): the
+outlet edge is the plane x = ``outlet_x`` (the chute's end), outside the bowl's wall there;
+a part that leaves over it falls beside the bowl, below its bottom. The track starts
+``turns`` turns (or a fraction of one) before that.
+
+The drive (vibrofeed's bowl deck): the bowl turns about its axis by
+theta_b(t) = (amp_t / r_mid) sin(w t) and rises by z_b(t) = amp_n sin(w t + phase), so
+``amp_t`` is the tangential displacement amplitude at the track's centre line radius
+r_mid, as a real bowl drive's torsional and vertical springs move it.
+:func:`track_drive` projects this motion on the helix: the tangent of the track (up the
+helix) and its normal see two sines of the same frequency, i.e. the linear track's
+drive (amp_t, amp_n, phase, incline) the single-part models take.
+"""
+
+from __future__ import annotations
+
+import cmath
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .errors import ParameterError
+from .mesh import MeshBuilder, write_stl
+
+THETA_END = -math.pi / 2  # the track's end: its tangent there is +x, the chute's direction
+# Largest angle between the mesh's stations around the bowl [rad]: the wall's facets then
+# deviate from the cylinder by R (1 - cos(STATION/2)) = 0.14 % of the radius (14 um in a
+# 20 mm bowl). A moving mesh costs LIGGGHTS time per triangle at every step, so the bowl
+# has no more triangles than its shape needs.
+STATION = math.radians(6.0)
+
+
+@dataclass(frozen=True)
+class Bowl:
+    """A bowl's geometry [m, deg] (see the module docstring)."""
+
+    radius: float
+    track_width: float
+    helix_angle: float
+    turns: float
+    wall_height: float
+    cone_angle: float = 0.0
+    cross_tilt: float = 0.0
+    lip_height: float = 0.0
+    chute_length: float = 0.0
+
+    @property
+    def r_mid(self) -> float:
+        """The track's centre line radius."""
+        return self.radius - self.track_width / 2
+
+    @property
+    def slope(self) -> float:
+        """tan of the helix angle at the centre line."""
+        return math.tan(math.radians(self.helix_angle))
+
+    @property
+    def pitch(self) -> float:
+        """Rise per turn."""
+        return 2 * math.pi * self.r_mid * self.slope
+
+    @property
+    def theta_start(self) -> float:
+        return THETA_END - 2 * math.pi * self.turns
+
+    @property
+    def z_start(self) -> float:
+        """The floor's height on the centre line where the track starts: the floor's outer
+        edge on the bottom (at the wall, height 0), or higher when the bottom's cone is
+        steeper than the floor's cross tilt, so that its inner edge meets the cone."""
+        w, cone, tilt = self.track_width, _tan(self.cone_angle), _tan(self.cross_tilt)
+        return max(w / 2 * tilt, w * cone - w / 2 * tilt)
+
+    def floor_z(self, theta, r):
+        """The track floor's height at polar angle ``theta`` [rad, from theta_start up to
+        THETA_END] and radius ``r``: the helix on the centre line, the cross tilt across."""
+        rise = self.pitch * (np.asarray(theta) - self.theta_start) / (2 * math.pi)
+        return self.z_start + rise - (np.asarray(r) - self.r_mid) * _tan(self.cross_tilt)
+
+    def bottom_z(self, r):
+        """The bottom's height at radius ``r``: the cone, 0 at the wall."""
+        return (self.radius - np.asarray(r)) * _tan(self.cone_angle)
+
+    @property
+    def end_z(self) -> float:
+        """The track's centre line height at its end (the chute's start)."""
+        return float(self.floor_z(THETA_END, self.r_mid))
+
+    @property
+    def top(self) -> float:
+        """The wall's top: wall_height above the end's outer floor edge."""
+        return float(self.floor_z(THETA_END, self.radius)) + self.wall_height
+
+    @property
+    def slot(self) -> float:
+        """The angle past the track's end over which the chute passes through the wall [rad]:
+        to where the chute's inner edge (radius r_mid - w/2 at the start) leaves the bowl."""
+        return math.acos((self.radius - self.track_width) / self.radius)
+
+    @property
+    def outlet_x(self) -> float:
+        """The chute's end (the outlet edge), at x = chute_length cos(helix_angle)."""
+        return self.chute_length * math.cos(math.radians(self.helix_angle))
+
+    @property
+    def chute_exit_length(self) -> float:
+        """The chute length at which its inner edge leaves the bowl (it must be longer)."""
+        return self.radius * math.sin(self.slot) / math.cos(math.radians(self.helix_angle))
+
+    def helix_point(self, theta, r=None) -> np.ndarray:
+        """(..., 3) points of the track floor at ``theta`` and radius ``r`` (centre line)."""
+        theta = np.asarray(theta, dtype=float)
+        r = self.r_mid if r is None else np.asarray(r, dtype=float)
+        return np.stack(np.broadcast_arrays(r * np.cos(theta), r * np.sin(theta),
+                                            self.floor_z(theta, r)), axis=-1)
+
+    def arc_length(self, theta) -> np.ndarray:
+        """Path length along the centre line from the track's start to ``theta``."""
+        return (np.asarray(theta) - self.theta_start) * self.r_mid / math.cos(math.radians(self.helix_angle))
+
+    @property
+    def length(self) -> float:
+        """The helix's centre line length (start to the chute)."""
+        return float(self.arc_length(THETA_END))
+
+
+def _tan(deg: float) -> float:
+    return math.tan(math.radians(deg))
+
+
+def _stations(start: float, end: float, step: float = STATION) -> np.ndarray:
+    n = max(1, math.ceil((end - start) / step - 1e-9))
+    return np.linspace(start, end, n + 1)
+
+
+def bowl_mesh(b: Bowl) -> tuple[np.ndarray, np.ndarray]:
+    """The bowl at rest: bottom, riser, helical track (and lip), wall with the chute's
+    slot, and the chute with its two walls; indexed triangles over shared vertices.
+
+    Faces are oriented towards where the parts are (LIGGGHTS' mesh/surface contacts
+    either side; the orientation only serves pictures)."""
+    m = MeshBuilder()
+    w, R = b.track_width, b.radius
+    r_in = R - w
+    # the stations around the bowl, shared by the bottom's rim and the wall (a closed seam):
+    # every STATION from the track's end, and the slot's end
+    slot_end = THETA_END + b.slot
+    around = np.unique(np.concatenate([_stations(THETA_END, THETA_END + 2 * math.pi), [slot_end]]))
+    # the bottom: a cone, exactly a fan of triangles from its apex to the rim
+    apex = (0.0, 0.0, float(b.bottom_z(0.0)))
+    for t0, t1 in zip(around[:-1], around[1:]):
+        m.triangle(apex, (R * math.cos(t0), R * math.sin(t0), 0.0), (R * math.cos(t1), R * math.sin(t1), 0.0))
+    # the track: floor (and lip) from its start to its end
+    track = _stations(b.theta_start, THETA_END)
+    for t0, t1 in zip(track[:-1], track[1:]):
+        a0, a1 = b.helix_point(t0, r_in), b.helix_point(t1, r_in)
+        c0, c1 = b.helix_point(t0, R), b.helix_point(t1, R)
+        m.quad(a0, c0, c1, a1)  # normal up
+        if b.lip_height > 0:
+            up = np.array([0.0, 0.0, b.lip_height])
+            m.quad(a1, a0, a0 + up, a1 + up)
+    # the riser under the first turn: from the bottom up to the floor's inner edge
+    first = track[track <= b.theta_start + 2 * math.pi + 1e-12]
+    for t0, t1 in zip(first[:-1], first[1:]):
+        lo0 = (r_in * math.cos(t0), r_in * math.sin(t0), float(b.bottom_z(r_in)))
+        lo1 = (r_in * math.cos(t1), r_in * math.sin(t1), float(b.bottom_z(r_in)))
+        m.quad(lo0, lo1, b.helix_point(t1, r_in), b.helix_point(t0, r_in))
+    # the start's face: the first turn's shelf is solid, closed by a radial face at its start
+    s_in, s_out = b.helix_point(b.theta_start, r_in), b.helix_point(b.theta_start, R)
+    bottom_in = np.array([s_in[0], s_in[1], float(b.bottom_z(r_in))])
+    bottom_out = np.array([s_out[0], s_out[1], 0.0])
+    if s_in[2] - bottom_in[2] > 1e-12 or s_out[2] > 1e-12:
+        m.quad(bottom_in, bottom_out, s_out, s_in)
+    # the wall: from the bottom to the top, open above the end's outer floor edge over the slot
+    z_slot = float(b.floor_z(THETA_END, R))
+    for t0, t1 in zip(around[:-1], around[1:]):
+        p0 = (R * math.cos(t0), R * math.sin(t0))
+        p1 = (R * math.cos(t1), R * math.sin(t1))
+        if abs(t0 - slot_end) < 1e-12:  # the slot's edge: its lower face's corner at z_slot shared
+            m.polygon([(*p1, 0.0), (*p0, 0.0), (*p0, z_slot), (*p0, b.top), (*p1, b.top)])
+        elif abs(t1 - (THETA_END + 2 * math.pi)) < 1e-12:  # back at the track's end: the slot's
+            m.polygon([(*p0, 0.0), (*p0, b.top), (*p1, b.top), (*p1, z_slot), (*p1, 0.0)])  # corner
+        elif t0 > slot_end:  # one face from the bottom to the top
+            m.quad((*p0, 0.0), (*p0, b.top), (*p1, b.top), (*p1, 0.0))
+        else:
+            m.quad((*p0, 0.0), (*p0, z_slot), (*p1, z_slot), (*p1, 0.0))
+    # the chute: the helix's tangent at its end, along +x at y = -r (floor, two walls)
+    cos_a, sin_a = math.cos(math.radians(b.helix_angle)), math.sin(math.radians(b.helix_angle))
+    end_in, end_out = b.helix_point(THETA_END, r_in), b.helix_point(THETA_END, R)
+    n_chute = max(1, math.ceil(b.chute_length / (4 * w)))
+    for s0, s1 in zip(np.linspace(0, b.chute_length, n_chute + 1)[:-1],
+                      np.linspace(0, b.chute_length, n_chute + 1)[1:]):
+        d0, d1 = np.array([s0 * cos_a, 0, s0 * sin_a]), np.array([s1 * cos_a, 0, s1 * sin_a])
+        i0, i1, o0, o1 = end_in + d0, end_in + d1, end_out + d0, end_out + d1
+        m.quad(i0, o0, o1, i1)
+        up = np.array([0.0, 0.0, b.wall_height])
+        m.quad(o0, o0 + up, o1 + up, o1)
+        m.quad(i1, i1 + up, i0 + up, i0)
+    return m.mesh()
+
+
+# ------------------------------------------------------------------ the drive on the track
+@dataclass(frozen=True)
+class TrackDrive:
+    """The bowl's drive seen by a part on the track at radius ``r``: the linear deck's
+    parameters (amplitudes [m], phase of the normal motion over the tangential one [deg],
+    incline [deg]) and the radial (centripetal) acceleration the torsion adds at its peak
+    [m/s^2], which the linear models leave out."""
+
+    amp_t: float
+    amp_n: float
+    phase: float
+    incline: float
+    centripetal: float
+
+
+def track_drive(amp_t: float, amp_n: float, phase: float, freq: float, helix_angle: float,
+                r_mid: float, r: float | None = None) -> TrackDrive:
+    """Project the bowl's motion on the helix at radius ``r`` (default the centre line).
+
+    The bowl's point at radius r moves by (r/r_mid) amp_t sin(w t) along e_theta and by
+    amp_n sin(w t + phase) along z. The helix at r rises at alpha_r, tan(alpha_r) =
+    tan(helix_angle) r_mid / r; its tangent (up the helix) is cos(alpha_r) e_theta +
+    sin(alpha_r) e_z, its normal -sin(alpha_r) e_theta + cos(alpha_r) e_z. As phasors
+    (sin(w t) = 1, sin(w t + phase) = e^{i phase}): tangential T = u cos(a) + v sin(a),
+    normal N = -u sin(a) + v cos(a) with u = (r/r_mid) amp_t, v = amp_n e^{i phase}; the
+    linear drive is amp_t = |T|, amp_n = |N|, phase = arg N - arg T, incline = alpha_r. The
+    torsion's centripetal acceleration r (theta_b')^2 peaks at r (amp_t w / r_mid)^2.
+    """
+    r = r_mid if r is None else r
+    alpha = math.atan(math.tan(math.radians(helix_angle)) * r_mid / r)
+    u = r / r_mid * amp_t
+    v = amp_n * cmath.exp(1j * math.radians(phase))
+    tangential = u * math.cos(alpha) + v * math.sin(alpha)
+    normal = -u * math.sin(alpha) + v * math.cos(alpha)
+    lead = 0.0
+    if abs(tangential) > 0 and abs(normal) > 0:
+        lead = math.degrees(cmath.phase(normal) - cmath.phase(tangential))
+        lead = (lead + 180.0) % 360.0 - 180.0
+    w = 2 * math.pi * freq
+    return TrackDrive(abs(tangential), abs(normal), lead, math.degrees(alpha),
+                      r * (amp_t * w / r_mid) ** 2)
+
+
+# ------------------------------------------------------------------ checks
+def bowl_from(p: Mapping) -> Bowl:
+    """The bowl of a deck's parameters (numbers)."""
+    return Bowl(radius=float(p["bowl_diameter"]) / 2, track_width=float(p["track_width"]),
+                helix_angle=float(p["helix_angle"]), turns=float(p["turns"]),
+                wall_height=float(p["wall_height"]), cone_angle=float(p.get("cone_angle", 0.0)),
+                cross_tilt=float(p.get("cross_tilt", 0.0)), lip_height=float(p.get("lip_height", 0.0)),
+                chute_length=float(p.get("chute_length", 0.0)))
+
+
+def widest_part(p: Mapping) -> float:
+    shape = int(p.get("shape", 0))
+    size = float(p["part_size"])
+    return size * (1 + float(p.get("size_spread", 0.0))) if shape == 0 else size
+
+
+def tallest_part(p: Mapping) -> float:
+    """A part's height lying flat (a sphere's diameter, a chip's or disc's thickness)."""
+    shape = int(p.get("shape", 0))
+    return widest_part(p) if shape == 0 else float(p.get("part_thickness", p["part_size"]))
+
+
+def part_reach(p: Mapping) -> float:
+    """A part's circumscribed radius (the deck's r_ext: a chip's corner sphere reaches
+    (part_size - part_thickness)/sqrt(2) + part_thickness/2 from its centre)."""
+    shape, size = int(p.get("shape", 0)), float(p["part_size"])
+    if shape == 0:
+        return size / 2 * (1 + float(p.get("size_spread", 0.0)))
+    thickness = float(p.get("part_thickness", size))
+    return (size - thickness) / math.sqrt(2) + thickness / 2 if shape == 1 else size / 2
+
+
+def check_bowl(p: Mapping[str, float]) -> None:
+    """Relations between a bowl's parameters (decks/bowl_feeder.liggghts refuses the same
+    for runs by hand); nothing for a deck that is not a bowl."""
+    if any(name not in p for name in ("bowl_diameter", "track_width", "helix_angle", "turns",
+                                      "wall_height", "part_size")):
+        return  # not a bowl (or a partial set, as the parameter rules see one)
+    b = bowl_from(p)
+    wide, tall = widest_part(p), tallest_part(p)
+    if p.get("n_parts", 1) <= 0 and p.get("n_track", 1) <= 0:
+        raise ParameterError("n_parts=0 and n_track=0: no part in the bowl; set n_parts (the pile) "
+                             "or n_track (along the track)")
+    if b.turns <= 0:
+        raise ParameterError(f"turns={b.turns:g} must be > 0: the track climbs at least part of a turn")
+    if not 0 < b.helix_angle < 45:
+        raise ParameterError(f"helix_angle={b.helix_angle:g} deg must be in (0, 45): the track climbs")
+    if b.track_width < wide:
+        raise ParameterError(f"track_width={b.track_width:g} m is narrower than a part ({wide:g} m across)")
+    if b.track_width >= b.radius / 2:
+        raise ParameterError(f"track_width={b.track_width:g} m is more than a quarter of bowl_diameter="
+                             f"{2 * b.radius:g} m: the track would fill the bowl")
+    if b.pitch - max(b.lip_height, 0.0) < 3 * tall:
+        raise ParameterError(f"helix_angle={b.helix_angle:g} deg rises {b.pitch:.3g} m per turn, less "
+                             f"than three parts ({3 * tall:.3g} m) above the turn below: parts would "
+                             "jam between turns; a steeper helix or a wider bowl")
+    if b.wall_height <= tall:
+        raise ParameterError(f"wall_height={b.wall_height:g} m is no higher than a part ({tall:g} m)")
+    if b.lip_height and b.lip_height >= b.pitch / 2:
+        raise ParameterError(f"lip_height={b.lip_height:g} m reaches half way to the next turn")
+    if b.chute_length <= b.chute_exit_length + wide:
+        raise ParameterError(f"chute_length={b.chute_length:g} m ends inside the bowl: its inner edge "
+                             f"leaves the wall after {b.chute_exit_length:.3g} m; make it longer than "
+                             f"{b.chute_exit_length + wide:.3g} m")
+
+
+# ------------------------------------------------------------------ the prepare hook's part
+def fill_boxes(b: Bowl, size: float, height: float, start: float = 0.25) -> list[tuple]:
+    """Cubes above the track's floor, one every cube side along its centre line, from
+    ``start`` of a turn after the track's start, up the helix and along the chute to its
+    end: where parts are pre-placed along the track. Each (x0, x1, y0, y1, z0, z1): side
+    0.6 track_width (a cube of that side fits in the track's width however it is turned),
+    from the highest floor point under it plus a twentieth of a part to ``height`` above."""
+    side = 0.6 * b.track_width
+    half = side / 2
+    dtheta = side / b.r_mid
+    t0 = b.theta_start + 2 * math.pi * start + dtheta
+    boxes = []
+
+    def box(x, y, floor):
+        z0 = floor + 0.05 * size
+        return (x - half, x + half, y - half, y + half, z0, z0 + height)
+
+    for t in np.arange(t0, THETA_END - dtheta / 2, dtheta):
+        c = b.helix_point(t)
+        boxes.append(box(float(c[0]), float(c[1]), float(b.floor_z(t + dtheta / 2, b.r_mid - half))))
+    # the chute: straight, rising at the helix angle, tilted across as the helix
+    slope = math.tan(math.radians(b.helix_angle))
+    # (from its end back: the last cube reaches the outlet edge, so the chute is full at once)
+    for x in np.arange(b.outlet_x - half, side - 1e-12, -side)[::-1]:
+        floor = b.end_z + (x + half) * slope + half * _tan(b.cross_tilt)
+        boxes.append(box(float(x), -b.r_mid, floor))
+    return boxes
+
+
+def write_bowl(values: Mapping[str, str], folder: Path) -> list[str]:
+    """Write the bowl's mesh (``bowl.stl``) and return ``prepared.in`` lines: the derived
+    geometry the deck reads and the regions along the track for its pre-fill."""
+    p = {k: float(v) for k, v in values.items() if k in (
+        "bowl_diameter", "track_width", "helix_angle", "turns", "wall_height", "cone_angle",
+        "cross_tilt", "lip_height", "chute_length", "part_size", "part_thickness", "shape",
+        "size_spread")}
+    b = bowl_from(p)
+    write_stl(*bowl_mesh(b), folder / "bowl.stl", "bowl")
+    # room for a part however it is turned (LIGGGHTS inserts its bounding sphere), under
+    # the next turn
+    tall = tallest_part(p)
+    boxes = fill_boxes(b, float(p["part_size"]), min(2.5 * 2 * part_reach(p), b.pitch - 1.5 * tall))
+    lines = [f"variable bowl_{k} equal {float(v)!r}\n" for k, v in (
+        ("r_mid", b.r_mid), ("pitch", b.pitch), ("top", b.top), ("end_z", b.end_z),
+        ("outlet_x", b.outlet_x), ("length", b.length), ("theta_start", b.theta_start),
+        ("slot", b.slot), ("fill_boxes", len(boxes)))]
+    names = []
+    for k, (x0, x1, y0, y1, z0, z1) in enumerate(boxes, 1):
+        corners = " ".join(repr(float(c)) for c in (x0, x1, y0, y1, z0, z1))
+        lines.append(f"region track_fill_{k} block {corners} units box\n")
+        names.append(f"track_fill_{k}")
+    if names:
+        lines.append(f"region track_fill union {len(names)} {' '.join(names)} units box\n")
+    return lines
+
+
+# ------------------------------------------------------------------ where a part is along the track
+def path_coordinate(b: Bowl, points) -> np.ndarray:
+    """Where points (..., 3) of the bowl's frame (the bowl at rest) are along the track: the
+    arc length along the helix's centre line from its start (``Bowl.arc_length``), then along
+    the chute (the helix's length plus the distance along it); NaN for a point that is not
+    over the track: in the pile (inside the track's inner edge), outside the bowl, or more
+    than a turn above the floor under it (on no turn). On the helix, a point over the track
+    (its radius within the track's width) belongs to the turn whose floor lies below it,
+    less than a pitch down."""
+    p = np.asarray(points, dtype=float)
+    x, y, z = p[..., 0], p[..., 1], p[..., 2]
+    r = np.hypot(x, y)
+    theta = np.arctan2(y, x)
+    out = np.full(r.shape, np.nan)
+    ring = (r >= b.radius - b.track_width) & (r <= b.radius)
+    # the turn below: from the lowest turn at this polar angle up, the first whose floor lies
+    # under the point by less than a pitch (a part sinks into the floor by far less than w)
+    best = np.full(r.shape, np.nan)
+    for extra in range(int(math.ceil(b.turns)) + 1):
+        t = b.theta_start + np.mod(theta - b.theta_start, 2 * math.pi) + 2 * math.pi * extra
+        ok = ring & (t <= THETA_END + 1e-12)
+        height = z - b.floor_z(t, r)
+        hit = ok & (height >= -b.track_width) & (height < b.pitch) & np.isnan(best)
+        best = np.where(hit, t, best)
+    out = np.where(np.isnan(best), out, b.arc_length(best))
+    # the chute: past the end's radial line, within its width, above its floor
+    cos_a, sin_a = math.cos(math.radians(b.helix_angle)), math.sin(math.radians(b.helix_angle))
+    along = x / cos_a
+    floor = b.end_z + along * sin_a - (-y - b.r_mid) * _tan(b.cross_tilt)
+    chute = (x >= 0) & (np.abs(y + b.r_mid) <= b.track_width / 2) & (z >= floor - b.track_width) \
+        & (z < floor + b.pitch) & (along <= b.chute_length)
+    return np.where(chute, b.length + along, out)
