@@ -201,6 +201,18 @@ def _transport(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None
     for run in runs:
         p = dict(run.params)
         T = 1.0 / run.number("freq")
+        if "bowl_diameter" in p:  # a bowl: along its helix, against the drive the helix sees
+            with Result(run.output) as r:
+                model, dem, centripetal = bowl_speeds(r, transient * T)
+                closest = min_distance(r)
+            if closest < part_span(p):
+                raise CaseError(f"case {case.name} [{run.label}]: not dilute: two parts came within "
+                                f"{closest:.3g} m of each other (they can touch below {part_span(p):.3g} m)")
+            out.rows.append(row(case, "mean_speed", run.label, model, dem, "m/s"))
+            # what the linear model leaves out: the torsion's centripetal pull, in g (model 0)
+            out.rows.append(row(case, "centripetal", run.label, 0.0, centripetal / G, "g"))
+            points.append((run, model, dem))
+            continue
         with Result(run.output) as r:
             dem = Transport(r, start=transient * T).run().results.mean_velocity
             if case.compare.get("restitution", "nominal") == "realised":
@@ -211,6 +223,54 @@ def _transport(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None
     axis = case.compare.get("plot_axis") or (next(iter(case.sweep)) if case.sweep else None)
     if axis is not None:
         out.figures.append(plot_speed_curve(case, runs, points, axis, fig_dir / "speed.png"))
+
+
+def bowl_speeds(result, t_from: float) -> tuple[float, float, float]:
+    """(model, DEM, centripetal) of the parts on a bowl's track after ``t_from``: each part's
+    speed along the helix over the whole periods it stays on the track (its path coordinate,
+    vibrofeed.postproc.path), and the single-part model under the drive the helix sees at the
+    part's own mean radius (vibrofeed.bowl.track_drive: the torsion's amplitude grows with the
+    radius); the means over the parts [m/s], and the largest peak centripetal acceleration the
+    torsion adds at their radii [m/s^2], which the model leaves out."""
+    from vibrofeed.bowl import bowl_from, track_drive
+    from vibrofeed.postproc.feedrate import period_lag
+    from vibrofeed.postproc.path import along
+
+    p = result.parameters
+    freq = float(p["freq"])
+    frames = np.nonzero(result.time >= t_from - 1e-12)[0]
+    m, _ = period_lag(result.time[frames], freq)
+    chain = frames[::m]
+    s, _ = along(result, chain)
+    ids = result.read("id", frames=chain)
+    position = result.read("position", frames=chain)
+    keep = (ids == ids[0]).all(axis=0) & (ids[0] != L.ID_FILL) & np.isfinite(s).all(axis=0)
+    if not keep.any():
+        raise CaseError("no part stayed on the bowl's track through the whole measurement")
+    span = result.time[chain[-1]] - result.time[chain[0]]
+    dem = (s[-1, keep] - s[0, keep]) / span
+    radius = np.hypot(position[..., 0], position[..., 1])[:, keep].mean(axis=0)
+    b = bowl_from(p)
+    models, centripetal = [], 0.0
+    for r in radius:
+        d = track_drive(float(p["amp_t"]), float(p["amp_n"]), float(p["phase"]), freq,
+                        float(p["helix_angle"]), b.r_mid, float(r))
+        models.append(dm.transport({**p, "amp_t": d.amp_t, "amp_n": d.amp_n, "phase": d.phase,
+                                    "incline": d.incline}).velocity)
+        centripetal = max(centripetal, d.centripetal)
+    return float(np.mean(models)), float(dem.mean()), centripetal
+
+
+def min_distance(result) -> float:
+    """Smallest distance [m] between the centres of two parts at any frame; inf without two."""
+    ids, x = result.read("id"), result.read("position")
+    best = math.inf
+    for k in range(len(ids)):
+        here = x[k][ids[k] != L.ID_FILL]
+        if len(here) >= 2:
+            d = np.linalg.norm(here[:, None, :] - here[None, :, :], axis=-1)
+            best = min(best, float(d[np.triu_indices(len(here), 1)].min()))
+    return best
 
 
 # ------------------------------------------------------------------ kind: period
