@@ -202,15 +202,8 @@ def _transport(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None
         p = dict(run.params)
         T = 1.0 / run.number("freq")
         if "bowl_diameter" in p:  # a bowl: along its helix, against the drive the helix sees
-            with Result(run.output) as r:
-                model, dem, centripetal = bowl_speeds(r, transient * T)
-                closest = min_distance(r)
-            if closest < part_span(p):
-                raise CaseError(f"case {case.name} [{run.label}]: not dilute: two parts came within "
-                                f"{closest:.3g} m of each other (they can touch below {part_span(p):.3g} m)")
+            model, dem = _bowl_rows(case, run, transient * T, out)
             out.rows.append(row(case, "mean_speed", run.label, model, dem, "m/s"))
-            # what the linear model leaves out: the torsion's centripetal pull, in g (model 0)
-            out.rows.append(row(case, "centripetal", run.label, 0.0, centripetal / G, "g"))
             points.append((run, model, dem))
             continue
         with Result(run.output) as r:
@@ -219,6 +212,38 @@ def _transport(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None
                 p["restitution"] = repr(_realised_restitution(case, run, r, out))
         model = dm.transport(p).velocity
         out.rows.append(row(case, "mean_speed", run.label, model, dem, "m/s"))
+        points.append((run, model, dem))
+    axis = case.compare.get("plot_axis") or (next(iter(case.sweep)) if case.sweep else None)
+    if axis is not None:
+        out.figures.append(plot_speed_curve(case, runs, points, axis, fig_dir / "speed.png"))
+
+
+def _bowl_rows(case: Case, run: Run, t_from: float, out: Outcome) -> tuple[float, float]:
+    """(model, DEM) mean speed up a bowl's helix (:func:`bowl_speeds`), the parts checked
+    dilute, and the row of what the linear model leaves out: the torsion's centripetal pull
+    at the parts, in g (model 0)."""
+    from vibrofeed.results.reader import Result
+
+    p = dict(run.params)
+    with Result(run.output) as r:
+        model, dem, centripetal = bowl_speeds(r, t_from)
+        closest = min_distance(r)
+    if closest < part_span(p):
+        raise CaseError(f"case {case.name} [{run.label}]: not dilute: two parts came within "
+                        f"{closest:.3g} m of each other (they can touch below {part_span(p):.3g} m)")
+    out.rows.append(row(case, "centripetal", run.label, 0.0, centripetal / G, "g"))
+    return model, dem
+
+
+def _climb(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
+    """A bowl's climb threshold: up the helix or not, the model's sign against the DEM's."""
+    from .plots import plot_speed_curve
+
+    transient = float(case.compare.get("transient_periods", 10))
+    points = []
+    for run in runs:
+        model, dem = _bowl_rows(case, run, transient / run.number("freq"), out)
+        out.rows.append(row(case, "climbs", run.label, float(model > 0), float(dem > 0)))
         points.append((run, model, dem))
     axis = case.compare.get("plot_axis") or (next(iter(case.sweep)) if case.sweep else None)
     if axis is not None:
@@ -718,7 +743,7 @@ def _line_continuity(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -
     out.figures.append(plot_line_continuity(case, panels, fig_dir / "continuity.png"))
 
 
-KINDS = {"flights": _flights, "transport": _transport, "period": _period, "vertical": _vertical,
-         "replay": _replay, "pulloff": _pulloff, "reference": _reference,
+KINDS = {"flights": _flights, "transport": _transport, "climb": _climb, "period": _period,
+         "vertical": _vertical, "replay": _replay, "pulloff": _pulloff, "reference": _reference,
          "line_transport": _line_transport, "line_continuity": _line_continuity,
          **micro_checks.KINDS}
