@@ -45,6 +45,9 @@ THETA_END = -math.pi / 2  # the track's end: its tangent there is +x, the chute'
 # 20 mm bowl). A moving mesh costs LIGGGHTS time per triangle at every step, so the bowl
 # has no more triangles than its shape needs.
 STATION = math.radians(6.0)
+# A step of the first shelf lower than this fraction of the track's width above the bottom
+# gets no face (a sliver; no part fits under it).
+LOW_STEP = 0.02
 
 
 @dataclass(frozen=True)
@@ -160,9 +163,11 @@ def bowl_mesh(b: Bowl) -> tuple[np.ndarray, np.ndarray]:
     w, R = b.track_width, b.radius
     r_in = R - w
     # the stations around the bowl, shared by the bottom's rim and the wall (a closed seam):
-    # every STATION from the track's end, and the slot's end
-    slot_end = THETA_END + b.slot
-    around = np.unique(np.concatenate([_stations(THETA_END, THETA_END + 2 * math.pi), [slot_end]]))
+    # every STATION from the track's end
+    around = _stations(THETA_END, THETA_END + 2 * math.pi)
+    # the slot ends at the first station past the chute's inner edge (a station of its own
+    # there would leave a sliver of wall a degree or two wide)
+    slot_end = float(around[np.searchsorted(around, THETA_END + b.slot - 1e-12)])
     # the bottom: a cone, exactly a fan of triangles from its apex to the rim
     apex = (0.0, 0.0, float(b.bottom_z(0.0)))
     for t0, t1 in zip(around[:-1], around[1:]):
@@ -176,31 +181,35 @@ def bowl_mesh(b: Bowl) -> tuple[np.ndarray, np.ndarray]:
         if b.lip_height > 0:
             up = np.array([0.0, 0.0, b.lip_height])
             m.quad(a1, a0, a0 + up, a1 + up)
-    # the riser under the first turn: from the bottom up to the floor's inner edge
+    # the riser under the first turn: from the bottom up to the floor's inner edge (an edge
+    # less than LOW_STEP of the track's width above the bottom is its own foot: a face that
+    # low would be a sliver LIGGGHTS refuses, and no part fits under it)
+    low = LOW_STEP * w
+
+    def foot(top: np.ndarray, bottom: float) -> np.ndarray:
+        return top if top[2] - bottom <= low else np.array([top[0], top[1], bottom])
+
     first = track[track <= b.theta_start + 2 * math.pi + 1e-12]
     for t0, t1 in zip(first[:-1], first[1:]):
-        lo0 = (r_in * math.cos(t0), r_in * math.sin(t0), float(b.bottom_z(r_in)))
-        lo1 = (r_in * math.cos(t1), r_in * math.sin(t1), float(b.bottom_z(r_in)))
-        m.quad(lo0, lo1, b.helix_point(t1, r_in), b.helix_point(t0, r_in))
+        top0, top1 = b.helix_point(t0, r_in), b.helix_point(t1, r_in)
+        m.quad(foot(top0, float(b.bottom_z(r_in))), foot(top1, float(b.bottom_z(r_in))), top1, top0)
     # the start's face: the first turn's shelf is solid, closed by a radial face at its start
     s_in, s_out = b.helix_point(b.theta_start, r_in), b.helix_point(b.theta_start, R)
-    bottom_in = np.array([s_in[0], s_in[1], float(b.bottom_z(r_in))])
-    bottom_out = np.array([s_out[0], s_out[1], 0.0])
-    if s_in[2] - bottom_in[2] > 1e-12 or s_out[2] > 1e-12:
-        m.quad(bottom_in, bottom_out, s_out, s_in)
-    # the wall: from the bottom to the top, open above the end's outer floor edge over the slot
+    m.quad(foot(s_in, float(b.bottom_z(r_in))), foot(s_out, 0.0), s_out, s_in)
+    # the wall in two bands all round, split at the slot's floor z_slot (the end's outer floor
+    # edge), the upper one open over the slot: no long sliver of a face (LIGGGHTS refuses a
+    # triangle whose smallest angle is below its curvature, about 0.26 deg)
+    # (a tall bowl's lower band in rows at most ten stations' arcs high: its faces' smallest
+    # angles stay above 5 deg)
     z_slot = float(b.floor_z(THETA_END, R))
+    rows = np.linspace(0.0, z_slot, max(1, math.ceil(z_slot / (10 * R * STATION) - 1e-9)) + 1)
     for t0, t1 in zip(around[:-1], around[1:]):
         p0 = (R * math.cos(t0), R * math.sin(t0))
         p1 = (R * math.cos(t1), R * math.sin(t1))
-        if abs(t0 - slot_end) < 1e-12:  # the slot's edge: its lower face's corner at z_slot shared
-            m.polygon([(*p1, 0.0), (*p0, 0.0), (*p0, z_slot), (*p0, b.top), (*p1, b.top)])
-        elif abs(t1 - (THETA_END + 2 * math.pi)) < 1e-12:  # back at the track's end: the slot's
-            m.polygon([(*p0, 0.0), (*p0, b.top), (*p1, b.top), (*p1, z_slot), (*p1, 0.0)])  # corner
-        elif t0 > slot_end:  # one face from the bottom to the top
-            m.quad((*p0, 0.0), (*p0, b.top), (*p1, b.top), (*p1, 0.0))
-        else:
-            m.quad((*p0, 0.0), (*p0, z_slot), (*p1, z_slot), (*p1, 0.0))
+        for z0, z1 in zip(rows[:-1], rows[1:]):
+            m.quad((*p0, z0), (*p0, z1), (*p1, z1), (*p1, z0))
+        if t0 >= slot_end - 1e-12:
+            m.quad((*p0, z_slot), (*p0, b.top), (*p1, b.top), (*p1, z_slot))
     # the chute: the helix's tangent at its end, along +x at y = -r (floor, two walls)
     cos_a, sin_a = math.cos(math.radians(b.helix_angle)), math.sin(math.radians(b.helix_angle))
     end_in, end_out = b.helix_point(THETA_END, r_in), b.helix_point(THETA_END, R)
@@ -325,13 +334,40 @@ def check_bowl(p: Mapping[str, float]) -> None:
                              f"{b.chute_exit_length + wide:.3g} m")
 
 
+def climb_advice(p: Mapping[str, float]) -> list[str]:
+    """A warning when the single-part model says parts do not climb this bowl's helix under
+    its drive (its speed up the centre line <= 0): a helix steeper than the drive allows.
+    Empty for a deck that is not a bowl, or one the model cannot judge (a parameter missing)."""
+    needed = ("bowl_diameter", "track_width", "helix_angle", "freq", "amp_t", "amp_n", "phase",
+              "mu", "restitution", "part_size")
+    if any(name not in p for name in needed):
+        return []
+    from .models.deck import transport  # scipy: loaded for a bowl only
+
+    b = bowl_from(p)
+    d = track_drive(float(p["amp_t"]), float(p["amp_n"]), float(p["phase"]), float(p["freq"]),
+                    b.helix_angle, b.r_mid)
+    try:
+        speed = transport({**p, "amp_t": d.amp_t, "amp_n": d.amp_n, "phase": d.phase,
+                           "incline": d.incline}).velocity
+    except (KeyError, ValueError):
+        return []
+    if speed > 0:
+        return []
+    return [f"helix_angle={b.helix_angle:g} deg: the single-part model says parts do not climb this "
+            f"helix under this drive ({speed * 1e3:.3g} mm/s up its centre line); a shallower helix, "
+            "a larger amplitude or another phase"]
+
+
 # ------------------------------------------------------------------ the prepare hook's part
 def fill_boxes(b: Bowl, size: float, height: float, start: float = 0.25) -> list[tuple]:
     """Cubes above the track's floor, one every cube side along its centre line, from
     ``start`` of a turn after the track's start, up the helix and along the chute to its
     end: where parts are pre-placed along the track. Each (x0, x1, y0, y1, z0, z1): side
     0.6 track_width (a cube of that side fits in the track's width however it is turned),
-    from the highest floor point under it plus a twentieth of a part to ``height`` above."""
+    from the highest floor point under it plus a twentieth of a part to ``height`` above.
+    The cubes are LIGGGHTS block regions, square to x and y: round the helix they stand
+    turned against it (:func:`_highest_floor`)."""
     side = 0.6 * b.track_width
     half = side / 2
     dtheta = side / b.r_mid
@@ -344,7 +380,8 @@ def fill_boxes(b: Bowl, size: float, height: float, start: float = 0.25) -> list
 
     for t in np.arange(t0, THETA_END - dtheta / 2, dtheta):
         c = b.helix_point(t)
-        boxes.append(box(float(c[0]), float(c[1]), float(b.floor_z(t + dtheta / 2, b.r_mid - half))))
+        x, y = float(c[0]), float(c[1])
+        boxes.append(box(x, y, _highest_floor(b, x - half, x + half, y - half, y + half, t)))
     # the chute: straight, rising at the helix angle, tilted across as the helix
     slope = math.tan(math.radians(b.helix_angle))
     # (from its end back: the last cube reaches the outlet edge, so the chute is full at once)
@@ -352,6 +389,34 @@ def fill_boxes(b: Bowl, size: float, height: float, start: float = 0.25) -> list
         floor = b.end_z + (x + half) * slope + half * _tan(b.cross_tilt)
         boxes.append(box(float(x), -b.r_mid, floor))
     return boxes
+
+
+def _highest_floor(b: Bowl, x0: float, x1: float, y0: float, y1: float, theta: float) -> float:
+    """The helix floor's highest point over the rectangle [x0, x1] x [y0, y1] of the bowl's
+    frame, near polar angle ``theta``.
+
+    The floor is z = K theta - tan(cross_tilt) r + const (K = pitch / 2 pi): its gradient
+    K e_theta / r - tan(cross_tilt) e_r never vanishes, so the highest point is on the
+    rectangle's outline. Along a side, at distance h from the axis, write u for the distance
+    from the foot of the perpendicular (r^2 = h^2 + u^2) and c = +-h for the sense the side
+    turns about the axis (d theta / du = c / r^2): dz/du = K c / r^2 - tan(cross_tilt) u / r,
+    zero where u r = q = K c / tan(cross_tilt), i.e. u^2 = 2 q^2 / (sqrt(c^4 + 4 q^2) + c^2), a
+    maximum (u r grows with u); clamped to the side, with the corners, the candidates."""
+    k, tilt = b.pitch / (2 * math.pi), _tan(b.cross_tilt)
+    corners = [(x0, y0), (x1, y0), (x1, y1), (x0, y1)]
+    points = list(corners)
+    if tilt > 0:
+        for (ax, ay), (bx, by) in zip(corners, corners[1:] + corners[:1]):
+            side = math.hypot(bx - ax, by - ay)
+            dx, dy = (bx - ax) / side, (by - ay) / side
+            c = ax * dy - ay * dx  # the cross product p x d: the same all along the side
+            q = k * c / tilt
+            u = math.copysign(math.sqrt(2 * q * q / (math.sqrt(c ** 4 + 4 * q * q) + c * c)), q)
+            s = min(max(u - (ax * dx + ay * dy), 0.0), side)
+            points.append((ax + s * dx, ay + s * dy))
+    x, y = np.array(points).T
+    t = theta + np.mod(np.arctan2(y, x) - theta + math.pi, 2 * math.pi) - math.pi
+    return float(np.max(b.floor_z(t, np.hypot(x, y))))
 
 
 def write_bowl(values: Mapping[str, str], folder: Path) -> list[str]:

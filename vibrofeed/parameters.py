@@ -13,7 +13,7 @@ import re
 import warnings
 from collections.abc import Callable, Mapping
 
-from .bowl import check_bowl
+from .bowl import check_bowl, climb_advice
 from .decks import RESERVED, Deck
 from .errors import ParameterError
 from .line import check_line
@@ -249,7 +249,7 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
     # (callers such as the validation cases pass every value).
     moved = [n for n in given if n in numbers and (not tunables[n].is_numeric
                                                   or numbers[n] != float(tunables[n].default))]
-    for line in advice(numbers, moved):
+    for line in advice(numbers, moved) + climb_advice(numbers):
         warnings.warn(line, ParameterWarning, stacklevel=2)
     return values
 

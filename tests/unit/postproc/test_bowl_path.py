@@ -1,16 +1,17 @@
 """Where a part is along a bowl's track (postproc.path): the helix's arc length of its centre
 in the bowl's frame, the recorded rotation and lift undone; NaN off the track; and the
-bowl's dilute limit, the single-part model under the drive the helix sees."""
+bowl's dilute limit, the single-part model under the drive the helix sees. And along a linear
+track: x in the track's frame, up to the outlet edge of the outlet table or the deck."""
 
 import math
 
 import numpy as np
 import pytest
 
-from helpers import parts
+from helpers import parts, write_bulk_result
 from vibrofeed.bowl import THETA_END, bowl_from, track_drive
 from vibrofeed.postproc.feedrate import dilute_limit
-from vibrofeed.postproc.path import along, path_end
+from vibrofeed.postproc.path import along, outlet_x, path_end
 from vibrofeed.results.reader import Result
 from vibrofeed.results.writer import ResultWriter
 
@@ -69,3 +70,80 @@ def test_a_bowls_dilute_limit_is_the_model_under_the_drive_the_helix_sees():
     assert got == pytest.approx(want, rel=1e-12, abs=0) and note == ""
     flat = transport(BOWL).velocity  # the bowl's own numbers, read as a level linear track
     assert abs(got - flat) > 0.02 * abs(want)  # the projection and the climb matter
+
+
+def test_a_bowls_path_ends_at_the_chutes_end():
+    """The helix's centre line, 1.5 turns at 9.4 mm rising at 3 deg, then the 8 mm chute."""
+    class Bowl:
+        parameters = {**BOWL, "track_length": 0.05}  # (a linear track's length: not a bowl's end)
+        outlet_plane = {"outlet_x": 0.03, "catch_z": -1e-3, "method": "synthetic"}
+
+    want = 3 * math.pi * 9.4e-3 / math.cos(math.radians(3)) + 8e-3
+    assert path_end(Bowl()) == pytest.approx(want, rel=1e-12, abs=0)
+
+
+# ------------------------------------------------------------------ a linear track
+LINEAR = {"freq": ("100", "Hz", "vibration frequency", "100"),
+          "track_length": ("0.02", "m", "track length", "0.02")}
+OUTLET = {"outlet_x": 0.018, "catch_z": -3e-4, "method": "synthetic"}
+
+
+def linear_result(path, outlet, variables=LINEAR):
+    """Three frames of two slots (the second empty in the middle one); the surface moved by
+    (1e-5, 2e-6, 0), (-2e-5, 0, 0), (3e-5, -1e-6, 0)."""
+    frames = [(0, 0.0, parts([1, 2], [[1e-3, 2e-4, 1.5e-4], [5e-3, -2e-4, 1.5e-4]])),
+              (1, 0.01, parts([1], [[2e-3, 3e-4, 1.5e-4]])),
+              (2, 0.02, parts([1, 2], [[3e-3, 4e-4, 1.5e-4], [7e-3, -1e-4, 1.5e-4]]))]
+    surface = [((1e-5, 2e-6, 0.0), (0.0, 0.0, 0.0)), ((-2e-5, 0.0, 0.0), (0.0, 0.0, 0.0)),
+               ((3e-5, -1e-6, 0.0), (0.0, 0.0, 0.0))]
+    return write_bulk_result(path, frames, variables=variables, outlet=outlet, surface=surface)
+
+
+def test_a_linear_tracks_coordinate_is_x_in_the_tracks_frame_and_its_speed_the_raw_x(tmp_path):
+    with Result(linear_result(tmp_path / "l.h5", OUTLET)) as r:
+        x, moved = along(r, np.arange(3))
+        want = np.array([[1e-3 - 1e-5, 5e-3 - 1e-5], [2e-3 + 2e-5, np.nan], [3e-3 - 3e-5, 7e-3 - 3e-5]])
+        assert np.allclose(x, want, rtol=0, atol=LENGTH, equal_nan=True)
+        assert np.allclose(moved, [[1e-3, 5e-3], [2e-3, np.nan], [3e-3, 7e-3]], rtol=0, atol=LENGTH,
+                           equal_nan=True)
+        # across the track (axis 1), the same
+        y, raw = along(r, [0, 2], axis=1)
+        assert np.allclose(y, [[2e-4 - 2e-6, -2e-4 - 2e-6], [4e-4 + 1e-6, -1e-4 + 1e-6]], rtol=0, atol=LENGTH)
+        assert np.allclose(raw, [[2e-4, -2e-4], [4e-4, -1e-4]], rtol=0, atol=LENGTH)
+
+
+@pytest.mark.parametrize("outlet, want", [
+    (OUTLET, 0.018),                                          # the outlet table's edge ...
+    ({"catch_z": -3e-4, "method": "synthetic"}, 0.02),        # ... without one, the deck's length
+    ({"outlet_x": math.nan, "catch_z": -3e-4, "method": ""}, 0.02),
+    (None, 0.02),                                             # no outlet table at all
+])
+def test_a_linear_tracks_outlet_edge_is_the_outlet_tables_else_the_tracks_end(tmp_path, outlet, want):
+    with Result(linear_result(tmp_path / "l.h5", outlet)) as r:
+        assert outlet_x(r) == pytest.approx(want, rel=1e-15, abs=0)
+        assert path_end(r) == pytest.approx(want, rel=1e-15, abs=0)
+
+
+def test_without_an_outlet_edge_or_a_track_length_there_is_no_end(tmp_path):
+    variables = {"freq": LINEAR["freq"]}
+    with Result(linear_result(tmp_path / "l.h5", None, variables)) as r:
+        assert math.isnan(outlet_x(r)) and math.isnan(path_end(r))
+
+
+def test_the_recorded_lift_is_undone_before_the_turn_is_found(tmp_path):
+    """Parts resting on the second turn and on the chute, the bowl lifted by half a millimetre
+    down and by more than a pitch up (no drive does either: to see the lift undone). Left in,
+    the first would put them a turn down, the second a turn up or off the track."""
+    b = bowl_from(BOWL)
+    a = math.radians(3.0)
+    thetas = np.array([-6.0, -4.0, -2.0])  # on the second turn (the first ends at -7.85)
+    on_helix = b.helix_point(thetas) + [0, 0, 1.5e-4]
+    chute = np.array([[3e-3, -b.r_mid, b.end_z + 3e-3 * math.tan(a) + 1.5e-4]])
+    points = np.vstack([on_helix, chute])
+    write_bowl(tmp_path / "b.h5", [0.0, 0.0, 0.0], [0.0, -5e-4, 3.2e-3], points)
+    r_mid = 9.4e-3
+    start = -math.pi / 2 - 3 * math.pi
+    want = np.r_[(thetas - start) * r_mid, 3 * math.pi * r_mid + 3e-3] / math.cos(a)
+    with Result(tmp_path / "b.h5") as r:
+        s, _ = along(r, np.arange(3))
+    assert np.allclose(s, want, rtol=0, atol=LENGTH)
