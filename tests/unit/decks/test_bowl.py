@@ -157,6 +157,7 @@ def test_a_pure_torsion_on_a_helix_also_moves_the_floor_normal_to_itself():
     d = track_drive(5e-5, 0.0, 0.0, 100.0, 10.0, 9.4e-3)
     assert d.amp_n == pytest.approx(5e-5 * math.sin(math.radians(10)), rel=1e-12, abs=0)
     assert abs(abs(d.phase) - 180) < 1e-9  # [deg] the floor drops as it swings forward
+    assert -180 <= d.phase < 180  # as every lead: -180, not 180
 
 
 @pytest.mark.parametrize("change, words", [
@@ -432,6 +433,12 @@ def test_the_tracks_stations_are_as_few_as_keep_them_within_6_deg():
     want = np.sort(np.unique(np.round(np.mod(stations, 2 * math.pi), 9)))
     got = distinct_angles(vertices[on_radius(vertices, r_in)])  # floor's edge, riser, chute's start
     assert len(got) == 84 and np.allclose(got, want, rtol=0, atol=ANGLE)
+    # a track shorter than a station: one step
+    b = replace(BOWL, turns=0.01)
+    vertices, _ = bowl_mesh(b)
+    got = distinct_angles(vertices[on_radius(vertices, r_in)])
+    assert np.allclose(got, np.sort(np.mod([-math.pi / 2 - 0.02 * math.pi, -math.pi / 2], 2 * math.pi)),
+                       rtol=0, atol=ANGLE)
 
 
 WIDE = Bowl(radius=0.01, track_width=4e-3, helix_angle=3.0, turns=1.5, wall_height=1e-3,
@@ -598,7 +605,7 @@ def expected_cubes(b, start):
     while first + len(thetas) * step < -math.pi / 2 - step / 2:
         thetas.append(first + len(thetas) * step)
     outlet = b.chute_length * math.cos(math.radians(b.helix_angle))
-    xs = outlet - side / 2 - side * np.arange(math.floor((outlet - side / 2) / side))
+    xs = outlet - side / 2 - side * np.arange(math.floor((outlet - side / 2) / side + 1e-9))
     return np.array(thetas), xs[::-1]
 
 
@@ -630,6 +637,25 @@ def test_the_fill_cubes_lie_a_side_apart_along_the_centre_line_from_start_turns_
     floor = end_z + (xs + side / 2) * tan(b.helix_angle) + side / 2 * tan(b.cross_tilt)
     assert np.allclose(z0[n:], floor + 0.05 * size, rtol=0, atol=LENGTH)
     assert x1[-1] == pytest.approx(b.chute_length * cos_a, rel=0, abs=LENGTH)
+
+
+def test_the_fill_cubes_keep_half_a_side_before_the_helixs_end_and_a_side_after_it():
+    """A start putting a cube's centre 0.4 of a side before the helix's end (it would reach
+    into the chute's first cube: none there, the last 1.4 sides before the end), and a chute
+    11.5 sides long (its first cube exactly a side past the end: there)."""
+    side, r_mid, a = 0.72e-3, 9.4e-3, math.radians(3.0)
+    b = replace(BOWL, chute_length=11.5 * side / math.cos(a))
+    step = side / r_mid
+    span = 3 * math.pi
+    k = math.floor(span / step - 1.4)
+    start = (span - (1.4 + k) * step) / (2 * math.pi)
+    boxes = np.array(fill_boxes(b, 3e-4, 7.5e-4, start))
+    thetas, xs = expected_cubes(b, start)
+    assert len(thetas) == k and len(xs) == 11 and len(boxes) == k + 11
+    centre = np.column_stack([(boxes[:, 0] + boxes[:, 1]) / 2, (boxes[:, 2] + boxes[:, 3]) / 2])
+    last = -math.pi / 2 - 1.4 * step
+    assert np.allclose(centre[k - 1], [r_mid * math.cos(last), r_mid * math.sin(last)], rtol=0, atol=LENGTH)
+    assert np.allclose(centre[k:, 0], side * np.arange(1, 12), rtol=0, atol=LENGTH)
 
 
 @pytest.mark.parametrize("size", [3e-4, 1e-3])
@@ -771,17 +797,20 @@ def test_the_chutes_floor_and_walls_stand_on_the_helixs_end_along_its_tangent(b,
         assert has_vertex(want, p), p
 
 
-@pytest.mark.parametrize("turns, rows", [(1.5, 1), (3.5, 2), (6.0, 2), (10.0, 3)])
+TEN_ARCS = 10 * 0.01 * STEP / (2 * math.pi * 9.4e-3 * tan(3.0))  # turns: a slot floor ten arcs up
+
+
+@pytest.mark.parametrize("turns, rows", [(1.5, 1), (3.5, 2), (6.0, 2), (10.0, 3), (TEN_ARCS, 1)])
 def test_the_wall_below_the_slot_is_in_rows_no_higher_than_ten_station_arcs(turns, rows):
     """Faces no thinner than 5 deg (LIGGGHTS refuses slivers): the wall up to the slot's floor
-    (z_slot, 4.6 mm for 1.5 turns, 10.8 mm for 3.5, 18.5 mm for 6, 30.9 mm for 10) in as few
-    equal rows as keep them within ten arcs of 6 deg at R = 10 mm (10.5 mm), over the slot's
-    floor one band to the top."""
+    (z_slot, 4.6 mm for 1.5 turns, 10.8 mm for 3.5, 18.5 mm for 6, 30.9 mm for 10, 10.5 mm
+    for 3.38: one pitch a turn above the bottom at the wall, the cone as steep as the tilt) in
+    as few equal rows as keep them within ten arcs of 6 deg at R = 10 mm (10.5 mm), over the
+    slot's floor one band to the top."""
     b = replace(BOWL, turns=turns)
     vertices, triangles = bowl_mesh(b)
     R = b.radius
     z_slot = float(hand_floor(b, -math.pi / 2, R))
-    assert rows == math.ceil(z_slot / (10 * R * STEP))
     wall = triangles[np.all(on_radius(vertices, R)[triangles], axis=1)]
     far = vertices[np.unique(wall)]
     far = far[np.abs(far[:, 0] - (-R)) < LENGTH]  # the station opposite the track's end
@@ -819,3 +848,55 @@ def test_a_negative_lip_counts_as_none_in_the_refusals_too():
     big = {**PARAMS, "part_size": 1.1e-3, "wall_height": 2e-3}  # 3.3 mm: more than the pitch
     with pytest.raises(ParameterError, match="less than three parts"):
         check_bowl({**big, "lip_height": -5e-4})
+
+
+def test_past_the_tracks_end_above_the_last_turn_there_is_no_coordinate():
+    """Past the helix's end (polar angles -66 to -36 deg, beside the chute), where the last turn
+    would go on if it did not end: no turn, a pitch over the turn below. Just below, on that
+    turn below, a coordinate a turn back."""
+    r_mid, a = 9.4e-3, math.radians(3.0)
+    for deg in (-66.0, -50.0, -36.0):
+        theta = math.radians(deg)
+        on_next = float(hand_floor(BOWL, theta, r_mid))  # the last turn's floor, continued
+        point = [r_mid * math.cos(theta), r_mid * math.sin(theta), on_next + 1.5e-4]
+        assert np.isnan(path_coordinate(BOWL, [point])[0]), deg
+        point[2] -= 2 * math.pi * r_mid * math.tan(a)  # a pitch down: on the turn below
+        s = path_coordinate(BOWL, [point])[0]
+        below = theta - 2 * math.pi
+        assert s == pytest.approx((below + 3.5 * math.pi) * r_mid / math.cos(a), rel=0, abs=LENGTH)
+
+
+@pytest.mark.parametrize("tilt", [3.0, 10.0])
+def test_the_chute_holds_points_from_a_width_under_its_floor_to_a_pitch_over_it(tilt):
+    """Over the chute, off its centre line too (its floor tilted across), from a track width
+    under its floor (a part sunk in) up to, not including, a pitch over it (where the next
+    turn would be): at 1 um inside either edge on the chute, 1 um outside not."""
+    b = replace(BOWL, cross_tilt=tilt)
+    r_mid, w, a = 9.4e-3, 1.2e-3, math.radians(3.0)
+    pitch = 2 * math.pi * r_mid * math.tan(a)
+    end = float(hand_floor(b, -math.pi / 2, r_mid))
+    for x in (3e-3, 7e-3):
+        for off in (-0.5e-3, 0.0, 0.5e-3):  # outwards, on the centre line, inwards
+            floor = end + x * math.tan(a) + off * tan(tilt)
+            y = -r_mid + off
+            inside = path_coordinate(b, [[x, y, floor - w + 1e-6], [x, y, floor + pitch - 1e-6]])
+            want = (3 * math.pi * r_mid + x) / math.cos(a)
+            assert np.allclose(inside, want, rtol=0, atol=LENGTH)
+            above = path_coordinate(b, [[x, y, floor + pitch + 1e-6]])[0]
+            assert np.isnan(above), (x, off)
+
+
+def test_the_chutes_width_includes_its_walls():
+    """A point exactly in the plane of either chute wall, |y + r_mid| = w / 2 to the last bit,
+    is on the chute (as the track's edges are on the helix). (A bowl of binary fractions,
+    R = 2^-7 m, w = 2^-10 m, so that the walls' planes are numbers exactly.)"""
+    R, w, a = 2.0 ** -7, 2.0 ** -10, math.radians(3.0)
+    b = Bowl(radius=R, track_width=w, helix_angle=3.0, turns=1.5, wall_height=1e-3, cross_tilt=3.0,
+             chute_length=8e-3)
+    r_mid = R - w / 2
+    x = 4e-3
+    for y in (-R, -(R - w)):
+        assert abs(y + b.r_mid) == w / 2
+        z = float(hand_floor(b, -math.pi / 2, -y)) + x * math.tan(a) + 1.5e-4
+        s = path_coordinate(b, [[x, y, z]])[0]
+        assert s == pytest.approx((3 * math.pi * r_mid + x) / math.cos(a), rel=0, abs=LENGTH), y
