@@ -211,6 +211,22 @@ def shape_code(value: str) -> int:
     return int(code)
 
 
+def _part_files(values: Mapping[str, str], folder: Path, hook: str, shape: int, size: float,
+                thickness: float) -> tuple[list[str], np.ndarray | None]:
+    """What every feeder deck's prepare hook writes for its parts: the catch face, the clump
+    templates; and the first lines of its prepared.in (the templates' sphere counts, the
+    insertion seeds). Returns (those lines, the body template of ``shape`` or None)."""
+    write_stl(*catch_face(), folder / "catch.stl", "catch")
+    templates = {"chip": chip_template(size, thickness), "disc": disc_template(size, thickness)}
+    for name, rows in templates.items():
+        write_template(rows, folder / f"{name}.multisphere", name)
+    lines = [f"# written by vibrofeed.geometry.{hook} for one run\n"]
+    lines += [f"variable n_sph_{name} equal {len(rows)}\n" for name, rows in templates.items()]
+    seed = int(_number(values, "seed")) if "seed" in values else 5489
+    lines += [f"variable seed_{k} equal {p}\n" for k, p in enumerate(insertion_seeds(seed, 6), 1)]
+    return lines, {0: None, 1: templates["chip"], 2: templates["disc"]}[shape]
+
+
 def prepare_bulk_feeder(values: Mapping[str, str], folder: str | Path) -> Prepared:
     """Write the bulk feeder's geometry for one run into ``folder`` and describe it.
 
@@ -232,16 +248,8 @@ def prepare_bulk_feeder(values: Mapping[str, str], folder: str | Path) -> Prepar
     vertices, triangles = track_mesh(length, width, _number(values, "wall_height"), gate_width, gate_x,
                                      cross_tilt=tilt)
     write_stl(vertices, triangles, folder / "track.stl", "track")
-    write_stl(*catch_face(), folder / "catch.stl", "catch")
-    templates = {"chip": chip_template(size, thickness), "disc": disc_template(size, thickness)}
-    for name, rows in templates.items():
-        write_template(rows, folder / f"{name}.multisphere", name)
-    lines = ["# written by vibrofeed.geometry.prepare_bulk_feeder for one run\n"]
-    lines += [f"variable n_sph_{name} equal {len(rows)}\n" for name, rows in templates.items()]
-    seed = int(_number(values, "seed")) if "seed" in values else 5489
-    lines += [f"variable seed_{k} equal {p}\n" for k, p in enumerate(insertion_seeds(seed, 6), 1)]
+    lines, template = _part_files(values, folder, "prepare_bulk_feeder", shape, size, thickness)
     (folder / "prepared.in").write_text("".join(lines))
-    template = {0: None, 1: templates["chip"], 2: templates["disc"]}[shape]
 
     section_2 = write_sections(values, folder)
     if section_2 is not None:
@@ -267,17 +275,9 @@ def prepare_bowl_feeder(values: Mapping[str, str], folder: str | Path) -> Prepar
     numbers = {name: _number(values, name) for name in names}
     numbers["shape"] = shape_code(values.get("shape", "0"))
     check_bowl(numbers)
-    size, thickness = numbers["part_size"], numbers["part_thickness"]
-    write_stl(*catch_face(), folder / "catch.stl", "catch")
-    templates = {"chip": chip_template(size, thickness), "disc": disc_template(size, thickness)}
-    for name, rows in templates.items():
-        write_template(rows, folder / f"{name}.multisphere", name)
-    lines = ["# written by vibrofeed.geometry.prepare_bowl_feeder for one run\n"]
-    lines += [f"variable n_sph_{name} equal {len(rows)}\n" for name, rows in templates.items()]
-    seed = int(_number(values, "seed")) if "seed" in values else 5489
-    lines += [f"variable seed_{k} equal {p}\n" for k, p in enumerate(insertion_seeds(seed, 6), 1)]
-    lines += write_bowl({**{k: str(v) for k, v in numbers.items()}}, folder)
+    lines, template = _part_files(values, folder, "prepare_bowl_feeder", numbers["shape"],
+                                  numbers["part_size"], numbers["part_thickness"])
+    lines += write_bowl({k: str(v) for k, v in numbers.items()}, folder)
     (folder / "prepared.in").write_text("".join(lines))
-    template = {0: None, 1: templates["chip"], 2: templates["disc"]}[numbers["shape"]]
     return Prepared(variables={"mesh_dir": str(folder.resolve())}, track=bowl_mesh(bowl_from(numbers)),
                     body_template=template)

@@ -558,17 +558,20 @@ class _Physics:
             for element, got, want, scale, unit in (
                     ("position", motion[0][()], expected[0], amp, "m"),
                     ("velocity", motion[1][()], expected[1], amp * omega, "m/s")):
-                tol = DRIVE_RTOL * scale + DRIVE_ATOL[element]
-                off = np.abs(got - want).max(axis=1)
-                bad = np.nonzero(~(off <= tol))[0]  # NaN fails too
-                if len(bad):
-                    j = int(bad[0])
-                    self.c.error(f"{where}/{element}/value",
-                                 f"section {k}'s {element} at frame {j} (t = {time[j]:g} s) is "
-                                 f"{np.array2string(got[j], precision=4)} {unit}, its drive gives "
-                                 f"{np.array2string(want[j], precision=4)} {unit} (off by "
-                                 f"{off[j]:.3g}, beyond {tol:.3g} {unit}: {DRIVE_RTOL:g} of the "
-                                 f"amplitude)")
+                self.against_drive(f"{where}/{element}/value", f"section {k}'s {element}", got, want,
+                                   DRIVE_RTOL * scale + DRIVE_ATOL[element], unit, time)
+
+    def against_drive(self, path: str, what: str, got, want, tol: float, unit: str, time) -> None:
+        """An error at the first frame where recorded motion ``got`` departs from its drive's
+        ``want`` (frames, 3) by more than ``tol`` (NaN fails too)."""
+        off = np.abs(got - want).max(axis=1)
+        bad = np.nonzero(~(off <= tol))[0]
+        if len(bad):
+            j = int(bad[0])
+            self.c.error(path, f"{what} at frame {j} (t = {time[j]:g} s) is "
+                               f"{np.array2string(got[j], precision=4)} {unit}, its drive gives "
+                               f"{np.array2string(want[j], precision=4)} {unit} (off by {off[j]:.3g}, "
+                               f"beyond {tol:.3g} {unit}: {DRIVE_RTOL:g} of the amplitude)")
 
     def time_step(self, step: np.ndarray, time: np.ndarray) -> float | None:
         """The run's step [s]: derived/dt_used, else time over step."""
@@ -623,17 +626,8 @@ class _Physics:
                  DRIVE_ATOL["position"]),
                 ("velocity", np.column_stack([zero, zero, vel[:, 2]]), p["amp_n"] * omega, "m/s",
                  DRIVE_ATOL["velocity"])):
-            got = motion[element][()]
-            tol = DRIVE_RTOL * scale + atol
-            off = np.abs(got - want).max(axis=1)
-            bad = np.nonzero(~(off <= tol))[0]  # NaN fails too
-            if len(bad):
-                j = int(bad[0])
-                self.c.error(f"{L.SURFACE}/{element}/value",
-                             f"the bowl's {element} at frame {j} (t = {time[j]:g} s) is "
-                             f"{np.array2string(got[j], precision=4)} {unit}, its drive gives "
-                             f"{np.array2string(want[j], precision=4)} {unit} (off by {off[j]:.3g}, "
-                             f"beyond {tol:.3g} {unit}: {DRIVE_RTOL:g} of the amplitude)")
+            self.against_drive(f"{L.SURFACE}/{element}/value", f"the bowl's {element}",
+                               motion[element][()], want, DRIVE_RTOL * scale + atol, unit, time)
 
     def run(self) -> None:
         self.step()
