@@ -363,7 +363,7 @@ def climb_advice(p: Mapping[str, float]) -> list[str]:
 def fill_boxes(b: Bowl, size: float, height: float, start: float = 0.25) -> list[tuple]:
     """Cubes above the track's floor, one every cube side along its centre line, from
     ``start`` of a turn after the track's start, up the helix and along the chute to its
-    end: where parts are pre-placed along the track. Each (x0, x1, y0, y1, z0, z1): side
+    end (a part's ``size`` short of it): where parts are pre-placed along the track. Each (x0, x1, y0, y1, z0, z1): side
     0.6 track_width (a cube of that side fits in the track's width however it is turned),
     from the highest floor point under it plus a twentieth of a part to ``height`` above.
     The cubes are LIGGGHTS block regions, square to x and y: round the helix they stand
@@ -384,8 +384,10 @@ def fill_boxes(b: Bowl, size: float, height: float, start: float = 0.25) -> list
         boxes.append(box(x, y, _highest_floor(b, x - half, x + half, y - half, y + half, t)))
     # the chute: straight, rising at the helix angle, tilted across as the helix
     slope = math.tan(math.radians(b.helix_angle))
-    # (from its end back: the last cube reaches the outlet edge, so the chute is full at once)
-    for x in np.arange(b.outlet_x - half, side - 1e-12, -side)[::-1]:
+    # (from its end back, the last cube a part's size short of the outlet edge: the chute is
+    # full at once, and a part that lands tipped and slides does not leave while the fill
+    # settles, before the vibration and its outlet count start)
+    for x in np.arange(b.outlet_x - size - half, side - 1e-12, -side)[::-1]:
         floor = b.end_z + (x + half) * slope + half * _tan(b.cross_tilt)
         boxes.append(box(float(x), -b.r_mid, floor))
     return boxes

@@ -515,8 +515,10 @@ class Frames:
             self.counts = counts
             lost = counts["lost"]
             if lost and not self._lost_reported:
+                when = ("while the pre-fill settled, before the vibration" if t == 0
+                        else f"by t = {t:g} s")
                 self.report("warning", message=f"{lost} part(s) disappeared without crossing "
-                                               f"the outlet by t = {t:g} s (mass balance)")
+                                               f"the outlet {when} (mass balance)")
                 self._lost_reported = True
         return t
 

@@ -593,19 +593,19 @@ FILLED = [BOWL, replace(BOWL, cone_angle=5.0, cross_tilt=10.0),
           replace(BOWL, cone_angle=0.0, cross_tilt=0.0, chute_length=1.1e-2)]
 
 
-def expected_cubes(b, start):
+def expected_cubes(b, start, size):
     """By hand: cube centres every side (0.6 track_width) along the centre line from ``start``
     turns and one side after the track's start up to half a side before its end, then back
-    from the outlet edge (the last cube touching it) every side along the chute while a whole
-    side clear of the helix's end."""
+    from a part's ``size`` before the outlet edge (the last cube's end there) every side along
+    the chute while a whole side clear of the helix's end."""
     side, r_mid = 0.6 * b.track_width, b.radius - b.track_width / 2
     step = side / r_mid
     first = -math.pi / 2 - 2 * math.pi * b.turns + 2 * math.pi * start + step
     thetas = []
     while first + len(thetas) * step < -math.pi / 2 - step / 2:
         thetas.append(first + len(thetas) * step)
-    outlet = b.chute_length * math.cos(math.radians(b.helix_angle))
-    xs = outlet - side / 2 - side * np.arange(math.floor((outlet - side / 2) / side + 1e-9))
+    last = b.chute_length * math.cos(math.radians(b.helix_angle)) - size  # a part short of the edge
+    xs = last - side / 2 - side * np.arange(math.floor((last - side / 2) / side + 1e-9))
     return np.array(thetas), xs[::-1]
 
 
@@ -614,7 +614,7 @@ def expected_cubes(b, start):
 def test_the_fill_cubes_lie_a_side_apart_along_the_centre_line_from_start_turns_on(b, start):
     size, height = 3e-4, 7.5e-4
     boxes = np.array(fill_boxes(b, size, height) if start is None else fill_boxes(b, size, height, start))
-    thetas, xs = expected_cubes(b, 0.25 if start is None else start)
+    thetas, xs = expected_cubes(b, 0.25 if start is None else start, size)
     assert len(boxes) == len(thetas) + len(xs)
     side, r_mid = 0.6 * b.track_width, b.radius - b.track_width / 2
     x0, x1, y0, y1, z0, z1 = boxes.T
@@ -632,25 +632,25 @@ def test_the_fill_cubes_lie_a_side_apart_along_the_centre_line_from_start_turns_
                               rel=0, abs=LENGTH)
     # on the chute: a twentieth of a part above its floor's highest point under the cube, at
     # its far inner corner (the chute rises along x and is tilted down outwards); the last
-    # cube touches the outlet edge
+    # cube ends a part's size before the outlet edge
     end_z = float(hand_floor(b, -math.pi / 2, r_mid))
     floor = end_z + (xs + side / 2) * tan(b.helix_angle) + side / 2 * tan(b.cross_tilt)
     assert np.allclose(z0[n:], floor + 0.05 * size, rtol=0, atol=LENGTH)
-    assert x1[-1] == pytest.approx(b.chute_length * cos_a, rel=0, abs=LENGTH)
+    assert x1[-1] == pytest.approx(b.chute_length * cos_a - size, rel=0, abs=LENGTH)
 
 
 def test_the_fill_cubes_keep_half_a_side_before_the_helixs_end_and_a_side_after_it():
     """A start putting a cube's centre 0.4 of a side before the helix's end (it would reach
     into the chute's first cube: none there, the last 1.4 sides before the end), and a chute
-    11.5 sides long (its first cube exactly a side past the end: there)."""
+    11.5 sides and a part long (its first cube exactly a side past the end: there)."""
     side, r_mid, a = 0.72e-3, 9.4e-3, math.radians(3.0)
-    b = replace(BOWL, chute_length=11.5 * side / math.cos(a))
+    b = replace(BOWL, chute_length=(11.5 * side + 3e-4) / math.cos(a))
     step = side / r_mid
     span = 3 * math.pi
     k = math.floor(span / step - 1.4)
     start = (span - (1.4 + k) * step) / (2 * math.pi)
     boxes = np.array(fill_boxes(b, 3e-4, 7.5e-4, start))
-    thetas, xs = expected_cubes(b, start)
+    thetas, xs = expected_cubes(b, start, 3e-4)
     assert len(thetas) == k and len(xs) == 11 and len(boxes) == k + 11
     centre = np.column_stack([(boxes[:, 0] + boxes[:, 1]) / 2, (boxes[:, 2] + boxes[:, 3]) / 2])
     last = -math.pi / 2 - 1.4 * step
@@ -712,7 +712,7 @@ def test_each_fill_cube_stands_a_twentieth_of_a_part_above_the_highest_floor_und
     by hand, on a fine grid over the cube) is then at a corner reaching up the helix or inwards
     as much as at its side's middle."""
     size = 3e-4
-    thetas, _ = expected_cubes(b, 0.25)
+    thetas, _ = expected_cubes(b, 0.25, size)
     boxes = fill_boxes(b, size, 7.5e-4)
     g = np.linspace(0.0, 1.0, 121)  # 6 um apart: the grid's maximum is the floor's to 1e-10 m
     for t, (x0, x1, y0, y1, z0, _z1) in zip(thetas, boxes):
