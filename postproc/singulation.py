@@ -50,13 +50,13 @@ from .clusters import clump_labels, cluster_labels, pairs_touch, quaternion_matr
 from .feedrate import (
     FeedRate,
     outlet_events,
-    outlet_x,
     period_velocities,
     require_outlet,
     steady_window,
     too_few_exits,
     values_at,
 )
+from .path import along, outlet_x, path_end
 
 SUMMARY_KEYS = ("cv_interarrival", "doubles_rate", "singulated_fraction", "mean_gap", "cluster_sizes",
                 "n_arrivals", "n_doubles", "doubles_per_s", "mean_interarrival", "edge_velocity",
@@ -217,8 +217,9 @@ class Singulation(AnalysisBase):
         return float(radii.mean()) if len(radii) else math.nan
 
     def _edge_velocity(self, frames, t_a: float, t_b: float, diameter: float) -> float:
-        """Mean whole-period speed [m/s] of the parts within edge_length of the outlet edge."""
-        edge = outlet_x(self.result)
+        """Mean whole-period speed [m/s] of the parts within edge_length of the outlet edge
+        (along the path: a bowl's chute end is its helix's and chute's length from the start)."""
+        edge = path_end(self.result)
         window = frames[(self.times >= t_a - 1e-12) & (self.times <= t_b + 1e-12)]
         if not math.isfinite(edge):
             return math.nan
@@ -248,7 +249,7 @@ class Singulation(AnalysisBase):
 
     def _clusters(self, frames, t_a: float, t_b: float, tol: float) -> None:
         r, result = self.results, self.result
-        edge = outlet_x(result)
+        edge = path_end(result)
         window = frames[(self.times >= t_a - 1e-12) & (self.times <= t_b + 1e-12)]
         if len(window) == 0:
             window = frames
@@ -256,9 +257,11 @@ class Singulation(AnalysisBase):
                          .round().astype(int))
         fields = ("position", "radius") + (("orientation",) if result.body_template is not None else ())
         sizes_seen: list[np.ndarray] = []
-        for frame in result.iter_frames(window[pick], fields + ("surface_position",)):
-            track_x = frame["position"][:, self.axis] - frame["surface_position"][self.axis]
-            on = track_x <= edge if math.isfinite(edge) else np.ones(len(frame), dtype=bool)
+        for frame in result.iter_frames(window[pick], fields):
+            # on the track: up to the outlet edge along the path (in a bowl, not the pile on its
+            # bottom nor a part falling: their coordinate is NaN)
+            coordinate = along(result, [frame.index], self.axis)[0][0][frame.slots]
+            on = coordinate <= edge if math.isfinite(edge) else np.ones(len(frame), dtype=bool)
             if result.body_template is None:
                 labels = cluster_labels(frame["position"][on], frame["radius"][on], tol)
             else:

@@ -147,3 +147,42 @@ def test_the_recorded_lift_is_undone_before_the_turn_is_found(tmp_path):
     with Result(tmp_path / "b.h5") as r:
         s, _ = along(r, np.arange(3))
     assert np.allclose(s, want, rtol=0, atol=LENGTH)
+
+
+def test_a_bowls_track_clusters_leave_out_the_pile_and_its_edge_speed_is_along_the_chute(tmp_path):
+    """Singulation in a bowl: the clusters on the track are those of the parts on the helix and
+    the chute (path coordinate up to its end), not the pile on the bottom (off the track); the
+    edge speed is the chute's parts' speed along the path near its end.
+
+    By hand: three parts touching in the pile, a touching pair on the chute near its end and
+    two parts alone on the helix; the chute's pair moves along +x at 20 mm/s, the rest stand.
+    On the track: clusters of 1, 1 and 2, a singulated fraction of 2/4; the edge speed 20 mm/s
+    along x.
+    """
+    from vibrofeed.postproc.singulation import Singulation
+
+    b = bowl_from(BOWL)
+    d = 3e-4  # [m] the spheres' diameter: touching parts are a diameter apart
+    tan3 = math.tan(math.radians(3))
+    helix = b.helix_point(np.array([b.theta_start + 1.0, b.theta_start + 3.0])) + [0, 0, d / 2]
+    pile = np.array([[0.0, 0.0, 1e-3], [d, 0.0, 1e-3], [2 * d, 0.0, 1e-3]])
+    speed, dt = 0.02, 2.5e-3  # [m/s], [s]: frames a quarter period apart at 100 Hz
+    frames, n = [], 9
+    for k in range(n):
+        x0 = 6e-3 + speed * k * dt
+        chute = np.array([[x, -b.r_mid, b.end_z + x * tan3 + d / 2] for x in (x0, x0 + d)])
+        pos = np.vstack([helix, pile, chute])
+        frames.append((k, k * dt, parts(np.arange(1, 8), pos, radius=d / 2)))
+    events = {"time": np.array([0.001, 0.011, 0.019]), "id": np.array([101, 102, 103]),
+              "position": np.tile([b.outlet_x + 1e-4, -b.r_mid, -1e-3], (3, 1)),
+              "velocity": np.zeros((3, 3)), "orientation": np.tile([1.0, 0, 0, 0], (3, 1))}
+    variables = {k: (repr(v), "", k, repr(v)) for k, v in BOWL.items()}
+    path = write_bulk_result(tmp_path / "b.h5", frames, events=events, variables=variables,
+                             outlet={"outlet_x": b.outlet_x, "catch_z": -5e-4, "method": "synthetic"})
+    with Result(path) as r:
+        s = Singulation(r, start=0.0, end=0.02, cluster_frames=3).run().results
+    # (clusters per sampled frame: counts, exact)
+    assert s.cluster_sizes == {1: 2.0, 2: 1.0}
+    assert s.track_singulated_fraction == pytest.approx(0.5, rel=0, abs=1e-12)
+    # (the chute rises at the helix angle: along it, the pair moves 1/cos(3 deg) faster than in x)
+    assert s.edge_velocity == pytest.approx(speed / math.cos(math.radians(3)), rel=1e-9, abs=0)
