@@ -363,11 +363,11 @@ def climb_advice(p: Mapping[str, float]) -> list[str]:
 def fill_boxes(b: Bowl, size: float, height: float, start: float = 0.25) -> list[tuple]:
     """Cubes above the track's floor, one every cube side along its centre line, from
     ``start`` of a turn after the track's start, up the helix and along the chute to its
-    end (a part's ``size`` short of it): where parts are pre-placed along the track. Each (x0, x1, y0, y1, z0, z1): side
-    0.6 track_width (a cube of that side fits in the track's width however it is turned),
-    from the highest floor point under it plus a twentieth of a part to ``height`` above.
-    The cubes are LIGGGHTS block regions, square to x and y: round the helix they stand
-    turned against it (:func:`_highest_floor`)."""
+    end (a part's ``size`` short of it): where parts are pre-placed along the track. Each
+    (x0, x1, y0, y1, z0, z1): side 0.6 track_width (a cube of that side fits in the track's
+    width however it is turned), from the highest floor point under it plus a twentieth of a
+    part to ``height`` above. The cubes are LIGGGHTS block regions, square to x and y: round
+    the helix they stand turned against it (:func:`_highest_floor`)."""
     side = 0.6 * b.track_width
     half = side / 2
     dtheta = side / b.r_mid

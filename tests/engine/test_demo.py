@@ -43,3 +43,21 @@ def test_demo_refuses_a_bad_parameter_before_running(tmp_path):
     proc = vibrofeed("demo", "-o", tmp_path / "r", "-p", "n_parts=-3")
     assert proc.returncode == 2 and proc.stderr.startswith("vibrofeed: error: ")
     assert not (tmp_path / "r" / "feeder_line.h5").exists()
+
+
+def test_the_bowl_case_runs_the_bowl_with_its_dies(tmp_path):
+    """`vibrofeed demo --case bowl`, cut short (a few dies, 0.03 s: none leaves yet): the bowl
+    deck with the case's parameters runs, its result is complete, and the demo fails saying
+    why it measured nothing (never a feed rate of 0 reported as a success)."""
+    out = tmp_path / "results"
+    proc = vibrofeed("demo", "--case", "bowl", "-o", out, "-q", "--no-pictures", "-p", "t_settle=0.003",
+                     "-p", "t_end=0.03", "-p", "n_parts=2", "-p", "n_track=10", "-p", "output_dt=0.0025")
+    assert proc.returncode == 1
+    assert "too few exits to measure" in proc.stderr and "bowl_feeder.h5" in proc.stderr
+    with Result(out / "bowl_feeder.h5") as r:
+        assert r.deck_name == "bowl_feeder" and r.status == "complete"
+        assert r.parameters["shape"] == 1 and r.parameters["freq"] == 75  # the case's dies and drive
+        assert r.rotating
+        mb = {k: int(v[-1]) for k, v in r.mass_balance.items()}
+    assert mb["inserted"] == 12 and mb["lost"] == 0 and mb["inserted"] == mb["on_track"] + mb["exited"]
+    assert "Feed rate" in proc.stdout and "Singulation" in proc.stdout

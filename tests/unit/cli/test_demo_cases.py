@@ -1,5 +1,7 @@
 """The demo's cases: the line and the track it replaces resolve as deck parameters (checked
-as any run's are), share the supply, and the line is sized as its comments say."""
+as any run's are), share the supply, and the line is sized as its comments say; the bowl's
+case is a valid bowl whose dies the single-part model says climb, sliding, as its comments
+say."""
 
 import math
 
@@ -12,16 +14,17 @@ from vibrofeed.line import joint_motion, joint_steps
 from vibrofeed.parameters import resolve
 
 
-@pytest.mark.parametrize("case", sorted(CASES))
+@pytest.mark.parametrize("case", ["line", "track"])
 def test_each_case_is_a_valid_run_of_the_bulk_feeder(case):
-    name, given = CASES[case]
+    name, deck, given = CASES[case]
+    assert deck == "bulk_feeder"
     values = resolve(Deck(DECKS / "bulk_feeder.liggghts"), given)
     assert {k: values[k] for k in SUPPLY} == SUPPLY  # the same supply for both
     assert name.endswith(("line", "feeder"))
 
 
 def test_the_line_steps_down_at_every_instant_and_is_fed_not_drained():
-    _, given = CASES["line"]
+    _, _, given = CASES["line"]
     p = {k: float(v) for k, v in resolve(Deck(DECKS / "bulk_feeder.liggghts"), given).items()
          if k in given or k in ("freq", "s2_freq", "amp_n", "phase", "part_size", "gate_width")}
     dz, dx = joint_motion(p)
@@ -31,3 +34,32 @@ def test_the_line_steps_down_at_every_instant_and_is_fed_not_drained():
     # a sub-hopping single-file section (Gamma_n < 1): hopping spheres convey at scattered speeds
     assert p["s2_amp_n"] * (2 * math.pi * p["s2_freq"]) ** 2 / 9.81 < 1
     assert p["n_parts"] == 0 and p["inlet_rate"] > 0
+
+
+def test_the_bowl_case_is_a_bowl_whose_dies_climb_sliding_within_5_g():
+    import warnings
+
+    from vibrofeed.bowl import bowl_from, track_drive
+    from vibrofeed.models.deck import transport
+
+    name, deck, given = CASES["bowl"]
+    assert (name, deck) == ("bowl_feeder", "bowl_feeder")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no warning: the model says the dies climb
+        values = resolve(Deck(DECKS / "bowl_feeder.liggghts"), given)
+    p = {}
+    for k, v in values.items():
+        try:
+            p[k] = float(v)
+        except ValueError:  # (the deck's file names)
+            pass
+    assert p["shape"] == 1  # dies
+    w = 2 * math.pi * p["freq"]
+    b = bowl_from(p)
+    d = track_drive(p["amp_t"], p["amp_n"], p["phase"], p["freq"], b.helix_angle, b.r_mid)
+    # within 5 g at the track; the lift below 1 g (sliding, no hop): the comments' drive
+    assert max(p["amp_t"], p["amp_n"]) * w ** 2 / 9.81 < 5
+    assert d.amp_n * w ** 2 / 9.81 < 1
+    speed = transport({**p, "amp_t": d.amp_t, "amp_n": d.amp_n, "phase": d.phase,
+                       "incline": d.incline}).velocity
+    assert speed == pytest.approx(0.048, rel=0.02, abs=0)  # [m/s] the comment's 48 mm/s
