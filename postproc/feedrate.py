@@ -475,7 +475,9 @@ class FeedRate(AnalysisBase):
     (frames per whole-period interval) and ``velocity_alias`` (its distance
     from whole periods, in periods); ``profile_edges``, ``profile_x``,
     ``profile_velocity``, ``profile_velocity_err`` (batch means per bin, NaN in a bin
-    seen by fewer than two batches), ``profile_count``; the mass balance at the last frame
+    seen by fewer than two batches), ``profile_count``, ``profile_height`` (a bowl: the track
+    centre line's floor height at each bin [m], the profile in height; else None); the mass
+    balance at the last frame
     analysed: ``inserted``, ``on_track``, ``exited``, ``lost`` (None without one),
     ``rejected`` for a feeder line and ``returned`` (rejects put back at the inlet, part of
     ``inserted``) for one that recirculates;
@@ -639,6 +641,9 @@ class FeedRate(AnalysisBase):
             r.profile_velocity = np.where(count > 0, total / np.maximum(count, 1), np.nan)
         r.profile_edges, r.profile_x, r.profile_count = edges, 0.5 * (edges[1:] + edges[:-1]), count
         r.profile_velocity_err = profile_error(which, v, interval, self.bins, self.batches)
+        # a bowl's profile is also one in height: each bin's centre-line floor height
+        r.profile_height = (bowl_of(self.result.parameters).height_at(r.profile_x)
+                            if is_bowl(self.result.parameters) else None)
 
     def _mass_balance(self, frames: np.ndarray) -> None:
         balance = self.result.mass_balance

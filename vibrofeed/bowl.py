@@ -143,6 +143,12 @@ class Bowl:
         """The helix's centre line length (start to the chute)."""
         return float(self.arc_length(THETA_END))
 
+    def height_at(self, s) -> np.ndarray:
+        """The centre line's floor height at path coordinate ``s`` (:func:`path_coordinate`):
+        z_start + s sin(helix_angle), up the helix and along the chute alike (the chute rises
+        at the helix angle)."""
+        return self.z_start + np.asarray(s, dtype=float) * math.sin(math.radians(self.helix_angle))
+
 
 def _tan(deg: float) -> float:
     return math.tan(math.radians(deg))

@@ -98,7 +98,18 @@ def feedrate_figures(analysis, folder) -> list[Path]:
                         fontsize=6, color="0.4")
     ax.axhline(r.mean_velocity * 1e3, color="k", ls="--", lw=1.0,
                label=f"mean {r.mean_velocity * 1e3:.3g} ± {r.mean_velocity_err * 1e3:.2g} mm/s")
-    ax.set_xlabel("position along the track x [mm]")
+    if r.get("profile_height") is not None:  # a bowl: along the helix, then the chute
+        from ..postproc.path import bowl_of
+
+        b = bowl_of(analysis.result.parameters)
+        sin_a = np.sin(np.radians(b.helix_angle))
+        ax.set_xlabel(f"position along the helix and the chute s [mm] (the helix ends at "
+                      f"{b.length * 1e3:.3g})")
+        top = ax.secondary_xaxis("top", functions=(lambda s: (b.z_start + s * 1e-3 * sin_a) * 1e3,
+                                                   lambda z: (z * 1e-3 - b.z_start) / sin_a * 1e3))
+        top.set_xlabel("height of the track's centre line [mm]")
+    else:
+        ax.set_xlabel("position along the track x [mm]")
     ax.set_ylabel("conveying velocity [mm/s]")
     ax.set_title(f"whole-period displacements, {r.steady_from:.3g} .. {r.steady_to:.3g} s; "
                  f"{int(r.profile_count.sum())} samples in {len(x)} bins", fontsize=8)

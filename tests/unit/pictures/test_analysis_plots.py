@@ -154,8 +154,10 @@ def test_velocity_profile_has_batch_errors_and_thin_bins_drawn_light(tmp_path, d
             expected[k] = np.std(means, ddof=1) / np.sqrt(len(means))
     assert np.isfinite(expected).sum() >= 4
     assert fr.profile_velocity_err == pytest.approx(expected, rel=1e-9, abs=0, nan_ok=True)
+    assert fr.profile_height is None  # a linear track: no profile in height, no height axis
 
     ax = drawn["feedrate_velocity_profile.png"].axes[0]
+    assert ax.get_xlabel() == "position along the track x [mm]"
     drawn_err = {}
     alphas = []
     for container in ax.containers:   # each errorbar: data line, caps, bar segments

@@ -149,7 +149,8 @@ def test_the_recorded_lift_is_undone_before_the_turn_is_found(tmp_path):
     assert np.allclose(s, want, rtol=0, atol=LENGTH)
 
 
-def test_a_bowls_track_clusters_leave_out_the_pile_and_its_edge_speed_is_along_the_chute(tmp_path):
+def test_a_bowls_track_clusters_leave_out_the_pile_and_its_edge_speed_is_along_the_chute(tmp_path,
+                                                                                        monkeypatch):
     """Singulation in a bowl: the clusters on the track are those of the parts on the helix and
     the chute (path coordinate up to its end), not the pile on the bottom (off the track); the
     edge speed is the chute's parts' speed along the path near its end.
@@ -159,6 +160,7 @@ def test_a_bowls_track_clusters_leave_out_the_pile_and_its_edge_speed_is_along_t
     On the track: clusters of 1, 1 and 2, a singulated fraction of 2/4; the edge speed 20 mm/s
     along x.
     """
+    from vibrofeed.postproc.feedrate import FeedRate
     from vibrofeed.postproc.singulation import Singulation
 
     b = bowl_from(BOWL)
@@ -179,10 +181,40 @@ def test_a_bowls_track_clusters_leave_out_the_pile_and_its_edge_speed_is_along_t
     variables = {k: (repr(v), "", k, repr(v)) for k, v in BOWL.items()}
     path = write_bulk_result(tmp_path / "b.h5", frames, events=events, variables=variables,
                              outlet={"outlet_x": b.outlet_x, "catch_z": -5e-4, "method": "synthetic"})
+    from vibrofeed.pictures import plots
+
+    drawn = {}
+    monkeypatch.setattr(plots, "save", lambda fig, p: drawn.setdefault(p.name, fig) and p)
     with Result(path) as r:
         s = Singulation(r, start=0.0, end=0.02, cluster_frames=3).run().results
+        analysis = FeedRate(r, start=0.0, end=0.02, model=False).run()
+        plots.feedrate_figures(analysis, tmp_path)
+    fr = analysis.results
+    # the feed rate's speed profile is one in height too: each bin's centre-line floor height,
+    # and the figure's top axis [mm] maps the path's coordinate [mm] to it
+    assert len(fr.profile_x) == 20
+    assert np.allclose(fr.profile_height, b.height_at(fr.profile_x), rtol=0, atol=LENGTH)
+    ax = drawn["feedrate_velocity_profile.png"].axes[0]
+    (top,) = ax.child_axes
+    assert top.get_xlabel() == "height of the track's centre line [mm]"
+    assert ax.get_xlabel().startswith("position along the helix and the chute s [mm]")
+    to_height = top._functions[0]  # (matplotlib keeps the forward map there)
+    assert to_height(fr.profile_x[3] * 1e3) == pytest.approx(fr.profile_height[3] * 1e3, rel=1e-12, abs=0)
+    for fig in drawn.values():
+        plots.pyplot().close(fig)
     # (clusters per sampled frame: counts, exact)
     assert s.cluster_sizes == {1: 2.0, 2: 1.0}
     assert s.track_singulated_fraction == pytest.approx(0.5, rel=0, abs=1e-12)
     # (the chute rises at the helix angle: along it, the pair moves 1/cos(3 deg) faster than in x)
     assert s.edge_velocity == pytest.approx(speed / math.cos(math.radians(3)), rel=1e-9, abs=0)
+
+
+def test_the_profile_in_height_is_the_centre_lines_floor_up_the_helix_and_the_chute():
+    """Bowl.height_at(s): the helix's centre-line floor where its arc length is s, and past
+    its end the chute's floor, rising at the helix angle from the end's height."""
+    b = bowl_from(BOWL)
+    thetas = np.linspace(b.theta_start, THETA_END, 7)
+    assert np.allclose(b.height_at(b.arc_length(thetas)), b.helix_point(thetas)[:, 2], rtol=0, atol=LENGTH)
+    along = np.array([0.0, 2e-3, b.chute_length])  # [m] along the chute
+    want = b.end_z + along * math.sin(math.radians(b.helix_angle))
+    assert np.allclose(b.height_at(b.length + along), want, rtol=0, atol=LENGTH)
