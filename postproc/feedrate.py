@@ -107,7 +107,7 @@ from .line import (
     trend,
     unsteady,
 )
-from .path import along, bowl_of, is_bowl, outlet_x, path_end  # noqa: F401  (outlet_x: imported from here)
+from .path import along, bowl_of, falls, is_bowl, outlet_x, path_end  # noqa: F401  (outlet_x: imported from here)
 
 # Frames read at once: blocks of at most this many slot values.
 _BLOCK_VALUES = 1 << 22
@@ -124,7 +124,8 @@ SUMMARY_KEYS = ("parts_per_s", "parts_per_s_err", "mass_per_s", "mass_per_s_err"
                 "mean_velocity_err", "steady_from", "steady_to", "unsteady", "bed_trends", "n_events",
                 "inserted", "exited", "rejected", "returned", "on_track", "lost", "sections",
                 "rejects_by_tooling", "bin_width", "velocity_lag", "profile_x", "profile_velocity",
-                "profile_count", "model_velocity", "model_note", "velocity_ratio", "shape", "reason")
+                "profile_count", "fell", "fell_per_s", "fell_per_s_err", "model_velocity", "model_note",
+                "velocity_ratio", "shape", "reason")
 # Summary keys of feeder lines only (returned: of one that recirculates its rejects).
 LINE_KEYS = ("rejected", "returned", "sections", "rejects_by_tooling")
 # Parameters the single-part model needs from the deck (the rest have defaults).
@@ -476,8 +477,10 @@ class FeedRate(AnalysisBase):
     from whole periods, in periods); ``profile_edges``, ``profile_x``,
     ``profile_velocity``, ``profile_velocity_err`` (batch means per bin, NaN in a bin
     seen by fewer than two batches), ``profile_count``, ``profile_height`` (a bowl: the track
-    centre line's floor height at each bin [m], the profile in height; else None); the mass
-    balance at the last frame
+    centre line's floor height at each bin [m], the profile in height; else None); a bowl's
+    ``fell_times`` (every fall off its track back into the bowl, :func:`.path.falls`), ``fell``
+    (those in the steady window), ``fell_per_s`` and ``fell_per_s_err`` (their rate and its
+    counting error sqrt(n) / window); the mass balance at the last frame
     analysed: ``inserted``, ``on_track``, ``exited``, ``lost`` (None without one),
     ``rejected`` for a feeder line and ``returned`` (rejects put back at the inlet, part of
     ``inserted``) for one that recirculates;
@@ -552,6 +555,13 @@ class FeedRate(AnalysisBase):
             r.mass_per_s, r.mass_per_s_err = batch_rate(times, r.event_mass, t_a, t_b, freq,
                                                         self.batches)
         self._velocities(frames, t_a, t_b)
+        if is_bowl(result.parameters):  # parts the track lost back into the bowl, in the window
+            fell_times, _ = falls(result, frames)
+            r.fell_times = fell_times
+            n, span = int(((fell_times >= t_a) & (fell_times < t_b)).sum()), t_b - t_a
+            r.fell = n
+            r.fell_per_s = n / span if span > 0 else math.nan
+            r.fell_per_s_err = math.sqrt(n) / span if span > 0 else math.nan  # counts: Poisson
         self._mass_balance(frames)
         self._bed(frames, t_a, t_b, freq)
         r.reason = r.reason or r.unsteady  # a drifting bed measures no steady rate either

@@ -65,3 +65,32 @@ def along(result, frames, axis: int = 0) -> tuple[np.ndarray, np.ndarray]:
                      position[..., 2] - lift[:, 2][:, None]], axis=-1)
     coordinate = path_coordinate(bowl_of(result.parameters), rest)
     return coordinate, coordinate
+
+
+def falls(result, frames) -> tuple[np.ndarray, np.ndarray]:
+    """A bowl's parts that fell off its track back into the bowl: (times, ids), one row per
+    fall, in frame order. A fall: a part on the track at one frame (a finite path coordinate)
+    and off it at the next (NaN: below the floor, or inside the track's inner edge) while still
+    inside the bowl's wall (not leaving over the chute's end); its time is the later frame's.
+    A part picked up again and falling again counts again. Empty for a linear track."""
+    frames = np.asarray(frames, dtype=np.int64)
+    if not is_bowl(result.parameters) or len(frames) < 2:
+        return np.empty(0), np.empty(0, dtype=np.int64)
+    from ..results import layout as L
+
+    radius = bowl_of(result.parameters).radius
+    times, ids_out = [], []
+    per_block = 64  # frames read at once; blocks overlap by one so each pair is seen once
+    for a in range(0, len(frames) - 1, per_block - 1):
+        block = frames[a:a + per_block]
+        ids = result.read("id", frames=block)
+        s = along(result, block)[0]
+        position = result.read("position", frames=block)
+        inside = np.hypot(position[..., 0], position[..., 1]) <= radius
+        same = (ids[:-1] == ids[1:]) & (ids[:-1] != L.ID_FILL)
+        fell = same & np.isfinite(s[:-1]) & np.isnan(s[1:]) & inside[1:]
+        k, slot = np.nonzero(fell)
+        times.append(result.time[block][k + 1])
+        ids_out.append(ids[k + 1, slot])
+    order = np.argsort(np.concatenate(times), kind="stable")
+    return np.concatenate(times)[order], np.concatenate(ids_out)[order].astype(np.int64)

@@ -132,6 +132,9 @@ def table(s: dict) -> str:
         f"mm/s (whole-period displacement, {s['velocity_lag']} frames per interval)",
         *section_table(s),
     ]
+    if s.get("fell") is not None:  # a bowl
+        lines.append(f"fell back      {s['fell']} in the window, {fmt(s['fell_per_s'])} ± "
+                     f"{fmt(s['fell_per_s_err'], spec='.2g')} /s (off the track back into the bowl)")
     if "model_velocity" in s:
         lines.append(single_part(s))
     if s.get("inserted") is not None:

@@ -218,3 +218,40 @@ def test_the_profile_in_height_is_the_centre_lines_floor_up_the_helix_and_the_ch
     along = np.array([0.0, 2e-3, b.chute_length])  # [m] along the chute
     want = b.end_z + along * math.sin(math.radians(b.helix_angle))
     assert np.allclose(b.height_at(b.length + along), want, rtol=0, atol=LENGTH)
+
+
+def test_falls_are_parts_that_leave_the_track_for_the_bowl_counted_once_each_time(tmp_path):
+    """By hand, five frames 5 ms apart: part 1 rides the helix, then lies inside its inner edge
+    at frame 3 (a fall at 15 ms) and back on the helix at frame 4 (picked up: no fall); part 2
+    lies in the pile, then on the helix (no fall); part 3 goes off the chute's end and beyond
+    the wall (leaving, not falling); slot 4 holds part 4 on the helix, then part 5 in the pile
+    (another part in the slot: no fall). FeedRate counts the fall in its window: 1 in 20 ms."""
+    from vibrofeed.postproc.feedrate import FeedRate
+    from vibrofeed.postproc.path import falls
+
+    b = bowl_from(BOWL)
+    on = b.helix_point(np.array([b.theta_start + 2.0]))[0] + [0, 0, 1.5e-4]
+    pile = np.array([2e-3, 1e-3, 8e-4])
+    chute = np.array([7e-3, -b.r_mid, b.end_z + 7e-3 * math.tan(math.radians(3)) + 1.5e-4])
+    beyond = np.array([b.outlet_x + 1e-3, -b.r_mid, -3e-4])
+    rows = {  # frame -> positions of ids 1, 2, 3 and the fourth slot's part
+        0: [on, pile, chute, on + [0, 0, 1e-4]],
+        1: [on, pile, chute, on + [0, 0, 1e-4]],
+        2: [on, on + [0, 0, 2e-4], chute, pile],
+        3: [pile, on + [0, 0, 2e-4], beyond, pile],
+        4: [on, on + [0, 0, 2e-4], beyond, pile],
+    }
+    frames = [(k, 5e-3 * k, parts(np.array([1, 2, 3, 4 if k < 2 else 5]), np.array(rows[k]),
+                                  radius=1.5e-4)) for k in range(5)]
+    events = {"time": np.array([0.012]), "id": np.array([3]), "position": beyond[None, :],
+              "velocity": np.zeros((1, 3)), "orientation": np.array([[1.0, 0, 0, 0]])}
+    variables = {k: (repr(v), "", k, repr(v)) for k, v in BOWL.items()}
+    path = write_bulk_result(tmp_path / "f.h5", frames, events=events, variables=variables,
+                             outlet={"outlet_x": b.outlet_x, "catch_z": -5e-4, "method": "synthetic"})
+    with Result(path) as r:
+        times, ids = falls(r, np.arange(5))
+        fr = FeedRate(r, start=0.0, end=0.02, model=False).run().results
+    assert ids.tolist() == [1] and times == pytest.approx([0.015], rel=0, abs=1e-12)
+    assert fr.fell == 1
+    assert fr.fell_per_s == pytest.approx(1 / 0.02, rel=1e-12, abs=0)  # [1/s]
+    assert fr.fell_per_s_err == pytest.approx(1 / 0.02, rel=1e-12, abs=0)  # sqrt(1) / 0.02 s
