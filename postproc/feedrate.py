@@ -128,6 +128,8 @@ SUMMARY_KEYS = ("parts_per_s", "parts_per_s_err", "mass_per_s", "mass_per_s_err"
                 "velocity_ratio", "shape", "reason")
 # Summary keys of feeder lines only (returned: of one that recirculates its rejects).
 LINE_KEYS = ("rejected", "returned", "sections", "rejects_by_tooling")
+# Summary keys of bowls only.
+BOWL_KEYS = ("fell", "fell_per_s", "fell_per_s_err")
 # Parameters the single-part model needs from the deck (the rest have defaults).
 MODEL_NEEDS = ("freq", "mu", "restitution")
 

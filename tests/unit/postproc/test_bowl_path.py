@@ -250,7 +250,9 @@ def test_falls_are_parts_that_leave_the_track_for_the_bowl_counted_once_each_tim
                              outlet={"outlet_x": b.outlet_x, "catch_z": -5e-4, "method": "synthetic"})
     with Result(path) as r:
         times, ids = falls(r, np.arange(5))
-        fr = FeedRate(r, start=0.0, end=0.02, model=False).run().results
+        analysis = FeedRate(r, start=0.0, end=0.02, model=False).run()
+    fr, summary = analysis.results, analysis.summary()
+    assert {k: summary[k] for k in ("fell", "fell_per_s")} == {"fell": 1, "fell_per_s": fr.fell_per_s}
     assert ids.tolist() == [1] and times == pytest.approx([0.015], rel=0, abs=1e-12)
     assert fr.fell == 1
     assert fr.fell_per_s == pytest.approx(1 / 0.02, rel=1e-12, abs=0)  # [1/s]
