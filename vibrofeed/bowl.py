@@ -6,7 +6,10 @@ helical track on its inner wall: a shelf ``track_width`` wide rising at ``helix_
 (at its centre line) for ``turns`` turns, its floor tilted down towards the wall by
 ``cross_tilt``, with an optional lip ``lip_height`` along its open (inner) edge. Below the
 first turn a riser closes the shelf down to the bottom (a real bowl's first turn is cut
-into its wall), so no part wedges under the ramp. At its top the track goes on as a
+into its wall), so no part wedges under the ramp. A side drop (the feeder lines' tooling,
+on the helix) narrows the floor to ``drop_width`` from the wall between ``drop_from`` and
+``drop_to`` (fractions of the helix's length): a part not against the wall falls back into
+the bowl, as a real bowl returns its rejects to the bottom. At its top the track goes on as a
 straight chute, the helix's tangent, ``chute_length`` long, with a wall on both sides,
 through a slot in the bowl's wall; parts leave over the chute's end.
 
@@ -63,6 +66,9 @@ class Bowl:
     cross_tilt: float = 0.0
     lip_height: float = 0.0
     chute_length: float = 0.0
+    drop_from: float = 0.0  # the side drop: fractions of the helix's length, ...
+    drop_to: float = 0.0  # ... none when drop_to <= drop_from
+    drop_width: float = 0.0  # the floor left over the drop, from the wall
 
     @property
     def r_mid(self) -> float:
@@ -143,6 +149,34 @@ class Bowl:
         """The helix's centre line length (start to the chute)."""
         return float(self.arc_length(THETA_END))
 
+    @property
+    def stations(self) -> np.ndarray:
+        """The track's stations: the mesh's floor edges, every STATION at most, from its
+        start to its end."""
+        return _stations(self.theta_start, THETA_END)
+
+    @property
+    def drop(self) -> tuple[float, float] | None:
+        """The side drop's polar angles (start, end) [rad], each at the track's station nearest
+        to its fraction of the helix (the mesh's floor changes width at a station); None
+        without a drop."""
+        if not self.drop_to > self.drop_from:
+            return None
+        t = self.stations
+        n = len(t) - 1
+        a, b = (int(round(f * n)) for f in (self.drop_from, self.drop_to))
+        return (float(t[a]), float(t[b])) if b > a else None
+
+    def width_at(self, theta) -> np.ndarray:
+        """The floor's width from the wall at polar angle ``theta`` (on the helix): drop_width
+        over the side drop (its start included, its end not), track_width elsewhere."""
+        theta = np.asarray(theta, dtype=float)
+        drop = self.drop
+        if drop is None:
+            return np.full(theta.shape, self.track_width)
+        inside = (theta >= drop[0] - 1e-12) & (theta < drop[1] - 1e-12)
+        return np.where(inside, self.drop_width, self.track_width)
+
     def height_at(self, s) -> np.ndarray:
         """The centre line's floor height at path coordinate ``s`` (:func:`path_coordinate`):
         z_start + s sin(helix_angle), up the helix and along the chute alike (the chute rises
@@ -178,15 +212,26 @@ def bowl_mesh(b: Bowl) -> tuple[np.ndarray, np.ndarray]:
     apex = (0.0, 0.0, float(b.bottom_z(0.0)))
     for t0, t1 in zip(around[:-1], around[1:]):
         m.triangle(apex, (R * math.cos(t0), R * math.sin(t0), 0.0), (R * math.cos(t1), R * math.sin(t1), 0.0))
-    # the track: floor (and lip) from its start to its end
-    track = _stations(b.theta_start, THETA_END)
-    for t0, t1 in zip(track[:-1], track[1:]):
-        a0, a1 = b.helix_point(t0, r_in), b.helix_point(t1, r_in)
+    # the track: floor (and lip) from its start to its end, its inner edge R - width (the
+    # side drop's narrower floor between two stations)
+    track = b.stations
+    inner = R - b.width_at(0.5 * (track[:-1] + track[1:]))  # each segment's inner edge radius
+    drop = b.drop or (None, None)
+    for (t0, t1), ri in zip(zip(track[:-1], track[1:]), inner):
+        a0, a1 = b.helix_point(t0, ri), b.helix_point(t1, ri)
         c0, c1 = b.helix_point(t0, R), b.helix_point(t1, R)
-        m.quad(a0, c0, c1, a1)  # normal up
-        if b.lip_height > 0:
+        # (normal up; a wide segment beside the drop has a corner where the narrow floor's edge
+        # meets its end, so that the two share whole edges: no T-junction)
+        if ri == r_in and t1 == drop[0]:
+            m.polygon([a0, c0, c1, b.helix_point(t1, R - b.drop_width), a1])
+        elif ri == r_in and t0 == drop[1]:
+            m.polygon([c1, a1, a0, b.helix_point(t0, R - b.drop_width), c0])
+        else:
+            m.quad(a0, c0, c1, a1)
+        if b.lip_height > 0 and ri == r_in:  # (no lip over the drop: it would hold the rejects)
             up = np.array([0.0, 0.0, b.lip_height])
             m.quad(a1, a0, a0 + up, a1 + up)
+
     # the riser under the first turn: from the bottom up to the floor's inner edge (an edge
     # less than LOW_STEP of the track's width above the bottom is its own foot: a face that
     # low would be a sliver LIGGGHTS refuses, and no part fits under it)
@@ -196,9 +241,17 @@ def bowl_mesh(b: Bowl) -> tuple[np.ndarray, np.ndarray]:
         return top if top[2] - bottom <= low else np.array([top[0], top[1], bottom])
 
     first = track[track <= b.theta_start + 2 * math.pi + 1e-12]
-    for t0, t1 in zip(first[:-1], first[1:]):
-        top0, top1 = b.helix_point(t0, r_in), b.helix_point(t1, r_in)
-        m.quad(foot(top0, float(b.bottom_z(r_in))), foot(top1, float(b.bottom_z(r_in))), top1, top0)
+    for (t0, t1), ri in zip(zip(first[:-1], first[1:]), inner):
+        top0, top1 = b.helix_point(t0, ri), b.helix_point(t1, ri)
+        m.quad(foot(top0, float(b.bottom_z(ri))), foot(top1, float(b.bottom_z(ri))), top1, top0)
+    # where the side drop narrows the first turn's shelf, a radial face closes it down to the
+    # bottom at each end (check_bowl keeps the shelf there at least a part high)
+    for t in (b.drop or ()):
+        if t <= b.theta_start + 2 * math.pi + 1e-12:
+            r_narrow = R - b.drop_width
+            top_w, top_n = b.helix_point(t, r_in), b.helix_point(t, r_narrow)
+            m.quad(np.array([top_w[0], top_w[1], float(b.bottom_z(r_in))]),
+                   np.array([top_n[0], top_n[1], float(b.bottom_z(r_narrow))]), top_n, top_w)
     # the start's face: the first turn's shelf is solid, closed by a radial face at its start
     s_in, s_out = b.helix_point(b.theta_start, r_in), b.helix_point(b.theta_start, R)
     m.quad(foot(s_in, float(b.bottom_z(r_in))), foot(s_out, 0.0), s_out, s_in)
@@ -281,7 +334,8 @@ def bowl_from(p: Mapping) -> Bowl:
                 helix_angle=float(p["helix_angle"]), turns=float(p["turns"]),
                 wall_height=float(p["wall_height"]), cone_angle=float(p.get("cone_angle", 0.0)),
                 cross_tilt=float(p.get("cross_tilt", 0.0)), lip_height=float(p.get("lip_height", 0.0)),
-                chute_length=float(p.get("chute_length", 0.0)))
+                chute_length=float(p.get("chute_length", 0.0)), drop_from=float(p.get("drop_from", 0.0)),
+                drop_to=float(p.get("drop_to", 0.0)), drop_width=float(p.get("drop_width", 0.0)))
 
 
 def widest_part(p: Mapping) -> float:
@@ -334,10 +388,36 @@ def check_bowl(p: Mapping[str, float]) -> None:
         raise ParameterError(f"wall_height={b.wall_height:g} m is no higher than a part ({tall:g} m)")
     if b.lip_height and b.lip_height >= b.pitch / 2:
         raise ParameterError(f"lip_height={b.lip_height:g} m reaches half way to the next turn")
+    if b.drop_from != 0 or b.drop_to != 0:  # a side drop asked for
+        _check_drop(b, wide, tall)
     if b.chute_length <= b.chute_exit_length + wide:
         raise ParameterError(f"chute_length={b.chute_length:g} m ends inside the bowl: its inner edge "
                              f"leaves the wall after {b.chute_exit_length:.3g} m; make it longer than "
                              f"{b.chute_exit_length + wide:.3g} m")
+
+
+def _check_drop(b: Bowl, wide: float, tall: float) -> None:
+    """The side drop's refusals: a stretch of the helix, a floor that keeps one part and
+    drops a second, and (in the first turn, over its riser) a shelf a part high."""
+    if not 0 <= b.drop_from < b.drop_to <= 1:
+        raise ParameterError(f"drop_from={b.drop_from:g}, drop_to={b.drop_to:g}: the side drop needs "
+                             "0 <= drop_from < drop_to <= 1 (fractions of the helix's length)")
+    if b.drop is None:
+        raise ParameterError(f"drop_from={b.drop_from:g} and drop_to={b.drop_to:g} fall on one station "
+                             f"of the helix's mesh ({math.degrees(b.stations[1] - b.stations[0]):.3g} deg "
+                             "apart): a longer side drop")
+    if not wide <= b.drop_width <= b.track_width - wide / 4:
+        raise ParameterError(f"drop_width={b.drop_width:g} m must hold a part ({wide:g} m) and be a "
+                             f"quarter part narrower than track_width={b.track_width:g} m (at most "
+                             f"{b.track_width - wide / 4:.3g} m)")
+    r_narrow = b.radius - b.drop_width
+    for t in b.drop:
+        if t <= b.theta_start + 2 * math.pi + 1e-12:
+            shelf = float(b.floor_z(t, r_narrow) - b.bottom_z(r_narrow))
+            if shelf < tall:
+                raise ParameterError(f"drop_from={b.drop_from:g}: the side drop starts where the first "
+                                     f"turn's shelf is {shelf:.3g} m above the bottom, less than a part "
+                                     f"({tall:g} m); start it further up the helix")
 
 
 def climb_advice(p: Mapping[str, float]) -> list[str]:
@@ -369,7 +449,8 @@ def climb_advice(p: Mapping[str, float]) -> list[str]:
 def fill_boxes(b: Bowl, size: float, height: float, start: float = 0.25) -> list[tuple]:
     """Cubes above the track's floor, one every cube side along its centre line, from
     ``start`` of a turn after the track's start, up the helix and along the chute to its
-    end (a part's ``size`` short of it): where parts are pre-placed along the track. Each
+    end (a part's ``size`` short of it), none over the side drop and a cube's side either side
+    of it: where parts are pre-placed along the track. Each
     (x0, x1, y0, y1, z0, z1): side 0.6 track_width (a cube of that side fits in the track's
     width however it is turned), from the highest floor point under it plus a twentieth of a
     part to ``height`` above. The cubes are LIGGGHTS block regions, square to x and y: round
@@ -384,7 +465,10 @@ def fill_boxes(b: Bowl, size: float, height: float, start: float = 0.25) -> list
         z0 = floor + 0.05 * size
         return (x - half, x + half, y - half, y + half, z0, z0 + height)
 
+    drop = b.drop
     for t in np.arange(t0, THETA_END - dtheta / 2, dtheta):
+        if drop is not None and drop[0] - dtheta <= t <= drop[1] + dtheta:
+            continue  # none over the side drop: its floor may not reach the centre line
         c = b.helix_point(t)
         x, y = float(c[0]), float(c[1])
         boxes.append(box(x, y, _highest_floor(b, x - half, x + half, y - half, y + half, t)))
@@ -433,7 +517,7 @@ def write_bowl(values: Mapping[str, str], folder: Path) -> list[str]:
     p = {k: float(v) for k, v in values.items() if k in (
         "bowl_diameter", "track_width", "helix_angle", "turns", "wall_height", "cone_angle",
         "cross_tilt", "lip_height", "chute_length", "part_size", "part_thickness", "shape",
-        "size_spread")}
+        "size_spread", "drop_from", "drop_to", "drop_width")}
     b = bowl_from(p)
     write_stl(*bowl_mesh(b), folder / "bowl.stl", "bowl")
     # room for a part however it is turned (LIGGGHTS inserts its bounding sphere), under
@@ -459,7 +543,8 @@ def path_coordinate(b: Bowl, points) -> np.ndarray:
     """Where points (..., 3) of the bowl's frame (the bowl at rest) are along the track: the
     arc length along the helix's centre line from its start (``Bowl.arc_length``), then along
     the chute (the helix's length plus the distance along it); NaN for a point that is not
-    over the track: in the pile (inside the track's inner edge), outside the bowl, or more
+    over the track: in the pile (inside the track's inner edge, the side drop's over it),
+    outside the bowl, or more
     than a turn above the floor under it (on no turn). On the helix, a point over the track
     (its radius within the track's width) belongs to the turn whose floor lies below it,
     less than a pitch down."""
@@ -474,7 +559,7 @@ def path_coordinate(b: Bowl, points) -> np.ndarray:
     best = np.full(r.shape, np.nan)
     for extra in range(int(math.ceil(b.turns)) + 1):
         t = b.theta_start + np.mod(theta - b.theta_start, 2 * math.pi) + 2 * math.pi * extra
-        ok = ring & (t <= THETA_END + 1e-12)
+        ok = ring & (t <= THETA_END + 1e-12) & (r >= b.radius - b.width_at(t))  # over its floor
         height = z - b.floor_z(t, r)
         hit = ok & (height >= -b.track_width) & (height < b.pitch) & np.isnan(best)
         best = np.where(hit, t, best)

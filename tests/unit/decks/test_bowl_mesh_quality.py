@@ -36,3 +36,34 @@ def test_the_sliver_beside_the_slot_is_gone():
     b = Bowl(radius=0.01, track_width=1.2e-3, helix_angle=6.0, turns=1.5, wall_height=1e-3,
              cone_angle=3.0, chute_length=8e-3)
     assert smallest_angles(*bowl_mesh(b)).min() >= 1.0  # [deg]
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.floats(1.0, 20.0), st.floats(0.25, 3.0), st.floats(0.0, 10.0), st.floats(0.0, 10.0),
+       st.floats(0.0, 0.9), st.floats(0.05, 1.0), st.floats(3e-4, 1.125e-3))
+def test_with_a_side_drop_every_face_is_wider_than_liggghts_curvature_and_no_edge_is_open_twice(
+        helix, turns, cone, tilt, start, length, width):
+    """Any side drop check_bowl accepts (300 um parts): the faces' smallest angles, and every
+    edge shared by at most two faces (the narrow floor meets the wide one edge to edge)."""
+    from hypothesis import assume
+
+    from vibrofeed.bowl import check_bowl
+    from vibrofeed.errors import ParameterError
+
+    end = min(start + length, 1.0)
+    p = {"bowl_diameter": 0.02, "track_width": 1.2e-3, "helix_angle": helix, "turns": turns,
+         "wall_height": 1e-3, "cone_angle": cone, "cross_tilt": tilt, "chute_length": 0.02,
+         "part_size": 3e-4, "drop_from": start, "drop_to": end, "drop_width": width}
+    try:
+        check_bowl(p)
+    except ParameterError:
+        assume(False)
+    b = Bowl(radius=0.01, track_width=1.2e-3, helix_angle=helix, turns=turns, wall_height=1e-3,
+             cone_angle=cone, cross_tilt=tilt, chute_length=0.02, drop_from=start, drop_to=end,
+             drop_width=width)
+    vertices, triangles = bowl_mesh(b)
+    assert smallest_angles(vertices, triangles).min() > 2 * LIGGGHTS_CURVATURE
+    pairs = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [0, 2]]])
+    edges = np.sort(pairs, axis=1)
+    _, counts = np.unique(edges, axis=0, return_counts=True)
+    assert counts.max() <= 2

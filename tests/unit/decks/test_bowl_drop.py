@@ -1,0 +1,140 @@
+"""The side drop on a bowl's helix (the feeder lines' tooling): between drop_from and drop_to
+of the helix's length, at the track's stations, the floor is drop_width wide from the wall;
+a part beyond it has no floor under it and falls back into the bowl. Over the first turn the
+riser that closes the shelf follows the narrower floor, closed at both ends. No fill cube
+over the drop; no path coordinate beyond its floor; the refusals at their boundaries."""
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from vibrofeed.bowl import Bowl, bowl_mesh, check_bowl, fill_boxes, path_coordinate
+from vibrofeed.errors import ParameterError
+
+W, DW, PART = 1.2e-3, 4e-4, 3e-4  # [m] track, the floor over the drop, a part
+BOWL = Bowl(radius=0.01, track_width=W, helix_angle=3.0, turns=1.5, wall_height=1e-3, cone_angle=3.0,
+            cross_tilt=3.0, chute_length=8e-3, drop_from=0.7, drop_to=0.9, drop_width=DW)
+PARAMS = {"bowl_diameter": 0.02, "track_width": W, "helix_angle": 3.0, "turns": 1.5, "wall_height": 1e-3,
+          "cone_angle": 3.0, "cross_tilt": 3.0, "chute_length": 8e-3, "part_size": PART,
+          "drop_from": 0.7, "drop_to": 0.9, "drop_width": DW}
+LENGTH = 1e-9  # [m]
+# [m] the floor's faces are flat between stations 6 deg apart: at a station's middle they lie
+# within a micrometre of the helicoid (tan(cross_tilt) times the chord's sagitta, 0.7 um)
+FACET = 1e-5
+
+
+def crossings(vertices, triangles, x, y):
+    """Heights at which the vertical line through (x, y) passes through the mesh's faces."""
+    p = vertices[triangles]
+    a, b, c = p[:, 0], p[:, 1], p[:, 2]
+    det = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (c[:, 0] - a[:, 0]) * (b[:, 1] - a[:, 1])
+    ok = np.abs(det) > 1e-18  # (vertical faces: the line does not cross them)
+    u = ((x - a[:, 0]) * (c[:, 1] - a[:, 1]) - (c[:, 0] - a[:, 0]) * (y - a[:, 1])) / np.where(ok, det, 1)
+    v = ((b[:, 0] - a[:, 0]) * (y - a[:, 1]) - (x - a[:, 0]) * (b[:, 1] - a[:, 1])) / np.where(ok, det, 1)
+    hit = ok & (u >= 0) & (v >= 0) & (u + v <= 1)
+    z = a[:, 2] + u * (b[:, 2] - a[:, 2]) + v * (c[:, 2] - a[:, 2])
+    return np.sort(z[hit])
+
+
+def test_the_drop_lies_on_the_stations_nearest_its_fractions():
+    t = BOWL.stations
+    n = len(t) - 1
+    assert BOWL.drop == (t[round(0.7 * n)], t[round(0.9 * n)])
+    assert np.diff(t).max() <= math.radians(6.0) + 1e-12
+    a, b = BOWL.drop
+    w = BOWL.width_at(np.array([a - 1e-6, a, (a + b) / 2, b - 1e-6, b]))
+    assert w.tolist() == [W, DW, DW, DW, W]  # its start included, its end not
+    assert replace(BOWL, drop_to=0.0).drop is None and (replace(BOWL, drop_to=0.0).width_at([a]) == W).all()
+
+
+@pytest.mark.parametrize("b", [BOWL, replace(BOWL, turns=0.5, drop_from=0.5, drop_to=0.8)])
+def test_over_the_drop_only_the_narrow_floor_is_under_a_part(b):
+    """Up the helix, a vertical line between the narrow floor's edge and the track's inner edge
+    passes through the floor of its turn outside the drop, not over it (there only the bottom,
+    or the turns below); a line over the narrow floor passes through it everywhere."""
+    vertices, triangles = bowl_mesh(b)
+    a, e = b.drop
+    t = b.stations
+    for t0, t1 in zip(t[:-1], t[1:]):
+        mid = (t0 + t1) / 2
+        floor_beyond = float(b.floor_z(mid, b.radius - (W + DW) / 2))
+        floor_narrow = float(b.floor_z(mid, b.radius - DW / 2))
+        for r, floor, always in ((b.radius - (W + DW) / 2, floor_beyond, False),
+                                 (b.radius - DW / 2, floor_narrow, True)):
+            z = crossings(vertices, triangles, r * math.cos(mid), r * math.sin(mid))
+            here = np.abs(z - floor) < FACET
+            assert here.any() == (always or not a <= mid < e), (mid, r)
+    # over the first turn the shelf is closed down to the bottom, with the narrow floor too:
+    # between the two edges there is no face under the floor but the bottom
+    first = [m for m in (t[:-1] + t[1:]) / 2 if a <= m < e and m <= b.theta_start + 2 * math.pi]
+    for mid in first:
+        r = b.radius - (W + DW) / 2
+        z = crossings(vertices, triangles, r * math.cos(mid), r * math.sin(mid))
+        assert z[0] == pytest.approx(float(b.bottom_z(r)), rel=0, abs=FACET)
+
+
+def test_the_first_turns_narrow_shelf_is_closed_at_both_ends_and_the_mesh_has_no_t_junction():
+    b = replace(BOWL, turns=0.5, drop_from=0.5, drop_to=0.8)
+    vertices, triangles = bowl_mesh(b)
+    count = {}
+    for tri in triangles:
+        for e in ((tri[0], tri[1]), (tri[1], tri[2]), (tri[0], tri[2])):
+            count[tuple(sorted(e))] = count.get(tuple(sorted(e)), 0) + 1
+    assert max(count.values()) == 2
+    # each end: a radial face from the track's inner edge to the narrow floor's, bottom to floor
+    for t in b.drop:
+        corners = [(b.radius - W, True), (b.radius - DW, True), (b.radius - W, False), (b.radius - DW, False)]
+        for r, top in corners:
+            z = float(b.floor_z(t, r)) if top else float(b.bottom_z(r))
+            point = np.array([r * math.cos(t), r * math.sin(t), z])
+            assert np.min(np.linalg.norm(vertices - point, axis=1)) < LENGTH, (t, r, top)
+        # the edge between the wide floor's end and the narrow floor's: shared by two faces
+        i = np.argmin(np.linalg.norm(vertices - b.helix_point(t, b.radius - DW), axis=1))
+        j = np.argmin(np.linalg.norm(vertices - b.helix_point(t, b.radius), axis=1))
+        assert count[tuple(sorted((int(i), int(j))))] == 2
+
+
+def test_no_fill_cube_over_the_drop_nor_a_side_either_side_and_no_coordinate_beyond_its_floor():
+    side = 0.6 * W
+    dtheta = side / BOWL.r_mid
+    a, e = BOWL.drop
+    boxes = np.array(fill_boxes(BOWL, PART, 2.5 * PART))
+    centres = np.column_stack([(boxes[:, 0] + boxes[:, 1]) / 2, (boxes[:, 2] + boxes[:, 3]) / 2, boxes[:, 4]])
+    s = path_coordinate(BOWL, centres)
+    on_helix = s <= BOWL.length
+    # the track's angle of each cube on the helix (its turn's): none within a side of the drop
+    t = BOWL.theta_start + s[on_helix] * math.cos(math.radians(3.0)) / BOWL.r_mid
+    assert on_helix.sum() > 20 and not ((t >= a - dtheta) & (t <= e + dtheta)).any()
+    assert len(boxes) < len(fill_boxes(replace(BOWL, drop_to=0.0), PART, 2.5 * PART))
+    mid = (a + e) / 2
+    beyond = BOWL.helix_point(mid, BOWL.radius - (W + DW) / 2) + [0, 0, 1e-4]
+    narrow = BOWL.helix_point(mid, BOWL.radius - DW / 2) + [0, 0, 1e-4]
+    s = path_coordinate(BOWL, np.array([beyond, narrow]))
+    assert np.isnan(s[0]) and s[1] == pytest.approx(float(BOWL.arc_length(mid)), rel=0, abs=1e-7)
+
+
+@pytest.mark.parametrize("change, words", [
+    ({"drop_from": 0.9, "drop_to": 0.7}, "0 <= drop_from < drop_to <= 1"),
+    ({"drop_from": 0.7, "drop_to": 0.7}, "0 <= drop_from < drop_to <= 1"),
+    ({"drop_to": 1.01}, "0 <= drop_from < drop_to <= 1"),
+    ({"drop_from": -0.01}, "0 <= drop_from < drop_to <= 1"),
+    ({"drop_from": 0.0, "drop_to": 0.0, "drop_width": DW}, None),      # no drop asked: accepted
+    ({"drop_from": 0.70, "drop_to": 0.705}, "fall on one station"),
+    ({"drop_width": math.nextafter(PART, 0.0)}, "must hold a part"),
+    ({"drop_width": math.nextafter(W - PART / 4, 1.0)}, "a quarter part narrower"),
+    ({"drop_from": 0.05, "drop_to": 0.2}, "less than a part"),          # the first turn's low shelf
+])
+def test_the_drops_refusals_at_their_boundaries(change, words):
+    if words is None:
+        check_bowl({**PARAMS, **change})
+        return
+    with pytest.raises(ParameterError, match=words):
+        check_bowl({**PARAMS, **change})
+
+
+@pytest.mark.parametrize("change", [{"drop_width": PART}, {"drop_width": W - PART / 4},
+                                    {"drop_from": 0.5, "drop_to": 1.0, "turns": 2.0}])  # up to the chute
+def test_just_inside_the_drops_boundaries_is_accepted(change):
+    check_bowl({**PARAMS, **change})
