@@ -328,6 +328,13 @@ def track_drive(amp_t: float, amp_n: float, phase: float, freq: float, helix_ang
 
 
 # ------------------------------------------------------------------ checks
+# The deck's parameters a bowl is built from (bowl_from), and those of its parts: what the
+# prepare hook reads and write_bowl needs.
+GEOMETRY = ("bowl_diameter", "track_width", "helix_angle", "turns", "wall_height", "cone_angle",
+            "cross_tilt", "lip_height", "chute_length", "drop_from", "drop_to", "drop_width")
+PART = ("part_size", "part_thickness", "shape", "size_spread")
+
+
 def bowl_from(p: Mapping) -> Bowl:
     """The bowl of a deck's parameters (numbers)."""
     return Bowl(radius=float(p["bowl_diameter"]) / 2, track_width=float(p["track_width"]),
@@ -514,10 +521,7 @@ def _highest_floor(b: Bowl, x0: float, x1: float, y0: float, y1: float, theta: f
 def write_bowl(values: Mapping[str, str], folder: Path) -> list[str]:
     """Write the bowl's mesh (``bowl.stl``) and return ``prepared.in`` lines: the derived
     geometry the deck reads and the regions along the track for its pre-fill."""
-    p = {k: float(v) for k, v in values.items() if k in (
-        "bowl_diameter", "track_width", "helix_angle", "turns", "wall_height", "cone_angle",
-        "cross_tilt", "lip_height", "chute_length", "part_size", "part_thickness", "shape",
-        "size_spread", "drop_from", "drop_to", "drop_width")}
+    p = {k: float(v) for k, v in values.items() if k in GEOMETRY + PART}
     b = bowl_from(p)
     write_stl(*bowl_mesh(b), folder / "bowl.stl", "bowl")
     # room for a part however it is turned (LIGGGHTS inserts its bounding sphere), under

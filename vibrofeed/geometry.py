@@ -266,13 +266,11 @@ def prepare_bowl_feeder(values: Mapping[str, str], folder: str | Path) -> Prepar
     derived geometry (``bowl_*``) and the region ``track_fill`` of the pre-fill along the
     track. The bowl's parameters are checked first (vibrofeed.bowl.check_bowl).
     """
-    from .bowl import bowl_from, bowl_mesh, check_bowl, write_bowl
+    from .bowl import GEOMETRY, PART, bowl_from, bowl_mesh, check_bowl, write_bowl
 
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    names = ("bowl_diameter", "track_width", "helix_angle", "turns", "wall_height", "cone_angle",
-             "cross_tilt", "lip_height", "chute_length", "part_size", "part_thickness", "size_spread")
-    numbers = {name: _number(values, name) for name in names}
+    numbers = {name: _number(values, name) for name in GEOMETRY + PART if name != "shape"}
     numbers["shape"] = shape_code(values.get("shape", "0"))
     check_bowl(numbers)
     lines, template = _part_files(values, folder, "prepare_bowl_feeder", numbers["shape"],

@@ -187,7 +187,8 @@ def test_the_prepare_hook_writes_numbers_liggghts_reads(tmp_path):
 
     from vibrofeed.geometry import prepare_bowl_feeder
 
-    values = {k: str(v) for k, v in PARAMS.items()} | {"seed": "5489"}
+    values = {k: str(v) for k, v in PARAMS.items()} | {"seed": "5489", "drop_from": "0", "drop_to": "0",
+                                                         "drop_width": "0"}
     prepared = prepare_bowl_feeder(values, tmp_path)
     number = r"-?\d+(\.\d+)?(e-?\d+)?"
     lines = (tmp_path / "prepared.in").read_text().splitlines()[1:]
@@ -900,3 +901,34 @@ def test_the_chutes_width_includes_its_walls():
         z = float(hand_floor(b, -math.pi / 2, -y)) + x * math.tan(a) + 1.5e-4
         s = path_coordinate(b, [[x, y, z]])[0]
         assert s == pytest.approx((3 * math.pi * r_mid + x) / math.cos(a), rel=0, abs=LENGTH), y
+
+
+def test_the_prepare_hook_builds_the_bowl_from_every_one_of_its_fields(tmp_path):
+    """Each field of Bowl is a deck parameter the prepare hook reads: a bowl with every field
+    away from its default (a side drop too) is the mesh the hook writes and hands on, and
+    its stored file has as many faces (a field the hook left out built another bowl: the
+    side drop once reached the refusals but not the mesh)."""
+    import dataclasses
+
+    from stl import mesh as stl_mesh
+
+    from vibrofeed.bowl import GEOMETRY, bowl_from
+    from vibrofeed.geometry import prepare_bowl_feeder
+
+    params = {**PARAMS, "bowl_diameter": 0.024, "track_width": 1.3e-3, "helix_angle": 4.0, "turns": 1.25,
+              "wall_height": 1.1e-3, "cone_angle": 4.0, "cross_tilt": 2.0, "lip_height": 2e-4,
+              "chute_length": 9e-3, "drop_from": 0.6, "drop_to": 0.85, "drop_width": 5e-4}
+    b = bowl_from(params)
+    defaults = {f.name: f.default for f in dataclasses.fields(Bowl)}
+    # every field differs from its default and from the module's BOWL
+    for f in dataclasses.fields(Bowl):
+        assert getattr(b, f.name) != getattr(BOWL, f.name), f.name
+        assert f.default is dataclasses.MISSING or getattr(b, f.name) != defaults[f.name], f.name
+    assert set(GEOMETRY) >= {"bowl_diameter", *[f.name for f in dataclasses.fields(Bowl)
+                                                if f.name not in ("radius",)]}
+    values = {k: str(v) for k, v in params.items()} | {"seed": "5489"}
+    prepared = prepare_bowl_feeder(values, tmp_path)
+    want_v, want_t = bowl_mesh(b)
+    np.testing.assert_array_equal(prepared.track[0], want_v)
+    np.testing.assert_array_equal(prepared.track[1], want_t)
+    assert len(stl_mesh.Mesh.from_file(str(tmp_path / "bowl.stl")).vectors) == len(want_t)
