@@ -246,12 +246,20 @@ def bowl_mesh(b: Bowl) -> tuple[np.ndarray, np.ndarray]:
         m.quad(foot(top0, float(b.bottom_z(ri))), foot(top1, float(b.bottom_z(ri))), top1, top0)
     # where the side drop narrows the first turn's shelf, a radial face closes it down to the
     # bottom at each end (check_bowl keeps the shelf there at least a part high)
+    # (in rows at most ten times as high as the face is wide: a narrow step under a tall
+    # shelf would otherwise be a sliver)
     for t in (b.drop or ()):
         if t <= b.theta_start + 2 * math.pi + 1e-12:
             r_narrow = R - b.drop_width
             top_w, top_n = b.helix_point(t, r_in), b.helix_point(t, r_narrow)
-            m.quad(np.array([top_w[0], top_w[1], float(b.bottom_z(r_in))]),
-                   np.array([top_n[0], top_n[1], float(b.bottom_z(r_narrow))]), top_n, top_w)
+            foot_w = np.array([top_w[0], top_w[1], float(b.bottom_z(r_in))])
+            foot_n = np.array([top_n[0], top_n[1], float(b.bottom_z(r_narrow))])
+            n = max(1, math.ceil(max(top_w[2] - foot_w[2], top_n[2] - foot_n[2])
+                                 / (10 * (b.track_width - b.drop_width)) - 1e-9))
+            k = np.linspace(0.0, 1.0, n + 1)[:, None]
+            edge_w, edge_n = foot_w + k * (top_w - foot_w), foot_n + k * (top_n - foot_n)
+            for j in range(n):
+                m.quad(edge_w[j], edge_n[j], edge_n[j + 1], edge_w[j + 1])
     # the start's face: the first turn's shelf is solid, closed by a radial face at its start
     s_in, s_out = b.helix_point(b.theta_start, r_in), b.helix_point(b.theta_start, R)
     m.quad(foot(s_in, float(b.bottom_z(r_in))), foot(s_out, 0.0), s_out, s_in)

@@ -138,3 +138,25 @@ def test_the_drops_refusals_at_their_boundaries(change, words):
                                     {"drop_from": 0.5, "drop_to": 1.0, "turns": 2.0}])  # up to the chute
 def test_just_inside_the_drops_boundaries_is_accepted(change):
     check_bowl({**PARAMS, **change})
+
+
+def test_a_narrow_step_under_a_tall_shelf_is_cut_into_rows_not_slivers():
+    """A 9 deg helix of one turn narrowed by a quarter part up to its end: the riser's end face
+    there is 75 um wide and 9.4 mm high (a single quad's triangles: 0.46 deg, which LIGGGHTS
+    refuses); in rows at most ten times as high as it is wide, its faces keep 5 deg."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from test_bowl_mesh_quality import smallest_angles
+
+    b = Bowl(radius=0.01, track_width=W, helix_angle=9.0, turns=1.0, wall_height=1e-3, chute_length=0.02,
+             drop_from=0.05, drop_to=1.0, drop_width=W - PART / 4)
+    check_bowl({**PARAMS, "helix_angle": 9.0, "turns": 1.0, "cone_angle": 0.0, "cross_tilt": 0.0,
+                "chute_length": 0.02, "drop_from": 0.05, "drop_to": 1.0, "drop_width": W - PART / 4})
+    vertices, triangles = bowl_mesh(b)
+    on_end = np.all(np.abs(vertices[triangles][..., 0]) < LENGTH, axis=1) & np.all(
+        np.hypot(vertices[triangles][..., 0], vertices[triangles][..., 1]) < b.radius - W + PART / 4 + LENGTH,
+        axis=1)  # the end face at theta = -90 deg (x = 0), between the two inner edges
+    assert on_end.sum() >= 2 * math.ceil(0.00935 / (10 * PART / 4))
+    assert smallest_angles(vertices, triangles[on_end]).min() > 5.0  # [deg]
