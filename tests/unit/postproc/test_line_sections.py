@@ -10,7 +10,7 @@ import pytest
 from bulk_synthetic import JOINT, OUTLET_X, RADIUS, S2_LENGTH, bed, feeder, line_feeder
 from helpers import parts, write_bulk_result
 from vibrofeed.postproc import FeedRate
-from vibrofeed.postproc.feedrate import LINE_KEYS, SUMMARY_KEYS, period_velocities
+from vibrofeed.postproc.feedrate import BOWL_KEYS, LINE_KEYS, SUMMARY_KEYS, period_velocities
 from vibrofeed.postproc.line import batch_cuts, bed_pass, drift, drifts, tooling, unsteady
 from vibrofeed.results.reader import Result
 
@@ -272,7 +272,7 @@ def test_a_lines_summary_and_table_hold_the_sections(tmp_path):
         fa = FeedRate(r, start=0.1, end=0.5, model=False).run()
     s = fa.summary()
     assert list(s) == [k for k in SUMMARY_KEYS if k not in ("model_velocity", "model_note", "velocity_ratio",
-                                                                 "shape", "returned")]
+                                                                 "shape", "returned") + BOWL_KEYS]
     assert [sec["section"] for sec in s["sections"]] == [1, 2]
     assert set(s["rejects_by_tooling"]) == {"side_drop", "wiper", "other"}
     text = table(s)
@@ -292,7 +292,7 @@ def test_a_single_track_has_no_sections_in_its_summary_or_table(tmp_path):
     with Result(feeder(tmp_path / "one.h5", FRAMES, exits, freq=FREQ, amp=3e-5)) as r:
         fa = FeedRate(r).run()
     s = fa.summary()
-    assert list(s) == [k for k in SUMMARY_KEYS if k not in LINE_KEYS]
+    assert list(s) == [k for k in SUMMARY_KEYS if k not in LINE_KEYS + BOWL_KEYS]
     assert s["unsteady"] is None and "sections" not in table(s)
     # section 1 is the whole track: its speed is the track's
     assert [t["quantity"] for t in s["bed_trends"]] == ["conveying speed"]   # a store: no hold-up
