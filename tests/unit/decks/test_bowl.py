@@ -559,6 +559,7 @@ def test_a_bowl_without_the_optional_keys_has_no_cone_tilt_lip_or_chute():
     b = bowl_from(required)
     assert (b.radius, b.track_width, b.helix_angle, b.turns, b.wall_height) == (0.01, 1.2e-3, 3.0, 1.5, 1e-3)
     assert (b.cone_angle, b.cross_tilt, b.lip_height, b.chute_length) == (0.0, 0.0, 0.0, 0.0)
+    assert (b.drop_from, b.drop_to, b.drop_width) == (0.0, 0.0, 0.0) and b.drop is None
     bare = Bowl(radius=0.01, track_width=1.2e-3, helix_angle=3.0, turns=1.5, wall_height=1e-3)
     assert (bare.cone_angle, bare.cross_tilt, bare.lip_height, bare.chute_length) == (0.0, 0.0, 0.0, 0.0)
     # so: a flat bottom, a floor level across, no chute

@@ -123,7 +123,7 @@ def test_no_fill_cube_over_the_drop_nor_a_side_either_side_and_no_coordinate_bey
     ({"drop_from": 0.0, "drop_to": 0.0, "drop_width": DW}, None),      # no drop asked: accepted
     ({"drop_from": 0.70, "drop_to": 0.705}, "fall on one station"),
     ({"drop_width": math.nextafter(PART, 0.0)}, "must hold a part"),
-    ({"drop_width": math.nextafter(W - PART / 4, 1.0)}, "a quarter part narrower"),
+    ({"drop_width": math.nextafter(W - PART / 4, 1.0)}, r"a quarter part narrower .*at most 0\.00112 m"),
     ({"drop_from": 0.05, "drop_to": 0.2}, "less than a part"),          # the first turn's low shelf
 ])
 def test_the_drops_refusals_at_their_boundaries(change, words):
@@ -160,3 +160,13 @@ def test_a_narrow_step_under_a_tall_shelf_is_cut_into_rows_not_slivers():
         axis=1)  # the end face at theta = -90 deg (x = 0), between the two inner edges
     assert on_end.sum() >= 2 * math.ceil(0.00935 / (10 * PART / 4))
     assert smallest_angles(vertices, triangles[on_end]).min() > 5.0  # [deg]
+
+
+def test_the_drop_adds_one_face_at_each_end_of_the_floor_and_none_elsewhere():
+    """Over an upper turn (no riser there) the narrowed floor has as many faces as the full
+    one, and each wide segment beside the drop gains the corner where the narrow floor's edge
+    meets it: one triangle more at each end."""
+    plain = bowl_mesh(replace(BOWL, drop_to=0.0))[1]
+    dropped = bowl_mesh(BOWL)[1]
+    assert BOWL.drop[0] > BOWL.theta_start + 2 * math.pi  # an upper turn's stretch
+    assert len(dropped) == len(plain) + 2
