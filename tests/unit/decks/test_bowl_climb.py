@@ -41,3 +41,13 @@ def test_the_warning_follows_the_models_speed_up_the_helix(helix, climbs):
 def test_no_model_for_a_deck_that_is_not_a_bowl_or_lacks_a_value():
     assert climb_advice({"freq": 100.0, "amp_t": 5e-5}) == []
     assert climb_advice({"bowl_diameter": 0.02, "track_width": 1.2e-3}) == []
+
+
+def test_a_bowl_that_does_not_move_its_parts_is_warned_of_too():
+    """No vibration: the model's speed is exactly 0 (the part rests), not positive: the parts
+    do not climb, and the warning says so (a part that stays is not fed)."""
+    p = {"bowl_diameter": 0.02, "track_width": 1.2e-3, "helix_angle": 3.0, "freq": 100.0, "amp_t": 0.0,
+         "amp_n": 0.0, "phase": 0.0, "mu": 0.5, "restitution": 0.3, "part_size": 3e-4, "turns": 1.5,
+         "wall_height": 1e-3}
+    (text,) = climb_advice(p)
+    assert "do not climb" in text and "(0 mm/s up its centre line)" in text
