@@ -562,6 +562,7 @@ def test_a_bowl_without_the_optional_keys_has_no_cone_tilt_lip_or_chute():
     assert (b.drop_from, b.drop_to, b.drop_width) == (0.0, 0.0, 0.0) and b.drop is None
     bare = Bowl(radius=0.01, track_width=1.2e-3, helix_angle=3.0, turns=1.5, wall_height=1e-3)
     assert (bare.cone_angle, bare.cross_tilt, bare.lip_height, bare.chute_length) == (0.0, 0.0, 0.0, 0.0)
+    assert (bare.drop_from, bare.drop_to, bare.drop_width) == (0.0, 0.0, 0.0)
     # so: a flat bottom, a floor level across, no chute
     assert bare.bottom_z(0.0) == 0.0 and bare.floor_z(-2.0, 0.0088) == bare.floor_z(-2.0, 0.01)
     assert bare.outlet_x == 0.0
