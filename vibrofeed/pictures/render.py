@@ -231,7 +231,8 @@ class _Painter:
             faster = int((frame.speed > self.speed_top).sum())
             title = "speed [mm/s]"
             if faster:
-                title += f"\nclipped: {faster} part{'s' if faster > 1 else ''}\noff the track faster"
+                # (the magenta box above the bar, labelled "faster", ends the sentence)
+                title += f"\nclipped: {faster} part{'s' if faster > 1 else ''}\noff the track:"
             return mesh, {"scalars": "speed", "cmap": "viridis", "clim": (0.0, top),
                           "above_color": "#ff00ff",
                           "scalar_bar_args": {**bar, "title": title, "fmt": "%.3g",
