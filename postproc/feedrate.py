@@ -107,10 +107,17 @@ from .line import (
     trend,
     unsteady,
 )
-from .path import along, bowl_of, falls, is_bowl, outlet_x, path_end  # noqa: F401  (outlet_x: imported from here)
+from .path import (  # noqa: F401  (outlet_x: imported from here)
+    BLOCK_VALUES,
+    along,
+    bowl_of,
+    falls,
+    is_bowl,
+    outlet_x,
+    path_end,
+)
 
-# Frames read at once: blocks of at most this many slot values.
-_BLOCK_VALUES = 1 << 22
+_BLOCK_VALUES = BLOCK_VALUES  # (this module's name for it)
 # The count series: bins of ~10 events, so that a transient stands out of one
 # bin's Poisson noise (the reason MSER-5 averages batches of 5 observations);
 # within 10 .. 200 bins (MSER's resolution, its cost).

@@ -28,10 +28,9 @@ import numpy as np
 
 from ..line import section_from
 from ..results import layout as L
-from .path import along
+from .path import BLOCK_VALUES, along
 
-# Frames read at once: blocks of at most this many slot values (as feedrate's).
-_BLOCK_VALUES = 1 << 22
+_BLOCK_VALUES = BLOCK_VALUES  # (a name of this module's: tests set it to read in small blocks)
 # Rejects: the tools, in the order they are tried (a part falls sideways only where the
 # side drop leaves no wall, so its stretch is tried first).
 TOOLING = ("side_drop", "wiper", "other")

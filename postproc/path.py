@@ -19,6 +19,9 @@ import math
 
 import numpy as np
 
+# Frames read at once by the bed's analyses: blocks of at most this many slot values.
+BLOCK_VALUES = 1 << 22
+
 
 def is_bowl(parameters) -> bool:
     return "bowl_diameter" in parameters
@@ -47,11 +50,14 @@ def path_end(result) -> float:
     return outlet_x(result)
 
 
-def along(result, frames, axis: int = 0) -> tuple[np.ndarray, np.ndarray]:
+def along(result, frames, axis: int = 0, position=None) -> tuple[np.ndarray, np.ndarray]:
     """(coordinate, moved) of every slot at ``frames`` (frames, slots) [m]: where each part is
     along the path in the track's frame, and the coordinate whose change over whole periods
-    is its conveying (module docstring). NaN where no part is (or, in a bowl, off the track)."""
-    position = result.read("position", frames=frames)
+    is its conveying (module docstring). NaN where no part is (or, in a bowl, off the track).
+    ``position`` (frames, n, 3): positions already read at those frames (any n parts, e.g. a
+    Frame's present ones), instead of every slot's read again."""
+    if position is None:
+        position = result.read("position", frames=frames)
     if not is_bowl(result.parameters):
         x = position[..., axis]
         return x - result.read("surface_position", frames=frames)[:, axis][:, None], x
@@ -80,12 +86,13 @@ def falls(result, frames) -> tuple[np.ndarray, np.ndarray]:
 
     radius = bowl_of(result.parameters).radius
     times, ids_out = [], []
-    per_block = 64  # frames read at once; blocks overlap by one so each pair is seen once
+    # (blocks overlap by one frame, so each consecutive pair is seen once)
+    per_block = max(2, BLOCK_VALUES // max(4 * result.n_slots, 1))
     for a in range(0, len(frames) - 1, per_block - 1):
         block = frames[a:a + per_block]
         ids = result.read("id", frames=block)
-        s = along(result, block)[0]
         position = result.read("position", frames=block)
+        s = along(result, block, position=position)[0]
         inside = np.hypot(position[..., 0], position[..., 1]) <= radius
         same = (ids[:-1] == ids[1:]) & (ids[:-1] != L.ID_FILL)
         fell = same & np.isfinite(s[:-1]) & np.isnan(s[1:]) & inside[1:]

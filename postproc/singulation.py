@@ -260,7 +260,7 @@ class Singulation(AnalysisBase):
         for frame in result.iter_frames(window[pick], fields):
             # on the track: up to the outlet edge along the path (in a bowl, not the pile on its
             # bottom nor a part falling: their coordinate is NaN)
-            coordinate = along(result, [frame.index], self.axis)[0][0][frame.slots]
+            coordinate = along(result, [frame.index], self.axis, frame["position"][None])[0][0]
             on = coordinate <= edge if math.isfinite(edge) else np.ones(len(frame), dtype=bool)
             if result.body_template is None:
                 labels = cluster_labels(frame["position"][on], frame["radius"][on], tol)

@@ -150,6 +150,13 @@ class Bowl:
         return float(self.arc_length(THETA_END))
 
     @property
+    def first_turn_end(self) -> float:
+        """The polar angle where the first turn ends (one turn past the start; past the track's
+        end on a bowl of under a turn), with a rounding's slack: stations at or before it lie
+        over the bottom, where the riser closes the shelf."""
+        return self.theta_start + 2 * math.pi + 1e-12
+
+    @property
     def stations(self) -> np.ndarray:
         """The track's stations: the mesh's floor edges, every STATION at most, from its
         start to its end."""
@@ -240,7 +247,7 @@ def bowl_mesh(b: Bowl) -> tuple[np.ndarray, np.ndarray]:
     def foot(top: np.ndarray, bottom: float) -> np.ndarray:
         return top if top[2] - bottom <= low else np.array([top[0], top[1], bottom])
 
-    first = track[track <= b.theta_start + 2 * math.pi + 1e-12]
+    first = track[track <= b.first_turn_end]
     for (t0, t1), ri in zip(zip(first[:-1], first[1:]), inner):
         top0, top1 = b.helix_point(t0, ri), b.helix_point(t1, ri)
         m.quad(foot(top0, float(b.bottom_z(ri))), foot(top1, float(b.bottom_z(ri))), top1, top0)
@@ -249,7 +256,7 @@ def bowl_mesh(b: Bowl) -> tuple[np.ndarray, np.ndarray]:
     # (in rows at most ten times as high as the face is wide: a narrow step under a tall
     # shelf would otherwise be a sliver)
     for t in (b.drop or ()):
-        if t <= b.theta_start + 2 * math.pi + 1e-12:
+        if t <= b.first_turn_end:
             r_narrow = R - b.drop_width
             top_w, top_n = b.helix_point(t, r_in), b.helix_point(t, r_narrow)
             foot_w = np.array([top_w[0], top_w[1], float(b.bottom_z(r_in))])
@@ -427,7 +434,7 @@ def _check_drop(b: Bowl, wide: float, tall: float) -> None:
                              f"{b.track_width - wide / 4:.3g} m)")
     r_narrow = b.radius - b.drop_width
     for t in b.drop:
-        if t <= b.theta_start + 2 * math.pi + 1e-12:
+        if t <= b.first_turn_end:
             shelf = float(b.floor_z(t, r_narrow) - b.bottom_z(r_narrow))
             if shelf < tall:
                 raise ParameterError(f"drop_from={b.drop_from:g}: the side drop starts where the first "

@@ -105,7 +105,8 @@ def feedrate_figures(analysis, folder) -> list[Path]:
         sin_a = np.sin(np.radians(b.helix_angle))
         ax.set_xlabel(f"position along the helix and the chute s [mm] (the helix ends at "
                       f"{b.length * 1e3:.3g})")
-        top = ax.secondary_xaxis("top", functions=(lambda s: (b.z_start + s * 1e-3 * sin_a) * 1e3,
+        # height_at(s) = z_start + s sin(helix angle): linear, inverted here [mm]
+        top = ax.secondary_xaxis("top", functions=(lambda s: b.height_at(s * 1e-3) * 1e3,
                                                    lambda z: (z * 1e-3 - b.z_start) / sin_a * 1e3))
         top.set_xlabel("height of the track's centre line [mm]")
     else:

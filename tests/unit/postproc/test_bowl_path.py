@@ -220,7 +220,9 @@ def test_the_profile_in_height_is_the_centre_lines_floor_up_the_helix_and_the_ch
     assert np.allclose(b.height_at(b.length + along), want, rtol=0, atol=LENGTH)
 
 
-def test_falls_are_parts_that_leave_the_track_for_the_bowl_counted_once_each_time(tmp_path):
+@pytest.mark.parametrize("per_block", [None, 2, 3])  # None: one block; else frames read at once
+def test_falls_are_parts_that_leave_the_track_for_the_bowl_counted_once_each_time(tmp_path, monkeypatch,
+                                                                                  per_block):
     """By hand, five frames 5 ms apart: part 1 rides the helix, then lies inside its inner edge
     at frame 3 (a fall at 15 ms) and back on the helix at frame 4 (picked up: no fall); part 2
     lies in the pile, then on the helix (no fall); part 3 goes off the chute's end and beyond
@@ -249,6 +251,10 @@ def test_falls_are_parts_that_leave_the_track_for_the_bowl_counted_once_each_tim
     path = write_bulk_result(tmp_path / "f.h5", frames, events=events, variables=variables,
                              outlet={"outlet_x": b.outlet_x, "catch_z": -5e-4, "method": "synthetic"})
     with Result(path) as r:
+        if per_block is not None:  # blocks that overlap by a frame: the pair 2-3 across two
+            import vibrofeed.postproc.path as pp
+
+            monkeypatch.setattr(pp, "BLOCK_VALUES", 4 * r.n_slots * per_block)
         times, ids = falls(r, np.arange(5))
         analysis = FeedRate(r, start=0.0, end=0.02, model=False).run()
     fr, summary = analysis.results, analysis.summary()
