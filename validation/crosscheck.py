@@ -251,39 +251,49 @@ def _climb(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
 
 
 def bowl_speeds(result, t_from: float) -> tuple[float, float, float]:
-    """(model, DEM, centripetal) of the parts on a bowl's track after ``t_from``: each part's
-    speed along the helix over the whole periods it stays on the track (its path coordinate,
-    vibrofeed.postproc.path), and the single-part model under the drive the helix sees at the
-    part's own mean radius (vibrofeed.bowl.track_drive: the torsion's amplitude grows with the
-    radius); the means over the parts [m/s], and the largest peak centripetal acceleration the
-    torsion adds at their radii [m/s^2], which the model leaves out."""
+    """(model, DEM, centripetal) of the parts on a bowl's helix after ``t_from``: each part's
+    speed along the helix over whole periods (its path coordinate, vibrofeed.postproc.path)
+    until it reaches the chute, and the single-part model under the drive the helix sees at
+    the part's own mean radius there (vibrofeed.bowl.track_drive: the torsion's amplitude
+    grows with the radius); the means over the parts [m/s], and the largest peak centripetal
+    acceleration the torsion adds at their radii [m/s^2], which the model leaves out.
+
+    A part counts if it is on the helix for at least half the measured span. The chute is
+    left out because the helix's drive is not its drive: along the chute's line the torsion
+    also shakes parts across it, by x theta (docs/bowl.md), and they slow there."""
     from vibrofeed.bowl import bowl_from, track_drive
     from vibrofeed.postproc.feedrate import period_lag
     from vibrofeed.postproc.path import along
 
     p = result.parameters
+    b = bowl_from(p)
     freq = float(p["freq"])
     frames = np.nonzero(result.time >= t_from - 1e-12)[0]
     m, _ = period_lag(result.time[frames], freq)
     chain = frames[::m]
+    time = result.time[chain]
     s, _ = along(result, chain)
     ids = result.read("id", frames=chain)
     position = result.read("position", frames=chain)
-    keep = (ids == ids[0]).all(axis=0) & (ids[0] != L.ID_FILL) & np.isfinite(s).all(axis=0)
+    same = (ids == ids[0]).all(axis=0) & (ids[0] != L.ID_FILL)
+    helix = np.isfinite(s) & (s <= b.length)
+    # the frames up to each part's first one off the helix
+    ends = np.where(helix.all(axis=0), len(chain), np.argmin(helix, axis=0)) - 1
+    keep = same & (ends >= 1)
+    keep &= time[np.maximum(ends, 0)] - time[0] >= 0.5 * (time[-1] - time[0])
     if not keep.any():
-        raise CaseError("no part stayed on the bowl's track through the whole measurement")
-    span = result.time[chain[-1]] - result.time[chain[0]]
-    dem = (s[-1, keep] - s[0, keep]) / span
-    radius = np.hypot(position[..., 0], position[..., 1])[:, keep].mean(axis=0)
-    b = bowl_from(p)
-    models, centripetal = [], 0.0
-    for r in radius:
+        raise CaseError("no part stayed on the bowl's helix for half the measurement")
+    models, dems, centripetal = [], [], 0.0
+    for j in np.nonzero(keep)[0]:
+        k = ends[j]
+        dems.append((s[k, j] - s[0, j]) / (time[k] - time[0]))
+        r = float(np.hypot(position[:k + 1, j, 0], position[:k + 1, j, 1]).mean())
         d = track_drive(float(p["amp_t"]), float(p["amp_n"]), float(p["phase"]), freq,
-                        float(p["helix_angle"]), b.r_mid, float(r))
+                        float(p["helix_angle"]), b.r_mid, r)
         models.append(dm.transport({**p, "amp_t": d.amp_t, "amp_n": d.amp_n, "phase": d.phase,
                                     "incline": d.incline}).velocity)
         centripetal = max(centripetal, d.centripetal)
-    return float(np.mean(models)), float(dem.mean()), centripetal
+    return float(np.mean(models)), float(np.mean(dems)), centripetal
 
 
 def min_distance(result) -> float:

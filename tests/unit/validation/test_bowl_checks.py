@@ -8,6 +8,7 @@ import pytest
 
 from helpers import parts
 from vibrofeed.bowl import bowl_from, track_drive
+from vibrofeed.errors import CaseError
 from vibrofeed.models.deck import transport
 from vibrofeed.results.reader import Result
 from vibrofeed.results.writer import ResultWriter
@@ -54,3 +55,57 @@ def test_speeds_along_the_helix_and_the_model_at_each_parts_radius(tmp_path):
     omega = 2 * math.pi * 100.0
     assert centripetal == pytest.approx(radii.max() * (5e-5 * omega / b.r_mid) ** 2, rel=1e-12, abs=0)
     assert closest > 1e-3  # [m] far apart
+
+
+def test_speeds_end_where_each_part_reaches_the_chute(tmp_path):
+    """The chute is not measured (its drive is not the helix's): a part is measured up to its
+    last whole-period frame on the helix, and counts only if that spans at least half the
+    window; a part that starts on the chute, or leaves the helix early, does not count."""
+    b = bowl_from(BOWL)
+    cos_a, sin_a = math.cos(math.radians(3.0)), math.sin(math.radians(3.0))
+    THETA_END = -math.pi / 2
+    inner, outer = b.radius - 1.0e-3, b.radius - 0.3e-3
+
+    def helix_then_chute(t, rate, r, t_switch, chute_speed):
+        if t <= t_switch:
+            return b.helix_point(THETA_END - rate * (t_switch - t), r)
+        return b.helix_point(THETA_END, r) + chute_speed * (t - t_switch) * np.array([cos_a, 0, sin_a])
+
+    frames = np.arange(0, 0.2 + 1e-12, 0.0025)  # 4 frames per period
+    variables = {k: (repr(v), "", k, repr(v)) for k, v in BOWL.items()}
+    w = ResultWriter(tmp_path / "b.h5", deck_name="bowl_feeder", deck_path="b.liggghts", deck_text="#\n",
+                     variables=variables, derived={"dt_used": 1e-6}, engine_version=ENGINE, seed=1,
+                     run_id="b" * 64, rotating=True)
+    for k, t in enumerate(frames):
+        pos = np.array([
+            helix_then_chute(t, 1.6, inner, 0.175, 4e-3),  # on the helix until 0.175 s: counts
+            helix_then_chute(t, 2.4, outer, 0.135, 4e-3),  # leaves it after 0.035 s of 0.1: not
+            helix_then_chute(t, 0.0, b.r_mid, -0.3, 1e-2),  # on the chute throughout: not
+        ]) + [0, 0, 7.5e-5]
+        w.write_frame(k, float(t), parts([1, 2, 3], pos, radius=1.8e-4), [0, 0, 0], [0, 0, 0],
+                      surface_rotation=([0, 0, 0], [0, 0, 0]))
+    w.finish("complete")
+    with Result(tmp_path / "b.h5") as r:
+        model, dem, _ = bowl_speeds(r, 0.1)
+    assert dem == pytest.approx(1.6 * b.r_mid / cos_a, rel=1e-9, abs=0)
+    d = track_drive(5e-5, 3e-5, -30.0, 100.0, 3.0, b.r_mid, inner)
+    want = transport({**BOWL, "amp_t": d.amp_t, "amp_n": d.amp_n, "phase": d.phase,
+                      "incline": d.incline}).velocity
+    assert model == pytest.approx(want, rel=1e-12, abs=0)
+
+
+def test_speeds_refuse_when_no_part_stays_on_the_helix(tmp_path):
+    b = bowl_from(BOWL)
+    frames = np.arange(0, 0.2 + 1e-12, 0.0025)
+    variables = {k: (repr(v), "", k, repr(v)) for k, v in BOWL.items()}
+    w = ResultWriter(tmp_path / "b.h5", deck_name="bowl_feeder", deck_path="b.liggghts", deck_text="#\n",
+                     variables=variables, derived={"dt_used": 1e-6}, engine_version=ENGINE, seed=1,
+                     run_id="b" * 64, rotating=True)
+    a = math.radians(3.0)
+    for k, t in enumerate(frames):
+        pos = b.helix_point(-math.pi / 2) + (2e-3 + 1e-2 * t) * np.array([math.cos(a), 0, math.sin(a)])
+        w.write_frame(k, float(t), parts([1], pos[None] + [0, 0, 7.5e-5], radius=1.8e-4), [0, 0, 0],
+                      [0, 0, 0], surface_rotation=([0, 0, 0], [0, 0, 0]))
+    w.finish("complete")
+    with Result(tmp_path / "b.h5") as r, pytest.raises(CaseError, match="helix"):
+        bowl_speeds(r, 0.1)
