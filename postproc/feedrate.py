@@ -135,8 +135,12 @@ SUMMARY_KEYS = ("parts_per_s", "parts_per_s_err", "mass_per_s", "mass_per_s_err"
                 "velocity_ratio", "shape", "reason")
 # Summary keys of feeder lines only (returned: of one that recirculates its rejects).
 LINE_KEYS = ("rejected", "returned", "sections", "rejects_by_tooling")
-# Summary keys of bowls only.
-BOWL_KEYS = ("fell", "fell_per_s", "fell_per_s_err")
+# Summary keys of bowls, not of a single track (sections: also a line's).
+BOWL_KEYS = ("sections", "fell", "fell_per_s", "fell_per_s_err")
+# A bowl's two sections along its path (its summary's ``sections``, each with a ``name``).
+BOWL_SECTIONS = ("helix", "chute")
+# Why the chute has no single-part model (docs/bowl.md, "The chute").
+CHUTE_NOTE = "the chute's drive is not a linear track's: the torsion also shakes it across, by x theta"
 # Parameters the single-part model needs from the deck (the rest have defaults).
 MODEL_NEEDS = ("freq", "mu", "restitution")
 
@@ -539,6 +543,8 @@ class FeedRate(AnalysisBase):
         ev = outlet_events(result, t_lo, t_hi)
         times = ev["time"]
         r.event_times, r.n_events = times, len(times)
+        if is_bowl(result.parameters):  # parts the track lost back into the bowl (the bed's rejects)
+            r.fell_times, _ = falls(result, frames)
         fed = is_fed(result.parameters)
         t_a, t_b, width, counts = steady_window(times, t_lo, t_hi, freq, self.start, self.end, fed)
         r.parts_per_s = r.parts_per_s_err = math.nan  # the bed's figures before the rate is measured
@@ -564,9 +570,8 @@ class FeedRate(AnalysisBase):
             r.mass_per_s, r.mass_per_s_err = batch_rate(times, r.event_mass, t_a, t_b, freq,
                                                         self.batches)
         self._velocities(frames, t_a, t_b)
-        if is_bowl(result.parameters):  # parts the track lost back into the bowl, in the window
-            fell_times, _ = falls(result, frames)
-            r.fell_times = fell_times
+        if is_bowl(result.parameters):  # the falls in the window
+            fell_times = r.fell_times
             n, span = int(((fell_times >= t_a) & (fell_times < t_b)).sum()), t_b - t_a
             r.fell = n
             r.fell_per_s = n / span if span > 0 else math.nan
@@ -579,12 +584,16 @@ class FeedRate(AnalysisBase):
             r.model_velocity, r.model_note = dilute_limit(result.parameters)
             r.velocity_ratio = velocity_ratio(r.mean_velocity, r.model_velocity)
             for k, sec in enumerate(r.get("sections") or (), 1):  # each section's own drive
-                try:
-                    drive = section_drive(result.parameters, k)
-                except KeyError as exc:
-                    sec["model_speed"], sec["model_note"] = None, f"the result lacks {exc.args[0]}"
+                if is_bowl(result.parameters):
+                    sec["model_speed"], sec["model_note"] = ((r.model_velocity, r.model_note) if k == 1
+                                                             else (None, CHUTE_NOTE))
                 else:
-                    sec["model_speed"], sec["model_note"] = dilute_limit(drive)
+                    try:
+                        drive = section_drive(result.parameters, k)
+                    except KeyError as exc:
+                        sec["model_speed"], sec["model_note"] = None, f"the result lacks {exc.args[0]}"
+                    else:
+                        sec["model_speed"], sec["model_note"] = dilute_limit(drive)
                 sec["speed_ratio"] = velocity_ratio(sec["speed"], sec["model_speed"])
 
     def _bed_pass(self, frames):
@@ -681,7 +690,10 @@ class FeedRate(AnalysisBase):
         r, result = self.results, self.result
         edge = path_end(result)
         bounds = section_bounds(result.parameters, edge)
-        rejects = result.rejects
+        bowl = is_bowl(result.parameters)
+        # a bowl's rejects are the parts fallen off its helix (its chute is walled)
+        rejects = ({"time": r.fell_times, "section": np.ones(len(r.fell_times), dtype=np.int64)}
+                   if bowl else result.rejects)
         crossings, counts = self._bed_pass(frames)
         inside = (self.times >= t_a - 1e-12) & (self.times <= t_b + 1e-12)
         window, window_t = frames[inside], self.times[inside]
@@ -716,6 +728,10 @@ class FeedRate(AnalysisBase):
         if is_line(result.parameters):
             r.sections = sections
             r.rejects_by_tooling = self._rejects_by_tooling(rejects, span)
+        elif bowl:
+            for sec, name in zip(sections, BOWL_SECTIONS):
+                sec["name"] = name
+            r.sections = sections
 
     def _section(self, k: int, lo: float, hi: float, v, interval, window_t, n, flux: tuple,
                  rejects: dict, span: tuple) -> dict:

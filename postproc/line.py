@@ -8,7 +8,9 @@ yet, and either drive's amplitude is far below a section's length.
 
 * :func:`section_bounds`: where each section lies; a part is over section 1 when x <
   the joint (the inlet wall keeps it at x > 0), over section 2 when the joint <= x <= the
-  outlet edge (beyond it, it falls);
+  outlet edge (beyond it, it falls). A bowl has two sections too, along its path: the
+  helix, and the chute from the helix's end (its drive is not the helix's: the torsion
+  also shakes it across, docs/bowl.md);
 * :func:`bed_pass`: one pass over the frames giving each joint's crossings and the parts
   over each section at each frame (the hold-up);
 * :func:`tooling`: the rejects sorted by the tool that threw them off;
@@ -28,7 +30,7 @@ import numpy as np
 
 from ..line import section_from
 from ..results import layout as L
-from .path import BLOCK_VALUES, along
+from .path import BLOCK_VALUES, along, bowl_of, is_bowl
 
 _BLOCK_VALUES = BLOCK_VALUES  # (a name of this module's: tests set it to read in small blocks)
 # Rejects: the tools, in the order they are tried (a part falls sideways only where the
@@ -50,7 +52,11 @@ def is_line(parameters) -> bool:
 
 def section_bounds(parameters, edge: float) -> list[tuple[float, float]]:
     """[(x_from, x_to)] of each section in the track's frame [m]: the track from 0 to
-    the outlet ``edge``; a line's section 1 to the joint, section 2 from it to the edge."""
+    the outlet ``edge``; a line's section 1 to the joint, section 2 from it to the edge; a
+    bowl's helix (along its path, :mod:`.path`) to its end, then its chute to the edge."""
+    if is_bowl(parameters):
+        joint = bowl_of(parameters).length
+        return [(0.0, joint), (joint, edge)]
     if not is_line(parameters):
         return [(0.0, edge)]
     joint = section_from(parameters).x0

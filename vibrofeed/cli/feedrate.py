@@ -55,6 +55,11 @@ def _pm(value, error, scale: float = 1.0) -> str:
     return f"{fmt(value, scale)} ± {fmt(error, scale, '.2g')}"
 
 
+def section_name(section: dict) -> str:
+    """A section's name in the tables: its number, or a bowl's helix and chute."""
+    return str(section.get("name", section["section"]))
+
+
 def section_table(s: dict) -> list[str]:
     """A line's lines of the table: one row per section, its rejects by tooling and the
     continuity at each joint; nothing for a single track. Rates read n/a when the summary
@@ -63,12 +68,15 @@ def section_table(s: dict) -> list[str]:
     if not sections:
         return []
     measured = not s.get("reason")
-    widths = (15, 22, 22, 20, 15)
-    head = ("x [mm]", "out [parts/s]", "speed [mm/s]", "hold-up [parts]", "density [/mm]")
-    lines = ["sections       " + "".join(h.ljust(w) for h, w in zip(head, widths)) + "rejects [/s]"]
+    bowl = "name" in sections[0]  # a bowl's helix and chute, along its path
+    widths = (22, 22, 22, 20, 15) if bowl else (15, 22, 22, 20, 15)
+    head = ("path [mm]" if bowl else "x [mm]", "out [parts/s]", "speed [mm/s]", "hold-up [parts]",
+            "density [/mm]")
+    rejects_head = "fell back [/s]" if bowl else "rejects [/s]"
+    lines = ["sections       " + "".join(h.ljust(w) for h, w in zip(head, widths)) + rejects_head]
     for k, sec in enumerate(sections):
         out = "outlet" if k == len(sections) - 1 else "joint"
-        cells = (f"{sec['section']}: {fmt(sec['x_from'], 1e3, '.3g')} .. {fmt(sec['x_to'], 1e3, '.3g')}",
+        cells = (f"{section_name(sec)}: {fmt(sec['x_from'], 1e3, '.3g')} .. {fmt(sec['x_to'], 1e3, '.3g')}",
                  f"{out} " + (_pm(sec["joint_flux"], sec["joint_flux_error"]) if measured else "n/a"),
                  _pm(sec["speed"], sec["speed_error"], 1e3),
                  _pm(sec["hold_up"], sec["hold_up_error"]),
@@ -107,9 +115,9 @@ def single_part(s: dict) -> str:
     sphere = s.get("shape", 0) == 0
     sections = [sec for sec in s.get("sections") or () if "model_speed" in sec]
     if sections:
-        told = [f"{sec['section']}: {fmt(sec['model_speed'], 1e3)} mm/s (DEM / model "
+        told = [f"{section_name(sec)}: {fmt(sec['model_speed'], 1e3)} mm/s (DEM / model "
                 f"{fmt(sec['speed_ratio'], spec='.3f')})" if sec["model_speed"] is not None
-                else f"{sec['section']}: n/a ({sec['model_note']})" for sec in sections]
+                else f"{section_name(sec)}: n/a ({sec['model_note']})" for sec in sections]
         return ("single part    model, dilute limit, each section's drive: " + ", ".join(told)
                 + (f"; {SLIDING_BLOCK}" if sphere else ""))
     if s["model_velocity"] is None:

@@ -19,7 +19,8 @@ line (``sections`` = 2) adds its sections' figures, flattened with the
 section's number: ``joint_flux_K`` and ``joint_flux_K_err`` (through the joint
 after section K: the last section's is ``parts_per_s``), ``speed_K``,
 ``hold_up_K`` (every section) and ``reject_rate_K`` (sections past the first,
-where the tooling is); the rates among them are missing with the feed rate.
+where the tooling is); the rates among them are missing with the feed rate. A bowl
+has the same columns: section 1 is its helix, 2 its chute.
 Chips and discs get their ``orientation_yield`` (face up and aligned).
 """
 

@@ -263,3 +263,72 @@ def test_falls_are_parts_that_leave_the_track_for_the_bowl_counted_once_each_tim
     assert fr.fell == 1
     assert fr.fell_per_s == pytest.approx(1 / 0.02, rel=1e-12, abs=0)  # [1/s]
     assert fr.fell_per_s_err == pytest.approx(1 / 0.02, rel=1e-12, abs=0)  # sqrt(1) / 0.02 s
+
+
+def test_a_bowls_sections_are_its_helix_and_its_chute(tmp_path):
+    """FeedRate splits a bowl's path where the helix ends: by hand, 41 frames a quarter period
+    apart (0 to 0.1 s). Part 1 climbs the helix at 2 rad/s throughout; part 2 climbs it at
+    2 rad/s and crosses onto the chute at 51.25 ms, then runs along it at 10 mm/s; part 3 runs
+    along the chute at 10 mm/s throughout; part 4 climbs the helix at 2 rad/s and falls into
+    the pile at 31.25 ms. The helix: speed 2 r_mid / cos(3 deg), hold-up (41 + 21 + 13) / 41,
+    1 crossing and 1 fall in 0.1 s (10 /s each); the chute: speed 10 mm/s, hold-up
+    (41 + 20) / 41; the model: the helix's dilute limit, none for the chute."""
+    from vibrofeed.cli.feedrate import table
+    from vibrofeed.postproc.feedrate import BOWL_SECTIONS, CHUTE_NOTE, FeedRate
+
+    b = bowl_from(BOWL)
+    d = 3e-4  # [m] the spheres' diameter
+    a = math.radians(3.0)
+    up = np.array([math.cos(a), 0.0, math.sin(a)])  # along the chute
+
+    def chute(s):
+        return b.helix_point(THETA_END) + s * up + [0, 0, d / 2]
+
+    def helix(theta):
+        return b.helix_point(theta) + [0, 0, d / 2]
+
+    rate, v, cross, fall = 2.0, 0.01, 0.05125, 0.03125  # [rad/s], [m/s], [s], [s]
+    pile = np.array([2e-3, 1e-3, 8e-4])
+    frames = []
+    for k in range(41):
+        t = 2.5e-3 * k
+        pos = np.array([helix(b.theta_start + 1.0 + rate * t),
+                        helix(THETA_END - rate * (cross - t)) if t < cross else chute(v * (t - cross)),
+                        chute(1e-3 + v * t),
+                        helix(b.theta_start + 3.0 + rate * t) if t < fall else pile])
+        frames.append((k, t, parts(np.arange(1, 5), pos, radius=d / 2)))
+    events = {"time": np.array([0.001, 0.011, 0.019]), "id": np.array([101, 102, 103]),
+              "position": np.tile([b.outlet_x + 1e-4, -b.r_mid, -1e-3], (3, 1)),
+              "velocity": np.zeros((3, 3)), "orientation": np.tile([1.0, 0, 0, 0], (3, 1))}
+    variables = {k: (repr(v_), "", k, repr(v_)) for k, v_ in BOWL.items()}
+    path = write_bulk_result(tmp_path / "s.h5", frames, events=events, variables=variables,
+                             outlet={"outlet_x": b.outlet_x, "catch_z": -5e-4, "method": "synthetic"})
+    with Result(path) as r:
+        analysis = FeedRate(r, start=0.0, end=0.1, batches=5).run()
+        found = FeedRate(r).run().summary()  # (the window searched: the bed's pass comes first)
+    assert [sec["name"] for sec in found["sections"]] == ["helix", "chute"]
+    s = analysis.summary()
+    helix_s, chute_s = s["sections"]
+    assert [sec["name"] for sec in s["sections"]] == list(BOWL_SECTIONS) == ["helix", "chute"]
+    assert (helix_s["x_from"], chute_s["x_to"]) == (0.0, pytest.approx(b.length + b.chute_length, rel=1e-12))
+    assert helix_s["x_to"] == chute_s["x_from"] == pytest.approx(b.length, rel=1e-12, abs=0)
+    assert helix_s["speed"] == pytest.approx(rate * b.r_mid / math.cos(a), rel=1e-9, abs=0)
+    assert chute_s["speed"] == pytest.approx(v, rel=1e-9, abs=0)
+    assert helix_s["hold_up"] == pytest.approx((41 + 21 + 13) / 41, rel=1e-12, abs=0)
+    assert chute_s["hold_up"] == pytest.approx((41 + 20) / 41, rel=1e-12, abs=0)
+    assert helix_s["joint_flux"] == pytest.approx(1 / 0.1, rel=1e-12, abs=0)  # [1/s]
+    assert helix_s["reject_rate"] == pytest.approx(1 / 0.1, rel=1e-12, abs=0)  # the fall
+    assert chute_s["reject_rate"] == 0.0
+    assert helix_s["model_speed"] == pytest.approx(dilute_limit(BOWL)[0], rel=1e-12, abs=0)
+    assert helix_s["speed_ratio"] == pytest.approx(helix_s["speed"] / helix_s["model_speed"], rel=1e-12)
+    assert (chute_s["model_speed"], chute_s["model_note"]) == (None, CHUTE_NOTE)
+    # the sweep's columns: the helix is section 1, the chute 2
+    from vibrofeed.sweep.metrics import section_columns
+
+    columns = section_columns(s["sections"], True)
+    assert (columns["speed_1"], columns["speed_2"]) == (helix_s["speed"], chute_s["speed"])
+    assert columns["joint_flux_1"] == helix_s["joint_flux"] and columns["reject_rate_2"] == 0.0
+    text = table(s)
+    assert "sections       path [mm]" in text and "fell back [/s]" in text
+    assert f"helix: 0 .. {b.length * 1e3:.3g}" in text and "chute: " in text
+    assert "helix: " + f"{helix_s['model_speed'] * 1e3:.3g}" in text and "chute: n/a" in text
