@@ -9,8 +9,8 @@ keeps them narrow to the outlet.
 Meshes are indexed triangle sets ``(vertices (V, 3) float64 [m], triangles (T, 3) int32)``:
 the floor and the walls share their edge vertices, so the only open edges of the track
 are the outlet edge and the walls' top edges (LIGGGHTS' mesh/surface then sees one
-connected surface, without seams between floor and walls). They are written as STL with
-numpy-stl. Multisphere parts (chips, discs) are clumps of spheres of diameter
+connected surface, without seams between floor and walls). They are written as binary STL
+(:func:`vibrofeed.mesh.write_stl`). Multisphere parts (chips, discs) are clumps of spheres of diameter
 ``part_thickness`` whose outline is the part's, given as ``(n, 4)`` rows x, y, z, r in
 the body frame (the part's centre at the origin, its flat faces normal to z).
 

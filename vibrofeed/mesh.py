@@ -1,4 +1,4 @@
-"""Indexed triangle meshes: built over shared vertices, written as binary STL (numpy-stl).
+"""Indexed triangle meshes: built over shared vertices, written as binary STL.
 
 The track of the bulk feeder (:mod:`vibrofeed.geometry`), a feeder line's further
 sections (:mod:`vibrofeed.line`) and the bowl (:mod:`vibrofeed.bowl`) are built with these.
@@ -49,14 +49,35 @@ class MeshBuilder:
                 np.array(self.triangles, dtype=np.int32).reshape(-1, 3))
 
 
+# A binary STL's 80-byte header. LIGGGHTS reads an STL's first line as text (up to the first
+# newline byte) before it decides the file is binary, and refuses a quote in it: without a
+# newline in the header that line runs on into the triangle count and the coordinates, and a
+# count of 39 (+ 256 k) triangles, whose first byte is a quote, stopped a run. A header line of
+# its own ends that line inside the header, and no "solid" at its start keeps it binary.
+STL_HEADER = 80
+
+
+def stl_header(name: str) -> bytes:
+    """The 80 bytes that open a binary STL: one line naming the mesh, padded with spaces."""
+    words = "".join(c if c.isalnum() or c in "_-." else "_" for c in name)
+    line = f"vibrofeed binary STL {words}"[:STL_HEADER - 1] + "\n"
+    return line.encode("ascii").ljust(STL_HEADER, b" ")
+
+
 def write_stl(vertices: np.ndarray, triangles: np.ndarray, path: str | Path,
               name: str = "vibrofeed") -> Path:
-    """Write an indexed mesh as a binary STL (numpy-stl), normals from the corner order."""
-    from stl import mesh as stl_mesh
-
-    m = stl_mesh.Mesh(np.zeros(len(triangles), dtype=stl_mesh.Mesh.dtype), name=name)
-    m.vectors[:] = vertices[triangles]
-    m.update_normals()
+    """Write an indexed mesh as a binary STL (little-endian float32), unit normals from the
+    corner order (zero for a degenerate face), the header :func:`stl_header`."""
+    corners = np.asarray(vertices, dtype=np.float64)[np.asarray(triangles)]
+    normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    length = np.linalg.norm(normal, axis=1, keepdims=True)
+    normal = np.divide(normal, length, out=np.zeros_like(normal), where=length > 0)
+    record = np.zeros(len(corners), dtype=[("normal", "<f4", (3,)), ("corners", "<f4", (3, 3)),
+                                           ("attribute", "<u2")])
+    record["normal"], record["corners"] = normal, corners
     path = Path(path)
-    m.save(str(path))
+    with open(path, "wb") as f:
+        f.write(stl_header(name))
+        f.write(np.uint32(len(record)).astype("<u4").tobytes())
+        f.write(record.tobytes())
     return path

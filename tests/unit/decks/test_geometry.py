@@ -141,6 +141,35 @@ def test_stl_round_trip(tmp_path):
     assert np.all(np.einsum("ij,ij->i", m.normals, expected) > 0)
 
 
+def liggghts_first_line(data: bytes) -> bytes:
+    """What LIGGGHTS reads of an STL before it decides the file is binary: its first line, up
+    to the first newline byte (src/input_mesh_tri.cpp: fgets, then the input parser, which
+    refuses unbalanced quotes)."""
+    end = data.find(b"\n")
+    return data if end < 0 else data[:end]
+
+
+@pytest.mark.parametrize("n", [1, 34, 39, 295, 551, 10 + 256 * 10])  # 34 '"', 39 "'", 10 newline
+def test_liggghts_reads_the_stls_first_line_as_its_header_whatever_the_triangles(tmp_path, n):
+    """A binary STL's first line is its header, text without quotes that does not open with
+    "solid": the triangle count's bytes (a count of 39 starts with a quote) and the coordinates'
+    never reach the line LIGGGHTS parses. A bowl of 551 triangles stopped a run before."""
+    from stl import mesh as stl_mesh
+
+    rng = np.random.default_rng(n)
+    v = rng.normal(scale=1e-2, size=(n + 2, 3))
+    v[0] = np.frombuffer(b"'\"\n'" * 3, dtype="<f4").astype(np.float64)  # quote and newline bytes
+    t = np.column_stack([np.zeros(n, dtype=int), np.arange(1, n + 1), np.arange(2, n + 2)])
+    path = write_stl(v, t, tmp_path / "m.stl", name="bowl 'x\"")
+    data = path.read_bytes()
+    line = liggghts_first_line(data)
+    assert len(line) < 80 and line == line.strip() and line.decode("ascii").isprintable()
+    assert b"'" not in line and b'"' not in line and not line.startswith(b"solid")
+    assert len(data) == 84 + 50 * n and int.from_bytes(data[80:84], "little") == n
+    m = stl_mesh.Mesh.from_file(str(path))  # another reader takes it as the mesh written
+    assert np.array_equal(m.vectors, v[t].astype(np.float32))
+
+
 @pytest.mark.parametrize("edge, thickness, n", [(3e-4, 1.5e-4, 9), (3e-4, 1e-4, 16), (1e-3, 1e-4, 169)])
 def test_chip_outline_is_the_die(edge, thickness, n):
     rows = chip_template(edge, thickness)
