@@ -101,6 +101,7 @@ from .line import (
     batch_cuts,
     batch_means,
     bed_pass,
+    bowl_tooling,
     is_line,
     section_bounds,
     tooling,
@@ -136,7 +137,7 @@ SUMMARY_KEYS = ("parts_per_s", "parts_per_s_err", "mass_per_s", "mass_per_s_err"
 # Summary keys of feeder lines only (returned: of one that recirculates its rejects).
 LINE_KEYS = ("rejected", "returned", "sections", "rejects_by_tooling")
 # Summary keys of bowls, not of a single track (sections: also a line's).
-BOWL_KEYS = ("sections", "fell", "fell_per_s", "fell_per_s_err")
+BOWL_KEYS = ("sections", "rejects_by_tooling", "fell", "fell_per_s", "fell_per_s_err")
 # A bowl's two sections along its path (its summary's ``sections``, each with a ``name``).
 BOWL_SECTIONS = ("helix", "chute")
 # Why the chute has no single-part model (docs/bowl.md, "The chute").
@@ -544,7 +545,7 @@ class FeedRate(AnalysisBase):
         times = ev["time"]
         r.event_times, r.n_events = times, len(times)
         if is_bowl(result.parameters):  # parts the track lost back into the bowl (the bed's rejects)
-            r.fell_times, _ = falls(result, frames)
+            r.fell_times, _, r.fell_where = falls(result, frames)
         fed = is_fed(result.parameters)
         t_a, t_b, width, counts = steady_window(times, t_lo, t_hi, freq, self.start, self.end, fed)
         r.parts_per_s = r.parts_per_s_err = math.nan  # the bed's figures before the rate is measured
@@ -732,6 +733,7 @@ class FeedRate(AnalysisBase):
             for sec, name in zip(sections, BOWL_SECTIONS):
                 sec["name"] = name
             r.sections = sections
+            r.rejects_by_tooling = self._rejects_by_tooling(rejects, span)
 
     def _section(self, k: int, lo: float, hi: float, v, interval, window_t, n, flux: tuple,
                  rejects: dict, span: tuple) -> dict:
@@ -762,14 +764,20 @@ class FeedRate(AnalysisBase):
         batch-means error, the number in the window and in the run analysed; None for a
         tool the line does not have."""
         result, (t_a, t_b, freq) = self.result, span
-        s = section_from(result.parameters)
         size = float(result.parameters.get("part_size", 0.0))
         t_lo, t_hi = float(self.times[0]), float(self.times[-1])
         run = (rejects["time"] > t_lo) & (rejects["time"] <= t_hi)
-        which = tooling(rejects["position"][:, self.axis], rejects["section"], s, size)
+        if is_bowl(result.parameters):  # its falls, where they left the helix
+            b = bowl_of(result.parameters)
+            which = bowl_tooling(self.results.fell_where, b, size)
+            has = {"side_drop": b.drop is not None, "wiper": b.wiper is not None}
+        else:
+            s = section_from(result.parameters)
+            which = tooling(rejects["position"][:, self.axis], rejects["section"], s, size)
+            has = {"side_drop": s.has_drop, "wiper": s.has_wiper}
         out = {}
         for k, name in enumerate(TOOLING):
-            if (name == "side_drop" and not s.has_drop) or (name == "wiper" and not s.has_wiper):
+            if not has.get(name, True):
                 out[name] = None
                 continue
             mine = which == k

@@ -13,7 +13,8 @@ yet, and either drive's amplitude is far below a section's length.
   also shakes it across, docs/bowl.md);
 * :func:`bed_pass`: one pass over the frames giving each joint's crossings and the parts
   over each section at each frame (the hold-up);
-* :func:`tooling`: the rejects sorted by the tool that threw them off;
+* :func:`tooling`: the rejects sorted by the tool that threw them off (a bowl's falls:
+  :func:`bowl_tooling`);
 * :func:`batch_cuts`, :func:`batch_means`: a quantity in batches of whole periods over
   the window; :func:`drift`, :func:`trend`, :func:`unsteady`: whether it drifts, and
   the words that say so.
@@ -153,6 +154,23 @@ def tooling(x, section, s, size: float) -> np.ndarray:
     out[wiper] = TOOLING.index("wiper")
     drop = on_2 & s.has_drop & (x >= s.drop_x[0] - size) & (x <= s.drop_x[1] + size)
     out[drop] = TOOLING.index("side_drop")
+    return out
+
+
+def bowl_tooling(where, b, size: float) -> np.ndarray:
+    """Index into :data:`TOOLING` of each fall off a bowl's helix at path coordinate
+    ``where`` [m] (the last on the track), on the bowl ``b`` (:class:`vibrofeed.bowl.Bowl`),
+    parts ``size`` across: as :func:`tooling` does along a line, the side drop's stretch
+    widened by a part size either way, else from :data:`WIPER_REACH` part sizes upstream of
+    the wiper's face to its bar's end, else other."""
+    s = np.asarray(where, dtype=float)
+    out = np.full(len(s), TOOLING.index("other"))
+    if b.wiper is not None:
+        w0, w1 = (float(b.arc_length(t)) for t in b.wiper)
+        out[(s >= w0 - WIPER_REACH * size) & (s <= w1)] = TOOLING.index("wiper")
+    if b.drop is not None:
+        d0, d1 = (float(b.arc_length(t)) for t in b.drop)
+        out[(s >= d0 - size) & (s <= d1 + size)] = TOOLING.index("side_drop")
     return out
 
 

@@ -73,19 +73,20 @@ def along(result, frames, axis: int = 0, position=None) -> tuple[np.ndarray, np.
     return coordinate, coordinate
 
 
-def falls(result, frames) -> tuple[np.ndarray, np.ndarray]:
-    """A bowl's parts that fell off its track back into the bowl: (times, ids), one row per
-    fall, in frame order. A fall: a part on the track at one frame (a finite path coordinate)
+def falls(result, frames) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A bowl's parts that fell off its track back into the bowl: (times, ids, where), one row
+    per fall, in frame order; ``where`` is the part's path coordinate at the earlier frame,
+    the last on the track [m]. A fall: a part on the track at one frame (a finite path coordinate)
     and off it at the next (NaN: below the floor, or inside the track's inner edge) while still
     inside the bowl's wall (not leaving over the chute's end); its time is the later frame's.
     A part picked up again and falling again counts again. Empty for a linear track."""
     frames = np.asarray(frames, dtype=np.int64)
     if not is_bowl(result.parameters) or len(frames) < 2:
-        return np.empty(0), np.empty(0, dtype=np.int64)
+        return np.empty(0), np.empty(0, dtype=np.int64), np.empty(0)
     from ..results import layout as L
 
     radius = bowl_of(result.parameters).radius
-    times, ids_out = [], []
+    times, ids_out, where = [], [], []
     # (blocks overlap by one frame, so each consecutive pair is seen once)
     per_block = max(2, BLOCK_VALUES // max(4 * result.n_slots, 1))
     for a in range(0, len(frames) - 1, per_block - 1):
@@ -99,5 +100,7 @@ def falls(result, frames) -> tuple[np.ndarray, np.ndarray]:
         k, slot = np.nonzero(fell)
         times.append(result.time[block][k + 1])
         ids_out.append(ids[k + 1, slot])
+        where.append(s[k, slot])
     order = np.argsort(np.concatenate(times), kind="stable")
-    return np.concatenate(times)[order], np.concatenate(ids_out)[order].astype(np.int64)
+    return (np.concatenate(times)[order], np.concatenate(ids_out)[order].astype(np.int64),
+            np.concatenate(where)[order])

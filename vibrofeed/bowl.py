@@ -9,7 +9,10 @@ first turn a riser closes the shelf down to the bottom (a real bowl's first turn
 into its wall), so no part wedges under the ramp. A side drop (the feeder lines' tooling,
 on the helix) narrows the floor to ``drop_width`` from the wall between ``drop_from`` and
 ``drop_to`` (fractions of the helix's length): a part not against the wall falls back into
-the bowl, as a real bowl returns its rejects to the bottom. At its top the track goes on as a
+the bowl, as a real bowl returns its rejects to the bottom. A wiper (the feeder lines' too) is
+a bar across the helix at ``wiper_at`` of its length whose underside follows the floor
+``wiper_height`` above it: a part taller than that (stacked, on edge) is stopped by its
+upstream face and pushed off the open edge back into the bowl. At its top the track goes on as a
 straight chute, the helix's tangent, ``chute_length`` long, with a wall on both sides,
 through a slot in the bowl's wall; parts leave over the chute's end.
 
@@ -51,6 +54,12 @@ STATION = math.radians(6.0)
 # A step of the first shelf lower than this fraction of the track's width above the bottom
 # gets no face (a sliver; no part fits under it).
 LOW_STEP = 0.02
+# The wiper's bar along the centre line, in part sizes (as a feeder line's: long enough that a
+# part cannot wedge under it tilted, short enough to stay a bar).
+WIPER_LENGTH = 1.0
+# The wiper's upstream face rises to this fraction of a pitch above the floor (under the next
+# turn, which lies a pitch above), or to the wall's top where that is lower.
+WIPER_REACH = 0.9
 
 
 @dataclass(frozen=True)
@@ -69,6 +78,9 @@ class Bowl:
     drop_from: float = 0.0  # the side drop: fractions of the helix's length, ...
     drop_to: float = 0.0  # ... none when drop_to <= drop_from
     drop_width: float = 0.0  # the floor left over the drop, from the wall
+    wiper_height: float = 0.0  # the wiper's underside above the floor (0: no wiper) ...
+    wiper_at: float = 0.5  # ... its upstream face at this fraction of the helix's length ...
+    wiper_length: float = 0.0  # ... and its bar this long along the centre line
 
     @property
     def r_mid(self) -> float:
@@ -173,6 +185,21 @@ class Bowl:
         n = len(t) - 1
         a, b = (int(round(f * n)) for f in (self.drop_from, self.drop_to))
         return (float(t[a]), float(t[b])) if b > a else None
+
+    @property
+    def wiper(self) -> tuple[float, float] | None:
+        """The wiper's polar angles (its upstream face, its bar's end) [rad]; None without a
+        wiper."""
+        if not self.wiper_height > 0:
+            return None
+        t0 = self.theta_start + self.wiper_at * (THETA_END - self.theta_start)
+        return t0, t0 + self.wiper_length * math.cos(math.radians(self.helix_angle)) / self.r_mid
+
+    def wiper_top(self, r) -> np.ndarray:
+        """The height the wiper's upstream face reaches at radius ``r``: WIPER_REACH of a
+        pitch above the floor, or the wall's top where that is lower."""
+        t0, _ = self.wiper
+        return np.minimum(self.floor_z(t0, r) + WIPER_REACH * self.pitch, self.top)
 
     def width_at(self, theta) -> np.ndarray:
         """The floor's width from the wall at polar angle ``theta`` (on the helix): drop_width
@@ -296,6 +323,22 @@ def bowl_mesh(b: Bowl) -> tuple[np.ndarray, np.ndarray]:
         up = np.array([0.0, 0.0, b.wall_height])
         m.quad(o0, o0 + up, o1 + up, o1)
         m.quad(i1, i1 + up, i0 + up, i0)
+    # the wiper: a bar across the whole track (the side drop's stretch too), its underside
+    # wiper_height above the floor from its face to its end, its upstream face up to
+    # wiper_top; parts below its underside pass, taller ones are stopped and pushed inwards
+    if b.wiper is not None:
+        t0, t1 = b.wiper
+        h = np.array([0.0, 0.0, b.wiper_height])
+        u0, u1 = b.helix_point(t0, r_in) + h, b.helix_point(t0, R) + h
+        m.quad(u0, u1, b.helix_point(t1, R) + h, b.helix_point(t1, r_in) + h)
+        top_in, top_out = u0.copy(), u1.copy()
+        top_in[2], top_out[2] = b.wiper_top(r_in), b.wiper_top(R)
+        # (in rows at most ten times as high as the track is wide, as the drop's end faces)
+        n = max(1, math.ceil(max(top_in[2] - u0[2], top_out[2] - u1[2]) / (10 * w) - 1e-9))
+        k = np.linspace(0.0, 1.0, n + 1)[:, None]
+        edge_in, edge_out = u0 + k * (top_in - u0), u1 + k * (top_out - u1)
+        for j in range(n):
+            m.quad(edge_out[j], edge_in[j], edge_in[j + 1], edge_out[j + 1])
     return m.mesh()
 
 
@@ -346,7 +389,8 @@ def track_drive(amp_t: float, amp_n: float, phase: float, freq: float, helix_ang
 # The deck's parameters a bowl is built from (bowl_from), and those of its parts: what the
 # prepare hook reads and write_bowl needs.
 GEOMETRY = ("bowl_diameter", "track_width", "helix_angle", "turns", "wall_height", "cone_angle",
-            "cross_tilt", "lip_height", "chute_length", "drop_from", "drop_to", "drop_width")
+            "cross_tilt", "lip_height", "chute_length", "drop_from", "drop_to", "drop_width",
+            "wiper_height", "wiper_at")
 PART = ("part_size", "part_thickness", "shape", "size_spread")
 
 
@@ -357,7 +401,9 @@ def bowl_from(p: Mapping) -> Bowl:
                 wall_height=float(p["wall_height"]), cone_angle=float(p.get("cone_angle", 0.0)),
                 cross_tilt=float(p.get("cross_tilt", 0.0)), lip_height=float(p.get("lip_height", 0.0)),
                 chute_length=float(p.get("chute_length", 0.0)), drop_from=float(p.get("drop_from", 0.0)),
-                drop_to=float(p.get("drop_to", 0.0)), drop_width=float(p.get("drop_width", 0.0)))
+                drop_to=float(p.get("drop_to", 0.0)), drop_width=float(p.get("drop_width", 0.0)),
+                wiper_height=float(p.get("wiper_height", 0.0)), wiper_at=float(p.get("wiper_at", 0.5)),
+                wiper_length=WIPER_LENGTH * float(p.get("part_size", 0.0)))
 
 
 def widest_part(p: Mapping) -> float:
@@ -412,6 +458,8 @@ def check_bowl(p: Mapping[str, float]) -> None:
         raise ParameterError(f"lip_height={b.lip_height:g} m reaches half way to the next turn")
     if b.drop_from != 0 or b.drop_to != 0:  # a side drop asked for
         _check_drop(b, wide, tall)
+    if b.wiper_height != 0:
+        _check_wiper(b, tall)
     if b.chute_length <= b.chute_exit_length + wide:
         raise ParameterError(f"chute_length={b.chute_length:g} m ends inside the bowl: its inner edge "
                              f"leaves the wall after {b.chute_exit_length:.3g} m; make it longer than "
@@ -440,6 +488,25 @@ def _check_drop(b: Bowl, wide: float, tall: float) -> None:
                 raise ParameterError(f"drop_from={b.drop_from:g}: the side drop starts where the first "
                                      f"turn's shelf is {shelf:.3g} m above the bottom, less than a part "
                                      f"({tall:g} m); start it further up the helix")
+
+
+def _check_wiper(b: Bowl, tall: float) -> None:
+    """The wiper's refusals: on the helix, a part lying flat passes under it, and its face
+    stands above its underside."""
+    if not 0 <= b.wiper_at < 1:
+        raise ParameterError(f"wiper_at={b.wiper_at:g} must be in [0, 1) (a fraction of the helix's length)")
+    if b.wiper[1] > THETA_END + 1e-12:
+        raise ParameterError(f"wiper_at={b.wiper_at:g}: the wiper's bar ({b.wiper_length:g} m) runs past "
+                             "the helix's end; lower wiper_at")
+    if b.wiper_height < tall:
+        raise ParameterError(f"wiper_height={b.wiper_height:g} m is lower than a part lying flat "
+                             f"({tall:g} m): no part would pass the wiper")
+    t0, _ = b.wiper
+    room = float(min(b.wiper_top(r) - b.floor_z(t0, r) for r in (b.radius - b.track_width, b.radius)))
+    if b.wiper_height >= room:
+        raise ParameterError(f"wiper_height={b.wiper_height:g} m is not below the wiper's face, which "
+                             f"rises {room:.3g} m above the floor (under the next turn or the wall's "
+                             "top): the wiper would not exist")
 
 
 def climb_advice(p: Mapping[str, float]) -> list[str]:
@@ -471,8 +538,8 @@ def climb_advice(p: Mapping[str, float]) -> list[str]:
 def fill_boxes(b: Bowl, size: float, height: float, start: float = 0.25) -> list[tuple]:
     """Cubes above the track's floor, one every cube side along its centre line, from
     ``start`` of a turn after the track's start, up the helix and along the chute to its
-    end (a part's ``size`` short of it), none over the side drop and a cube's side either side
-    of it: where parts are pre-placed along the track. Each
+    end (a part's ``size`` short of it), none over the side drop or under the wiper and a
+    cube's side either side of them: where parts are pre-placed along the track. Each
     (x0, x1, y0, y1, z0, z1): side 0.6 track_width (a cube of that side fits in the track's
     width however it is turned), from the highest floor point under it plus a twentieth of a
     part to ``height`` above. The cubes are LIGGGHTS block regions, square to x and y: round
@@ -487,10 +554,12 @@ def fill_boxes(b: Bowl, size: float, height: float, start: float = 0.25) -> list
         z0 = floor + 0.05 * size
         return (x - half, x + half, y - half, y + half, z0, z0 + height)
 
-    drop = b.drop
+    drop, wiper = b.drop, b.wiper
     for t in np.arange(t0, THETA_END - dtheta / 2, dtheta):
         if drop is not None and drop[0] - dtheta <= t <= drop[1] + dtheta:
             continue  # none over the side drop: its floor may not reach the centre line
+        if wiper is not None and wiper[0] - dtheta <= t <= wiper[1] + dtheta:
+            continue  # none under the wiper: a part placed there would sit on or across it
         c = b.helix_point(t)
         x, y = float(c[0]), float(c[1])
         boxes.append(box(x, y, _highest_floor(b, x - half, x + half, y - half, y + half, t)))

@@ -168,6 +168,8 @@ RULES: dict[str, Callable[[float], str | None]] = {
     "turns": _positive,
     "lip_height": _non_negative,
     "chute_length": _positive,
+    "wiper_height": _non_negative,
+    "wiper_at": _between(0, 1, lo_open=False),
 }
 # Section 2's drive and walls are section 1's kind: the same limits.
 SECTION_2_TWINS = {"s2_length": "track_length", "s2_width": "track_width",

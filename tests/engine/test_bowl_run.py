@@ -86,15 +86,16 @@ def test_by_hand_after_prepare_with_a_long_launch(tmp_path):
     """The deck by hand, as its header says: prepare, then the line it prints. A strong drive
     (75 Hz, 1.5e-4 m of stroke) launches parts far beyond the chute's end, so the catch face
     under it (as wide as the launch's reach) reaches past the bowl's side: the box must hold it
-    (LIGGGHTS stops when a mesh leaves the domain). With a side drop over the first turn: the
-    narrowed floor and the riser's end faces are a mesh LIGGGHTS accepts."""
+    (LIGGGHTS stops when a mesh leaves the domain). With a side drop over the first turn and a
+    wiper: the narrowed floor, the riser's end faces and the bar are a mesh LIGGGHTS accepts."""
     import re
     import shlex
     import subprocess
 
     given = {"n_parts": 4, "n_track": 10, "turns": 0.5, "youngs": 2e7, "t_settle": 0.002,
              "t_end": 0.002, "output_dt": 0.001, "freq": 75, "amp_t": 1.5e-4, "amp_n": 4e-5,
-             "phase": -60, "drop_from": 0.5, "drop_to": 0.8, "drop_width": 4e-4}
+             "phase": -60, "drop_from": 0.5, "drop_to": 0.8, "drop_width": 4e-4,
+             "wiper_height": 4.5e-4, "wiper_at": 0.3}
     args = [a for k, v in given.items() for a in ("-p", f"{k}={v}")]
     proc = vibrofeed("prepare", "bowl_feeder", *args, "-o", tmp_path / "m", check=True)
     line = proc.stdout.strip().splitlines()[-1]

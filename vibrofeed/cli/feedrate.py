@@ -87,12 +87,12 @@ def section_table(s: dict) -> list[str]:
     for name, tool in (s.get("rejects_by_tooling") or {}).items():
         label = TOOLING_NAMES.get(name, name)
         if tool is None:
-            told.append(f"{label}: none on the line")
+            told.append(f"{label}: none on the {'bowl' if bowl else 'line'}")
             continue
         rate = _pm(tool["per_s"], tool["per_s_error"]) + " /s" if measured else "n/a"
         told.append(f"{label} {rate} ({tool['in_window']} in the window, {tool['total']} in all)")
     if told:
-        lines.append("rejects        " + "; ".join(told))
+        lines.append(("fell back by   " if bowl else "rejects        ") + "; ".join(told))
     for k in range(len(sections) - 1 if measured else 0):
         into, nxt = sections[k], sections[k + 1]
         flows = (into["joint_flux"], nxt["joint_flux"], nxt["reject_rate"])

@@ -188,7 +188,8 @@ def test_the_prepare_hook_writes_numbers_liggghts_reads(tmp_path):
     from vibrofeed.geometry import prepare_bowl_feeder
 
     values = {k: str(v) for k, v in PARAMS.items()} | {"seed": "5489", "drop_from": "0", "drop_to": "0",
-                                                         "drop_width": "0"}
+                                                         "drop_width": "0", "wiper_height": "0",
+                                                         "wiper_at": "0.5"}
     prepared = prepare_bowl_feeder(values, tmp_path)
     number = r"-?\d+(\.\d+)?(e-?\d+)?"
     lines = (tmp_path / "prepared.in").read_text().splitlines()[1:]
@@ -919,15 +920,17 @@ def test_the_prepare_hook_builds_the_bowl_from_every_one_of_its_fields(tmp_path)
 
     params = {**PARAMS, "bowl_diameter": 0.024, "track_width": 1.3e-3, "helix_angle": 4.0, "turns": 1.25,
               "wall_height": 1.1e-3, "cone_angle": 4.0, "cross_tilt": 2.0, "lip_height": 2e-4,
-              "chute_length": 9e-3, "drop_from": 0.6, "drop_to": 0.85, "drop_width": 5e-4}
+              "chute_length": 9e-3, "drop_from": 0.6, "drop_to": 0.85, "drop_width": 5e-4,
+              "wiper_height": 4.5e-4, "wiper_at": 0.3}
     b = bowl_from(params)
     defaults = {f.name: f.default for f in dataclasses.fields(Bowl)}
     # every field differs from its default and from the module's BOWL
     for f in dataclasses.fields(Bowl):
         assert getattr(b, f.name) != getattr(BOWL, f.name), f.name
         assert f.default is dataclasses.MISSING or getattr(b, f.name) != defaults[f.name], f.name
+    # (the wiper's bar is a part size long: part_size is among the parts' parameters)
     assert set(GEOMETRY) >= {"bowl_diameter", *[f.name for f in dataclasses.fields(Bowl)
-                                                if f.name not in ("radius",)]}
+                                                if f.name not in ("radius", "wiper_length")]}
     values = {k: str(v) for k, v in params.items()} | {"seed": "5489"}
     prepared = prepare_bowl_feeder(values, tmp_path)
     want_v, want_t = bowl_mesh(b)

@@ -105,6 +105,8 @@ BULK = {
     "turns": (0, False, INF, False, None),
     "lip_height": (0, True, INF, False, None),
     "chute_length": (0, False, INF, False, None),
+    "wiper_height": (0, True, INF, False, None),
+    "wiper_at": (0, True, 1, False, None),
 }
 ALL = {**BOUNDS, **BULK}
 

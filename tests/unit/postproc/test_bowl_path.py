@@ -255,11 +255,13 @@ def test_falls_are_parts_that_leave_the_track_for_the_bowl_counted_once_each_tim
             import vibrofeed.postproc.path as pp
 
             monkeypatch.setattr(pp, "BLOCK_VALUES", 4 * r.n_slots * per_block)
-        times, ids = falls(r, np.arange(5))
+        times, ids, where = falls(r, np.arange(5))
         analysis = FeedRate(r, start=0.0, end=0.02, model=False).run()
     fr, summary = analysis.results, analysis.summary()
     assert {k: summary[k] for k in ("fell", "fell_per_s")} == {"fell": 1, "fell_per_s": fr.fell_per_s}
     assert ids.tolist() == [1] and times == pytest.approx([0.015], rel=0, abs=1e-12)
+    # where it left the helix: its coordinate at the frame before, on the track
+    assert where == pytest.approx([float(b.arc_length(b.theta_start + 2.0))], rel=1e-12, abs=0)
     assert fr.fell == 1
     assert fr.fell_per_s == pytest.approx(1 / 0.02, rel=1e-12, abs=0)  # [1/s]
     assert fr.fell_per_s_err == pytest.approx(1 / 0.02, rel=1e-12, abs=0)  # sqrt(1) / 0.02 s
@@ -332,3 +334,29 @@ def test_a_bowls_sections_are_its_helix_and_its_chute(tmp_path):
     assert "sections       path [mm]" in text and "fell back [/s]" in text
     assert f"helix: 0 .. {b.length * 1e3:.3g}" in text and "chute: " in text
     assert "helix: " + f"{helix_s['model_speed'] * 1e3:.3g}" in text and "chute: n/a" in text
+    # the fall by tooling: this bowl has neither a side drop nor a wiper
+    assert s["rejects_by_tooling"]["side_drop"] is None and s["rejects_by_tooling"]["wiper"] is None
+    assert {k: s["rejects_by_tooling"]["other"][k] for k in ("in_window", "total")} == \
+        {"in_window": 1, "total": 1}
+    assert ("fell back by   side drop: none on the bowl; wiper: none on the bowl; other n/a (1 in the "
+            "window, 1 in all)") in text  # (n/a: too few exits for a rate)
+
+
+def test_a_bowls_falls_by_tooling_where_they_left_the_helix():
+    """bowl_tooling: the side drop's stretch (its stations' arc lengths) widened by a part size
+    either way; else from 3 part sizes upstream of the wiper's face to its bar's end; else
+    other; by hand at each boundary, a nanometre either side."""
+    from vibrofeed.postproc.line import TOOLING, bowl_tooling
+
+    size = 3e-4
+    b = bowl_from({**BOWL, "drop_from": 0.5, "drop_to": 0.7, "drop_width": 4e-4,
+                   "wiper_height": 4.5e-4, "wiper_at": 0.2})
+    d0, d1 = (float(b.arc_length(t)) for t in b.drop)
+    w0, w1 = (float(b.arc_length(t)) for t in b.wiper)
+    eps = 1e-9
+    where = np.array([d0 - size - eps, d0 - size + eps, d1 + size - eps, d1 + size + eps,
+                      w0 - 3 * size - eps, w0 - 3 * size + eps, w1 - eps, w1 + eps, 0.0])
+    want = ["other", "side_drop", "side_drop", "other", "other", "wiper", "wiper", "other", "other"]
+    assert [TOOLING[k] for k in bowl_tooling(where, b, size)] == want
+    plain = bowl_from(BOWL)  # no tooling: every fall is other
+    assert set(bowl_tooling(where, plain, size)) == {TOOLING.index("other")}

@@ -154,7 +154,7 @@ def test_feed_rate_summary_holds_the_contract_keys_json_ready(tmp_path):
     # LINE_KEYS: feeder lines only; BOWL_KEYS: bowls only (sections: both)
     assert list(summary) == [k for k in SUMMARY_KEYS if k not in LINE_KEYS + BOWL_KEYS]
     assert LINE_KEYS == ("rejected", "returned", "sections", "rejects_by_tooling")
-    assert BOWL_KEYS == ("sections", "fell", "fell_per_s", "fell_per_s_err")
+    assert BOWL_KEYS == ("sections", "rejects_by_tooling", "fell", "fell_per_s", "fell_per_s_err")
     assert summary["parts_per_s"] == fa.results.parts_per_s
     assert isinstance(summary["profile_x"], list) and summary["n_events"] == 200
 
