@@ -13,14 +13,9 @@ import time
 
 from tqdm import tqdm
 
+from .values import duration
+
 LINE_MIN, LINE_MAX = 5.0, 60.0
-
-
-def _duration(seconds: float) -> str:
-    seconds = int(round(seconds))
-    h, rest = divmod(seconds, 3600)
-    m, s = divmod(rest, 60)
-    return f"{h}h{m:02d}m" if h else f"{m}m{s:02d}s"
 
 
 class RunProgress:
@@ -83,7 +78,7 @@ class RunProgress:
             return
         self._last_line, self._last_tenth = now, tenth
         rate = step / wall if wall > 0 else float("nan")
-        eta = f", ETA {_duration((self.n_steps - step) / rate)}" if rate > 0 else ""
+        eta = f", ETA {duration((self.n_steps - step) / rate)}" if rate > 0 else ""
         print(f"{self.label}: t = {event['time']:.4g}/{self.t_end:.4g} s "
               f"({100 * step / self.n_steps:.3g}%), {rate / 1e3:.3g}k steps/s{eta}",
               file=self.stream, flush=True)

@@ -22,6 +22,14 @@ def to_json(value):
     return value
 
 
+def duration(seconds: float) -> str:
+    """A time span as progress lines print it: 1h05m, 3m07s, 42s."""
+    seconds = int(round(seconds))
+    h, rest = divmod(seconds, 3600)
+    m, s = divmod(rest, 60)
+    return f"{h}h{m:02d}m" if h else f"{m}m{s:02d}s" if m else f"{s}s"
+
+
 def fmt(value, scale: float = 1.0, spec: str = ".4g") -> str:
     """A figure of a table: ``value * scale`` in ``spec``, n/a when missing or not finite."""
     if value is None or (isinstance(value, float) and not math.isfinite(value)):

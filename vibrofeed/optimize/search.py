@@ -701,7 +701,7 @@ def _best_so_far(spec: StudySpec, rows) -> str:
 def _eta(st: Study, left: int, slots: int) -> str:
     if not st.walls or left <= 0:
         return ""
-    from ..sweep.progress import duration
+    from ..values import duration
 
     return f"; ETA {duration(np.mean(st.walls) * left / max(slots, 1))}"
 

@@ -3,6 +3,8 @@ whether or not a progress bar is shown."""
 
 import io
 
+import pytest
+
 from vibrofeed.run_progress import RunProgress
 
 
@@ -45,7 +47,7 @@ def test_without_a_terminal_progress_comes_as_lines(monkeypatch):
     lines = stream.getvalue().splitlines()
     assert len(lines) == 9  # the tenths 1..9; the 10th is the end
     assert lines[0] == "bulk_feeder: t = 0.1/1 s (10%), 0.0025k steps/s, ETA 6m00s"
-    assert lines[-1] == "bulk_feeder: t = 0.9/1 s (90%), 0.0025k steps/s, ETA 0m40s"
+    assert lines[-1] == "bulk_feeder: t = 0.9/1 s (90%), 0.0025k steps/s, ETA 40s"
 
 
 def test_without_a_terminal_slow_progress_still_shows_every_minute(monkeypatch):
@@ -70,3 +72,14 @@ def test_quiet_shows_no_progress_but_the_warnings():
     progress({"event": "run", "n_steps": 10, "dt": 1e-3})
     progress({"event": "progress", "step": 5, "time": 5e-3, "wall": 100.0})
     assert stream.getvalue() == ""
+
+
+@pytest.mark.parametrize("seconds, text", [
+    (0, "0s"), (59.4, "59s"), (59.6, "1m00s"), (61, "1m01s"), (3599.4, "59m59s"),
+    (3599.6, "1h00m"), (3661, "1h01m"), (36000, "10h00m"),
+])
+def test_a_duration_reads_in_seconds_minutes_or_hours_at_its_boundaries(seconds, text):
+    """One format for a run's ETA, a sweep's and a study's (vibrofeed.values.duration)."""
+    from vibrofeed.values import duration
+
+    assert duration(seconds) == text
