@@ -103,6 +103,18 @@ def clump_labels(centres, orientations, template, tolerance: float = 0.0) -> np.
     return _components(n_bodies, pairs[pairs[:, 0] != pairs[:, 1]])
 
 
+def along_extents(orientations, template, direction) -> tuple[np.ndarray, np.ndarray]:
+    """(front, back): how far each body of a template (n, 4) turned by its quaternion reaches
+    from its centre along the unit ``direction`` and against it [m], exactly: its spheres'
+    largest projection plus radius. A square chip of edge a lying square to the direction
+    reaches a/2 either way; turned 45 degrees, (a/2 - r) sqrt(2) + r."""
+    d = np.asarray(direction, dtype=float)
+    n = len(orientations)
+    proj = _clump_spheres(np.zeros((n, 3)), orientations, template) @ d  # (N, spheres)
+    r = np.asarray(template, dtype=float)[:, 3]
+    return (proj + r).max(axis=1), (r - proj).max(axis=1)
+
+
 def _clump_spheres(centres, orientations, template) -> np.ndarray:
     """(N, n, 3) sphere centres of N bodies of a template (n, 4)."""
     offsets = template[:, :3] - template[:, :3].mean(axis=0)  # the centre is the spheres' mean

@@ -8,8 +8,11 @@ same way unless ``start``/``end`` are given)
   Poisson arrivals, 0 for perfectly periodic ones).
 * **Gaps** between consecutive parts at the outlet, as clear distance along
   the track [m]: inter-arrival time x the conveying speed at the edge minus
-  the two radii (for clumps the circumscribed radius: a conservative
-  footprint). The edge speed is the whole-period speed
+  how far the first reaches back and the second forward along the track
+  (a sphere: its radius; a clump: exactly, from its spheres turned as it lies at
+  the last frame its centre was over the track, :func:`.clusters.along_extents`:
+  a square chip square to the track reaches half its edge, not its corner's
+  circumscribed radius). The edge speed is the whole-period speed
   (:func:`.feedrate.period_velocities`) of the parts within ``edge_length``
   of the outlet edge; both parts fall the same way from the edge, so their
   time apart at the catch plane is their time apart at the edge.
@@ -46,7 +49,7 @@ import numpy as np
 from ..errors import InputError
 from ..results import layout as L
 from .base import AnalysisBase
-from .clusters import clump_labels, cluster_labels, pairs_touch, quaternion_matrices
+from .clusters import along_extents, clump_labels, cluster_labels, pairs_touch, quaternion_matrices
 from .feedrate import (
     FeedRate,
     outlet_events,
@@ -56,7 +59,7 @@ from .feedrate import (
     too_few_exits,
     values_at,
 )
-from .path import along, outlet_x, path_end
+from .path import along, is_bowl, outlet_x, path_end
 
 SUMMARY_KEYS = ("cv_interarrival", "doubles_rate", "singulated_fraction", "mean_gap", "cluster_sizes",
                 "n_arrivals", "n_doubles", "doubles_per_s", "mean_interarrival", "edge_velocity",
@@ -185,8 +188,10 @@ class Singulation(AnalysisBase):
             else math.nan
 
         r.edge_velocity = self._edge_velocity(frames, t_a, t_b, diameter)
-        radius = state["radius"]
-        r.gaps = dt * r.edge_velocity - (radius[:-1] + radius[1:])
+        delivered = (self._on_track_orientation(ev, before) if result.body_template is not None
+                     else None)
+        front, back = self._reach(state["radius"], delivered)
+        r.gaps = dt * r.edge_velocity - (back[:-1] + front[1:])
         r.mean_gap = float(np.nanmean(r.gaps)) if np.isfinite(r.gaps).any() else math.nan
         r.touching = self._touching(state, before, ev["id"], names, tol)
         doubles = r.touching.copy()
@@ -205,9 +210,22 @@ class Singulation(AnalysisBase):
 
         r.reason = too_few_exits(len(times))  # the arrivals' statistics are noise (see the command)
         self._clusters(frames, t_a, t_b, tol)
-        self._faces(ev, before)
+        self._faces(ev, delivered)
 
     # -- pieces -----------------------------------------------------------------------
+    def _reach(self, radius: np.ndarray, orientation) -> tuple[np.ndarray, np.ndarray]:
+        """(front, back) of each arriving part along the track at its exit [m]: a sphere's
+        radius; a clump's reach turned as it was delivered (``orientation``), along the
+        track's direction there (a bowl's chute rises at the helix angle)."""
+        if orientation is None:
+            return radius, radius
+        direction = np.zeros(3)
+        direction[self.axis] = 1.0
+        if is_bowl(self.result.parameters):
+            a = math.radians(float(self.result.parameters["helix_angle"]))
+            direction = np.array([math.cos(a), 0.0, math.sin(a)])
+        return along_extents(orientation, self.result.body_template, direction)
+
     def _mean_radius(self, event_radii: np.ndarray, frames: np.ndarray) -> float:
         """Mean part radius [m]: of the arriving parts, else of the parts at the first frame."""
         if np.isfinite(event_radii).any():
@@ -276,7 +294,9 @@ class Singulation(AnalysisBase):
         parts = all_sizes.sum()
         r.track_singulated_fraction = float((all_sizes == 1).sum() / parts) if parts else math.nan
 
-    def _faces(self, ev: dict, before: np.ndarray) -> None:
+    def _faces(self, ev: dict, delivered) -> None:
+        """Faces and alignment of the parts as delivered (``delivered``: their orientations
+        at the last frame over the track, :meth:`_on_track_orientation`; None for spheres)."""
         r, template = self.results, self.result.body_template
         keys = ("face_up_fraction", "face_down_fraction", "on_edge_fraction", "aligned_fraction",
                 "orientation_yield")
@@ -285,7 +305,7 @@ class Singulation(AnalysisBase):
             for key in keys:
                 r[key] = None
             return
-        r.cos_tilt, r.yaw_deg = face_orientation(self._on_track_orientation(ev, before), template)
+        r.cos_tilt, r.yaw_deg = face_orientation(delivered, template)
         c = math.cos(math.radians(FACE_ANGLE))
         r.face_up_fraction = float((r.cos_tilt >= c).mean())
         r.face_down_fraction = float((r.cos_tilt <= -c).mean())

@@ -4,7 +4,7 @@
 import numpy as np
 import pytest
 
-from bulk_synthetic import OUTLET_X, RADIUS, feeder, poisson_times
+from bulk_synthetic import OUTLET_X, RADIUS, enclosing_radius, feeder, poisson_times
 from vibrofeed.errors import InputError
 from vibrofeed.postproc import Singulation
 from vibrofeed.postproc.feedrate import period_velocities
@@ -198,6 +198,43 @@ def test_the_orientation_yield_counts_the_parts_both_face_up_and_aligned(tmp_pat
     assert sg.aligned_fraction == pytest.approx(4 / 5, abs=1e-12)
     assert sg.orientation_yield == pytest.approx(2 / 5, abs=1e-12)
     assert abs(sg.yaw_deg[4]) == pytest.approx(3.0, abs=1e-9)   # face down, along the track
+
+
+@pytest.mark.parametrize("yaw", [0.0, 45.0, 90.0, 30.0])
+def test_a_chips_gap_is_its_clear_track_as_it_lies_not_its_circumscribed_sphere(tmp_path, yaw):
+    """Chips in one lane, each centre a + g behind the one before with a its reach along the
+    track as it lies (yaw about z; by hand: the square of sphere centres at +-1e-4 m, spheres
+    of R_S, reaches 1e-4 + R_S square on, (1e-4 cos + 1e-4 sin) + R_S turned), a clear gap
+    of g = 20 um: every gap reads g, and none is a double. Square on, the circumscribed sphere
+    (2 x 2.16e-4 m) read them all as overlapping: doubles."""
+    deg = np.pi / 180
+    c, s = abs(np.cos(yaw * deg)), abs(np.sin(yaw * deg))
+    reach = 1e-4 * (c + s) + R_S  # [m] either way along the track
+    g, v = 2e-5, 0.05
+    n = 12
+    exits = 0.1 + (2 * reach + g) / v * np.arange(n)
+    quats = np.tile(q_axis([0, 0, 1], yaw * deg), (n, 1))
+    with open_feeder(tmp_path, exits, speed=v, orientations=quats, body_template=CHIP, clumps=True) as r:
+        sg = Singulation(r, start=0.0, end=1.0).run().results
+    assert sg.edge_velocity == pytest.approx(v, rel=1e-9, abs=0)
+    assert sg.gaps == pytest.approx(np.full(n - 1, g), rel=1e-6, abs=0)
+    assert sg.n_doubles == 0 and sg.singulated_fraction == 1.0
+    if yaw in (0.0, 90.0):  # square on: the circumscribed sphere read these as doubles
+        assert 2 * enclosing_radius(CHIP) > 2 * reach + g
+
+
+def test_along_extents_of_a_turned_clump_by_hand():
+    """The reach of a clump along a direction and against it: an offset template (its centre
+    is its spheres' mean) turned by 90 degrees about z, along x: the spheres at y = +-1e-4
+    land on x = -+1e-4."""
+    from vibrofeed.postproc.clusters import along_extents
+
+    template = np.array([[0.0, 0.0, 0.0, 1e-5], [0.0, 2e-4, 0.0, 3e-5]])  # centre at y = 1e-4
+    q = np.array([q_axis([0, 0, 1], np.pi / 2), [1.0, 0, 0, 0]])
+    front, back = along_extents(q, template, [1.0, 0.0, 0.0])
+    # turned: the sphere of 3e-5 at x = -1e-4, the one of 1e-5 at x = +1e-4
+    assert front == pytest.approx([1e-4 + 1e-5, 3e-5], rel=1e-12, abs=0)
+    assert back == pytest.approx([1e-4 + 3e-5, 3e-5], rel=1e-12, abs=0)
 
 
 def test_thin_axis_and_orientation_of_a_template():
