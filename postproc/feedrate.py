@@ -140,8 +140,7 @@ LINE_KEYS = ("rejected", "returned", "sections", "rejects_by_tooling")
 BOWL_KEYS = ("sections", "rejects_by_tooling", "fell", "fell_per_s", "fell_per_s_err")
 # A bowl's two sections along its path (its summary's ``sections``, each with a ``name``).
 BOWL_SECTIONS = ("helix", "chute")
-# Why the chute has no single-part model (docs/bowl.md, "The chute").
-CHUTE_NOTE = "the chute's drive is not a linear track's: the torsion also shakes it across, by x theta"
+
 # Parameters the single-part model needs from the deck (the rest have defaults).
 MODEL_NEEDS = ("freq", "mu", "restitution")
 
@@ -342,6 +341,20 @@ def dilute_limit(parameters) -> tuple[float | None, str]:
         return None, f"model not applicable ({exc})"
     note = "" if state.converged else "model not converged (chaotic hopping?): mean of its last blocks"
     return float(state.velocity), note
+
+
+def chute_model(parameters) -> tuple[float | None, str]:
+    """(speed [m/s], note) of a lone part crossing a bowl's chute by its model
+    (:func:`vibrofeed.bowl.chute_mean_speed`: the torsion also shakes the chute across, and
+    its walls brake the part); (None, why) without the parameters it needs."""
+    from ..bowl import chute_mean_speed
+
+    missing = [name for name in MODEL_NEEDS + ("amp_t", "amp_n", "phase", "part_size")
+               if name not in parameters]
+    if missing:
+        return None, f"the result lacks {', '.join(missing)}"
+    numbers = {k: float(v) for k, v in parameters.items() if isinstance(v, int | float)}
+    return chute_mean_speed(numbers)
 
 
 def velocity_ratio(measured: float | None, model: float | None) -> float | None:
@@ -585,9 +598,9 @@ class FeedRate(AnalysisBase):
             r.model_velocity, r.model_note = dilute_limit(result.parameters)
             r.velocity_ratio = velocity_ratio(r.mean_velocity, r.model_velocity)
             for k, sec in enumerate(r.get("sections") or (), 1):  # each section's own drive
-                if is_bowl(result.parameters):
+                if is_bowl(result.parameters):  # the helix's dilute limit; the chute's own model
                     sec["model_speed"], sec["model_note"] = ((r.model_velocity, r.model_note) if k == 1
-                                                             else (None, CHUTE_NOTE))
+                                                             else chute_model(result.parameters))
                 else:
                     try:
                         drive = section_drive(result.parameters, k)

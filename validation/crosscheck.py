@@ -296,6 +296,84 @@ def bowl_speeds(result, t_from: float) -> tuple[float, float, float]:
     return float(np.mean(models)), float(np.mean(dems)), centripetal
 
 
+def chute_speeds(result, t_from: float, bin_width: float) -> list[tuple[float, float, int, float]]:
+    """A bowl's parts on its chute after ``t_from``: their speed along it over each whole-period
+    interval (path coordinate, vibrofeed.postproc.path) with both ends on the chute, binned by
+    the interval's mid-point x along the chute from the slot in bins of ``bin_width`` [m], up
+    to a part size short of the outlet edge (where a part tips over it). [(x_lo, x_hi,
+    intervals, mean speed [m/s])] of the bins holding any."""
+    from vibrofeed.bowl import bowl_from
+    from vibrofeed.postproc.feedrate import period_lag
+    from vibrofeed.postproc.path import along
+
+    p = result.parameters
+    b = bowl_from(p)
+    frames = np.nonzero(result.time >= t_from - 1e-12)[0]
+    m, _ = period_lag(result.time[frames], float(p["freq"]))
+    chain = frames[::m]
+    s, _ = along(result, chain)
+    ids = result.read("id", frames=chain)
+    time = result.time[chain]
+    x = s - b.length  # along the chute (NaN off the track)
+    end = b.chute_length - float(p["part_size"])
+    on = (ids[:-1] == ids[1:]) & (ids[:-1] != L.ID_FILL) & (x[:-1] >= 0) & (x[1:] >= 0) \
+        & (x[:-1] <= end) & (x[1:] <= end)
+    mid = 0.5 * (x[:-1] + x[1:])[on]
+    speed = ((s[1:] - s[:-1]) / (time[1:] - time[:-1])[:, None])[on]
+    out = []
+    for lo in np.arange(0.0, end, bin_width):
+        sel = (mid >= lo) & (mid < min(lo + bin_width, end))
+        if sel.any():
+            out.append((float(lo), float(min(lo + bin_width, end)), int(sel.sum()), float(speed[sel].mean())))
+    return out
+
+
+def _chute(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
+    """A bowl's chute: the parts' speed along it in bins of x, against the sliding block
+    between the chute's walls under the drive it sees there (vibrofeed.bowl.chute_speed),
+    each bin with at least ``min_intervals`` whole-period intervals."""
+    from vibrofeed.bowl import chute_speed, track_drive
+    from vibrofeed.results.reader import Result
+
+    from .plots import plot_chute
+
+    transient = float(case.compare.get("transient_periods", 10))
+    width = float(case.compare.get("bin_width", 1e-3))
+    least = int(case.compare.get("min_intervals", 10))
+    for run in runs:
+        p = {k: float(v) for k, v in run.params.items() if _is_number(v)}
+        with Result(run.output) as r:
+            bins = chute_speeds(r, transient / p["freq"], width)
+        points = []
+        for lo, hi, n, dem in bins:
+            if n < least:
+                continue
+            x = 0.5 * (lo + hi)
+            model = chute_speed(p, x).velocity
+            label_x = f"x={x * 1e3:.1f}mm" + ("" if run.label == "base" else f",{run.label}")
+            out.rows.append(row(case, "chute_speed", label_x, model, dem, "m/s"))
+            points.append((x, n, model, dem))
+        if not points:
+            raise CaseError(f"case {case.name} [{run.label}]: no bin of the chute holds {least} "
+                            "whole-period intervals of a part")
+        d = track_drive(p["amp_t"], p["amp_n"], p["phase"], p["freq"], p["helix_angle"],
+                        p["bowl_diameter"] / 2 - p["track_width"] / 2)
+        helix = dm.transport({**p, "amp_t": d.amp_t, "amp_n": d.amp_n, "phase": d.phase,
+                              "incline": d.incline}).velocity
+        curve_x = np.linspace(0.0, points[-1][0] + width / 2, 13)
+        curve = [chute_speed(p, float(c)).velocity for c in curve_x]
+        out.figures.append(plot_chute(case, points, (curve_x, curve), helix,
+                                      fig_dir / f"chute_{run.label}.png"))
+
+
+def _is_number(text) -> bool:
+    try:
+        float(text)
+    except (TypeError, ValueError):
+        return False
+    return True
+
+
 def min_distance(result) -> float:
     """Smallest distance [m] between the centres of two parts at any frame; inf without two."""
     ids, x = result.read("id"), result.read("position")
@@ -753,7 +831,7 @@ def _line_continuity(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -
     out.figures.append(plot_line_continuity(case, panels, fig_dir / "continuity.png"))
 
 
-KINDS = {"flights": _flights, "transport": _transport, "climb": _climb, "period": _period,
+KINDS = {"flights": _flights, "transport": _transport, "climb": _climb, "chute": _chute, "period": _period,
          "vertical": _vertical, "replay": _replay, "pulloff": _pulloff, "reference": _reference,
          "line_transport": _line_transport, "line_continuity": _line_continuity,
          **micro_checks.KINDS}

@@ -73,6 +73,31 @@ def plot_flights(case, panels: list[dict], path: Path) -> Path:
                    dict(fontsize=8, loc="upper right"))
 
 
+def plot_chute(case, points, curve, helix: float, path: Path) -> Path:
+    """A bowl's chute: the parts' mean speed in bins along it (DEM, the number of intervals
+    by each), the sliding block between its walls (model curve, the tolerance about it), and
+    the speed the helix's drive alone would give (the 1D model: no drive across)."""
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(6, 4))
+    cx, cv = curve
+    ax.plot(np.asarray(cx) * 1e3, np.asarray(cv) * 1e3, **MODEL_STYLE)
+    xs = np.array([x for x, _, _, _ in points]) * 1e3
+    model = np.array([m for _, _, m, _ in points]) * 1e3
+    tol = case.tolerance_of("chute_speed")
+    err = tol.value * np.abs(model) if tol.kind == "rel" else np.full_like(model, tol.value * 1e3)
+    ax.errorbar(xs, model, yerr=err, fmt="none", ecolor="gray", capsize=3, label="tolerance")
+    ax.plot(xs, [d * 1e3 for _, _, _, d in points], "o", color=DEM_STYLE["color"], label=DEM_STYLE["label"])
+    for x, n, _, d in points:
+        ax.annotate(str(n), (x * 1e3, d * 1e3), textcoords="offset points", xytext=(4, 4), fontsize=7)
+    ax.axhline(helix * 1e3, color="gray", ls=":", lw=1, label="the helix's drive alone (1D model)")
+    ax.axhline(0, color="gray", lw=0.5)
+    ax.set_xlabel("x along the chute from the slot [mm]")
+    ax.set_ylabel("speed along the chute [mm/s]")
+    ax.set_title(heading(case), fontsize=10)
+    ax.legend(fontsize=8)
+    return save(fig, path)
+
+
 def plot_speed_curve(case, runs, points, axis: str, path: Path) -> Path:
     """Mean conveying speed vs the swept quantity: model curve, DEM points."""
     from ..models import deck as dm

@@ -534,6 +534,41 @@ def climb_advice(p: Mapping[str, float]) -> list[str]:
             "a larger amplitude or another phase"]
 
 
+def chute_speed(p: Mapping[str, float], x: float):
+    """The single-part model on a bowl's chute, x [m] along it from the slot
+    (:mod:`vibrofeed.models.cross_shake`): the helix's drive along it, the torsion's x theta
+    across it, a part sliding between its walls with the track's width less a part's
+    (``part_size``: a chip square to the chute) of play. A :class:`~vibrofeed.models.
+    cross_shake.ChuteState`; ValueError where the drive would make the part hop."""
+    from .models.cross_shake import chute_drive, sliding_speed  # loaded for a bowl only
+
+    b = bowl_from(p)
+    along, across, normal = chute_drive(float(p["amp_t"]), float(p["amp_n"]), float(p["phase"]),
+                                        b.helix_angle, b.r_mid, x)
+    return sliding_speed(float(p["freq"]), along, across, normal, float(p["mu"]), b.helix_angle,
+                         clearance=b.track_width - widest_part(p))
+
+
+# Points along the chute at which its model is evaluated for a lone part's mean speed.
+CHUTE_POINTS = 9
+
+
+def chute_mean_speed(p: Mapping[str, float]) -> tuple[float | None, str]:
+    """(speed [m/s], note) of a lone part crossing the chute by the model (:func:`chute_speed`):
+    the chute's length over the time it takes, L / integral dx / v(x), from the slot to a part
+    short of the outlet (trapezoids on CHUTE_POINTS points); 0 with a note where the part
+    stalls (v <= 0 somewhere), None with a note where the drive makes it hop."""
+    b = bowl_from(p)
+    xs = np.linspace(0.0, b.chute_length - float(p["part_size"]), CHUTE_POINTS)
+    try:
+        v = np.array([chute_speed(p, float(x)).velocity for x in xs])
+    except ValueError as exc:
+        return None, f"the chute's model only slides: {exc}"
+    if (v <= 0).any():
+        return 0.0, f"a lone part stalls on the chute by x = {xs[np.argmax(v <= 0)]:.3g} m"
+    return float((xs[-1] - xs[0]) / np.trapezoid(1 / v, xs)), ""
+
+
 # ------------------------------------------------------------------ the prepare hook's part
 def fill_boxes(b: Bowl, size: float, height: float, start: float = 0.25) -> list[tuple]:
     """Cubes above the track's floor, one every cube side along its centre line, from

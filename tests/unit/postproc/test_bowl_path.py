@@ -274,9 +274,10 @@ def test_a_bowls_sections_are_its_helix_and_its_chute(tmp_path):
     along the chute at 10 mm/s throughout; part 4 climbs the helix at 2 rad/s and falls into
     the pile at 31.25 ms. The helix: speed 2 r_mid / cos(3 deg), hold-up (41 + 21 + 13) / 41,
     1 crossing and 1 fall in 0.1 s (10 /s each); the chute: speed 10 mm/s, hold-up
-    (41 + 20) / 41; the model: the helix's dilute limit, none for the chute."""
+    (41 + 20) / 41; the models: the helix's dilute limit, the chute's lone part crossing it."""
+    from vibrofeed.bowl import chute_speed
     from vibrofeed.cli.feedrate import table
-    from vibrofeed.postproc.feedrate import BOWL_SECTIONS, CHUTE_NOTE, FeedRate
+    from vibrofeed.postproc.feedrate import BOWL_SECTIONS, FeedRate
 
     b = bowl_from(BOWL)
     d = 3e-4  # [m] the spheres' diameter
@@ -302,7 +303,8 @@ def test_a_bowls_sections_are_its_helix_and_its_chute(tmp_path):
     events = {"time": np.array([0.001, 0.011, 0.019]), "id": np.array([101, 102, 103]),
               "position": np.tile([b.outlet_x + 1e-4, -b.r_mid, -1e-3], (3, 1)),
               "velocity": np.zeros((3, 3)), "orientation": np.tile([1.0, 0, 0, 0], (3, 1))}
-    variables = {k: (repr(v_), "", k, repr(v_)) for k, v_ in BOWL.items()}
+    params = {**BOWL, "amp_n": 1.5e-5}  # (sliding: the chute's model has no flights)
+    variables = {k: (repr(v_), "", k, repr(v_)) for k, v_ in params.items()}
     path = write_bulk_result(tmp_path / "s.h5", frames, events=events, variables=variables,
                              outlet={"outlet_x": b.outlet_x, "catch_z": -5e-4, "method": "synthetic"})
     with Result(path) as r:
@@ -321,9 +323,19 @@ def test_a_bowls_sections_are_its_helix_and_its_chute(tmp_path):
     assert helix_s["joint_flux"] == pytest.approx(1 / 0.1, rel=1e-12, abs=0)  # [1/s]
     assert helix_s["reject_rate"] == pytest.approx(1 / 0.1, rel=1e-12, abs=0)  # the fall
     assert chute_s["reject_rate"] == 0.0
-    assert helix_s["model_speed"] == pytest.approx(dilute_limit(BOWL)[0], rel=1e-12, abs=0)
+    assert helix_s["model_speed"] == pytest.approx(dilute_limit(params)[0], rel=1e-12, abs=0)
     assert helix_s["speed_ratio"] == pytest.approx(helix_s["speed"] / helix_s["model_speed"], rel=1e-12)
-    assert (chute_s["model_speed"], chute_s["model_note"]) == (None, CHUTE_NOTE)
+    # the chute's model: a lone part's mean speed across it, L / integral dx / v(x) by trapezoids
+    # on 9 points from the slot to a part short of the outlet
+    xs = np.linspace(0.0, b.chute_length - 3e-4, 9)
+    v_x = np.array([chute_speed(params, float(x)).velocity for x in xs])
+    harmonic = (xs[-1] - xs[0]) / np.sum(np.diff(xs) * (1 / v_x[1:] + 1 / v_x[:-1]) / 2)
+    assert chute_s["model_speed"] == pytest.approx(harmonic, rel=1e-12, abs=0)
+    assert chute_s["model_note"] == "" and 0 < chute_s["model_speed"] < helix_s["model_speed"]
+    # (a drive that throws the part: no model, and why)
+    from vibrofeed.postproc.feedrate import chute_model
+
+    assert chute_model(BOWL)[0] is None and "only slides" in chute_model(BOWL)[1]
     # the sweep's columns: the helix is section 1, the chute 2
     from vibrofeed.sweep.metrics import section_columns
 
@@ -333,7 +345,8 @@ def test_a_bowls_sections_are_its_helix_and_its_chute(tmp_path):
     text = table(s)
     assert "sections       path [mm]" in text and "fell back [/s]" in text
     assert f"helix: 0 .. {b.length * 1e3:.3g}" in text and "chute: " in text
-    assert "helix: " + f"{helix_s['model_speed'] * 1e3:.3g}" in text and "chute: n/a" in text
+    assert "helix: " + f"{helix_s['model_speed'] * 1e3:.3g}" in text
+    assert "chute: " + f"{chute_s['model_speed'] * 1e3:.4g} mm/s (DEM / model" in text
     # the fall by tooling: this bowl has neither a side drop nor a wiper
     assert s["rejects_by_tooling"]["side_drop"] is None and s["rejects_by_tooling"]["wiper"] is None
     assert {k: s["rejects_by_tooling"]["other"][k] for k in ("in_window", "total")} == \

@@ -109,3 +109,47 @@ def test_speeds_refuse_when_no_part_stays_on_the_helix(tmp_path):
     w.finish("complete")
     with Result(tmp_path / "b.h5") as r, pytest.raises(CaseError, match="helix"):
         bowl_speeds(r, 0.1)
+
+
+def test_chute_speeds_bin_each_parts_whole_period_speed_along_the_chute(tmp_path):
+    """By hand, frames a quarter period apart (whole periods: every 4th): part 1 runs along the
+    chute from x = 0.5 mm at 10 mm/s, part 2 from x = 4.2 mm at 4 mm/s, part 3 climbs the
+    helix (not the chute: left out), part 4 runs past the last part size before the outlet
+    (its intervals there left out). Bins of 1 mm: each holds the intervals whose mid-point
+    lies in it, at its part's speed."""
+    from helpers import write_bulk_result
+    from vibrofeed.validation.crosscheck import chute_speeds
+
+    b = bowl_from(BOWL)
+    a = math.radians(BOWL["helix_angle"])
+    up = np.array([math.cos(a), 0.0, math.sin(a)])
+    end = b.chute_length - BOWL["part_size"]  # [m] the last x measured
+
+    def chute(x):
+        return b.helix_point(-math.pi / 2) + x * up + [0, 0, 1e-4]
+
+    frames = []
+    times = np.arange(0, 0.2 + 1e-12, 0.0025)
+    for k, t in enumerate(times):
+        pos = np.array([chute(5e-4 + 0.01 * t), chute(4.2e-3 + 0.004 * t),
+                        b.helix_point(b.theta_start + 1.0 + 2.0 * t) + [0, 0, 1e-4],
+                        chute(6.5e-3 + 0.01 * t)])
+        frames.append((k, float(t), parts(np.arange(1, 5), pos, radius=1.8e-4)))
+    variables = {k: (repr(v), "", k, repr(v)) for k, v in BOWL.items()}
+    path = write_bulk_result(tmp_path / "c.h5", frames, variables=variables,
+                             outlet={"outlet_x": b.outlet_x, "catch_z": -5e-4, "method": "synthetic"})
+    with Result(path) as r:
+        bins = chute_speeds(r, 0.0, 1e-3)
+    # the intervals by hand: 20 whole periods of 10 ms; part k's mid-points x0 + v (j + 0.5) T
+    want = {}
+    for x0, v in ((5e-4, 0.01), (4.2e-3, 0.004), (6.5e-3, 0.01)):
+        for j in range(20):
+            x_a, x_b = x0 + v * j * 0.01, x0 + v * (j + 1) * 0.01
+            if x_b <= end:
+                lo = math.floor((x_a + x_b) / 2 / 1e-3) * 1e-3
+                want.setdefault(round(lo, 9), []).append(v)
+    assert [round(lo, 9) for lo, _, _, _ in bins] == sorted(want)
+    for lo, hi, n, speed in bins:
+        assert n == len(want[round(lo, 9)])
+        assert speed == pytest.approx(np.mean(want[round(lo, 9)]), rel=1e-9, abs=0)
+        assert hi <= end + 1e-15

@@ -13,7 +13,7 @@ from vibrofeed.validation.outcome import Row
 
 # The quantities each kind reports (a case needs a tolerance for each it uses).
 QUANTITIES = {"flights": {"landing_time", "flight_duration"}, "transport": {"mean_speed"},
-              "climb": {"climbs", "centripetal"},
+              "climb": {"climbs", "centripetal"}, "chute": {"chute_speed"},
               "period": {"period"}, "vertical": {"net_speed"},
               "replay": {"mean_difference_mm", "mean_abs_error_mm", "final_displacement_mm"},
               "pulloff": {"pulloff"}, "reference": {"parts_per_s"},
