@@ -22,16 +22,21 @@ BOWL = {"bowl_diameter": 0.02, "track_width": 1.2e-3, "helix_angle": 3.0, "turns
         "density": 2330.0}
 
 
+def bowl_writer(path) -> ResultWriter:
+    """A rotating bowl result of BOWL's parameters, to write frames into."""
+    variables = {k: (repr(v), "", k, repr(v)) for k, v in BOWL.items()}
+    return ResultWriter(path, deck_name="bowl_feeder", deck_path="b.liggghts", deck_text="#\n",
+                        variables=variables, derived={"dt_used": 1e-6}, engine_version=ENGINE, seed=1,
+                        run_id="b" * 64, rotating=True)
+
+
 def test_speeds_along_the_helix_and_the_model_at_each_parts_radius(tmp_path):
     b = bowl_from(BOWL)
     radii = np.array([b.radius - 1.0e-3, b.radius - 0.3e-3])  # inner and outer side of the track
     rates = np.array([1.2, 2.0])  # [rad/s] about the axis
     theta0 = np.array([-9.0, -5.0])
     frames = np.arange(0, 0.2 + 1e-12, 0.0025)  # 4 frames per period
-    variables = {k: (repr(v), "", k, repr(v)) for k, v in BOWL.items()}
-    w = ResultWriter(tmp_path / "b.h5", deck_name="bowl_feeder", deck_path="b.liggghts", deck_text="#\n",
-                     variables=variables, derived={"dt_used": 1e-6}, engine_version=ENGINE, seed=1,
-                     run_id="b" * 64, rotating=True)
+    w = bowl_writer(tmp_path / "b.h5")
     for k, t in enumerate(frames):
         theta = theta0 + rates * t
         pos = np.array([b.helix_point(th, r) for th, r in zip(theta, radii)]) + [0, 0, 7.5e-5]
@@ -72,10 +77,7 @@ def test_speeds_end_where_each_part_reaches_the_chute(tmp_path):
         return b.helix_point(THETA_END, r) + chute_speed * (t - t_switch) * np.array([cos_a, 0, sin_a])
 
     frames = np.arange(0, 0.2 + 1e-12, 0.0025)  # 4 frames per period
-    variables = {k: (repr(v), "", k, repr(v)) for k, v in BOWL.items()}
-    w = ResultWriter(tmp_path / "b.h5", deck_name="bowl_feeder", deck_path="b.liggghts", deck_text="#\n",
-                     variables=variables, derived={"dt_used": 1e-6}, engine_version=ENGINE, seed=1,
-                     run_id="b" * 64, rotating=True)
+    w = bowl_writer(tmp_path / "b.h5")
     for k, t in enumerate(frames):
         pos = np.array([
             helix_then_chute(t, 1.6, inner, 0.175, 4e-3),  # on the helix until 0.175 s: counts
@@ -97,10 +99,7 @@ def test_speeds_end_where_each_part_reaches_the_chute(tmp_path):
 def test_speeds_refuse_when_no_part_stays_on_the_helix(tmp_path):
     b = bowl_from(BOWL)
     frames = np.arange(0, 0.2 + 1e-12, 0.0025)
-    variables = {k: (repr(v), "", k, repr(v)) for k, v in BOWL.items()}
-    w = ResultWriter(tmp_path / "b.h5", deck_name="bowl_feeder", deck_path="b.liggghts", deck_text="#\n",
-                     variables=variables, derived={"dt_used": 1e-6}, engine_version=ENGINE, seed=1,
-                     run_id="b" * 64, rotating=True)
+    w = bowl_writer(tmp_path / "b.h5")
     a = math.radians(3.0)
     for k, t in enumerate(frames):
         pos = b.helix_point(-math.pi / 2) + (2e-3 + 1e-2 * t) * np.array([math.cos(a), 0, math.sin(a)])
