@@ -353,8 +353,7 @@ def chute_model(parameters) -> tuple[float | None, str]:
                if name not in parameters]
     if missing:
         return None, f"the result lacks {', '.join(missing)}"
-    numbers = {k: float(v) for k, v in parameters.items() if isinstance(v, int | float)}
-    return chute_mean_speed(numbers)
+    return chute_mean_speed(parameters)
 
 
 def velocity_ratio(measured: float | None, model: float | None) -> float | None:
@@ -705,9 +704,10 @@ class FeedRate(AnalysisBase):
         edge = path_end(result)
         bounds = section_bounds(result.parameters, edge)
         bowl = is_bowl(result.parameters)
-        # a bowl's rejects are the parts fallen off its helix (its chute is walled)
-        rejects = ({"time": r.fell_times, "section": np.ones(len(r.fell_times), dtype=np.int64)}
-                   if bowl else result.rejects)
+        # a bowl's rejects are the parts fallen off its helix (its chute is walled), where they
+        # left it along the path
+        rejects = ({"time": r.fell_times, "section": np.ones(len(r.fell_times), dtype=np.int64),
+                    "where": r.fell_where} if bowl else result.rejects)
         crossings, counts = self._bed_pass(frames)
         inside = (self.times >= t_a - 1e-12) & (self.times <= t_b + 1e-12)
         window, window_t = frames[inside], self.times[inside]
@@ -782,7 +782,7 @@ class FeedRate(AnalysisBase):
         run = (rejects["time"] > t_lo) & (rejects["time"] <= t_hi)
         if is_bowl(result.parameters):  # its falls, where they left the helix
             b = bowl_of(result.parameters)
-            which = bowl_tooling(self.results.fell_where, b, size)
+            which = bowl_tooling(rejects["where"], b, size)
             has = {"side_drop": b.drop is not None, "wiper": b.wiper is not None}
         else:
             s = section_from(result.parameters)

@@ -250,6 +250,19 @@ def _climb(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
         out.figures.append(plot_speed_curve(case, runs, points, axis, fig_dir / "speed.png"))
 
 
+def _whole_periods(result, t_from: float):
+    """(times, path coordinates (frames, slots), ids) at the frames a whole number of periods
+    apart from ``t_from`` on (vibrofeed.postproc.feedrate.period_lag, .path.along)."""
+    from vibrofeed.postproc.feedrate import period_lag
+    from vibrofeed.postproc.path import along
+
+    frames = np.nonzero(result.time >= t_from - 1e-12)[0]
+    m, _ = period_lag(result.time[frames], float(result.parameters["freq"]))
+    chain = frames[::m]
+    s, _ = along(result, chain)
+    return result.time[chain], s, result.read("id", frames=chain), chain
+
+
 def bowl_speeds(result, t_from: float) -> tuple[float, float, float]:
     """(model, DEM, centripetal) of the parts on a bowl's helix after ``t_from``: each part's
     speed along the helix over whole periods (its path coordinate, vibrofeed.postproc.path)
@@ -262,18 +275,11 @@ def bowl_speeds(result, t_from: float) -> tuple[float, float, float]:
     left out because the helix's drive is not its drive: along the chute's line the torsion
     also shakes parts across it, by x theta (docs/bowl.md), and they slow there."""
     from vibrofeed.bowl import bowl_from, track_drive
-    from vibrofeed.postproc.feedrate import period_lag
-    from vibrofeed.postproc.path import along
 
     p = result.parameters
     b = bowl_from(p)
     freq = float(p["freq"])
-    frames = np.nonzero(result.time >= t_from - 1e-12)[0]
-    m, _ = period_lag(result.time[frames], freq)
-    chain = frames[::m]
-    time = result.time[chain]
-    s, _ = along(result, chain)
-    ids = result.read("id", frames=chain)
+    time, s, ids, chain = _whole_periods(result, t_from)
     position = result.read("position", frames=chain)
     same = (ids == ids[0]).all(axis=0) & (ids[0] != L.ID_FILL)
     helix = np.isfinite(s) & (s <= b.length)
@@ -303,17 +309,10 @@ def chute_speeds(result, t_from: float, bin_width: float) -> list[tuple[float, f
     to a part size short of the outlet edge (where a part tips over it). [(x_lo, x_hi,
     intervals, mean speed [m/s])] of the bins holding any."""
     from vibrofeed.bowl import bowl_from
-    from vibrofeed.postproc.feedrate import period_lag
-    from vibrofeed.postproc.path import along
 
     p = result.parameters
     b = bowl_from(p)
-    frames = np.nonzero(result.time >= t_from - 1e-12)[0]
-    m, _ = period_lag(result.time[frames], float(p["freq"]))
-    chain = frames[::m]
-    s, _ = along(result, chain)
-    ids = result.read("id", frames=chain)
-    time = result.time[chain]
+    time, s, ids, _ = _whole_periods(result, t_from)
     x = s - b.length  # along the chute (NaN off the track)
     end = b.chute_length - float(p["part_size"])
     on = (ids[:-1] == ids[1:]) & (ids[:-1] != L.ID_FILL) & (x[:-1] >= 0) & (x[1:] >= 0) \
@@ -332,7 +331,8 @@ def _chute(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
     """A bowl's chute: the parts' speed along it in bins of x, against the sliding block
     between the chute's walls under the drive it sees there (vibrofeed.bowl.chute_speed),
     each bin with at least ``min_intervals`` whole-period intervals."""
-    from vibrofeed.bowl import chute_speed, track_drive
+    from vibrofeed.bowl import chute_speed
+    from vibrofeed.postproc.feedrate import dilute_limit
     from vibrofeed.results.reader import Result
 
     from .plots import plot_chute
@@ -341,9 +341,9 @@ def _chute(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
     width = float(case.compare.get("bin_width", 1e-3))
     least = int(case.compare.get("min_intervals", 10))
     for run in runs:
-        p = {k: float(v) for k, v in run.params.items() if _is_number(v)}
         with Result(run.output) as r:
-            bins = chute_speeds(r, transient / p["freq"], width)
+            p = dict(r.parameters)  # (as the analyses read them: numbers)
+            bins = chute_speeds(r, transient / run.number("freq"), width)
         points = []
         for lo, hi, n, dem in bins:
             if n < least:
@@ -356,22 +356,11 @@ def _chute(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
         if not points:
             raise CaseError(f"case {case.name} [{run.label}]: no bin of the chute holds {least} "
                             "whole-period intervals of a part")
-        d = track_drive(p["amp_t"], p["amp_n"], p["phase"], p["freq"], p["helix_angle"],
-                        p["bowl_diameter"] / 2 - p["track_width"] / 2)
-        helix = dm.transport({**p, "amp_t": d.amp_t, "amp_n": d.amp_n, "phase": d.phase,
-                              "incline": d.incline}).velocity
+        helix, _ = dilute_limit(p)  # the helix's drive alone, at its centre line
         curve_x = np.linspace(0.0, points[-1][0] + width / 2, 13)
         curve = [chute_speed(p, float(c)).velocity for c in curve_x]
         out.figures.append(plot_chute(case, points, (curve_x, curve), helix,
                                       fig_dir / f"chute_{run.label}.png"))
-
-
-def _is_number(text) -> bool:
-    try:
-        float(text)
-    except (TypeError, ValueError):
-        return False
-    return True
 
 
 def min_distance(result) -> float:
