@@ -97,3 +97,24 @@ def test_ctrl_c_marks_the_file_interrupted_and_exits_130(tmp_path):
     assert proc.returncode == 130 and err.strip() == "vibrofeed: error: interrupted"
     assert not out.exists() and not list(tmp_path.glob(".vibrofeed-*"))  # scratch folder removed
     assert_valid_partial(part, seen, "interrupted")
+
+
+def test_a_killed_rerun_keeps_the_finished_result(tmp_path):
+    # A complete result first, then a rerun into the same name (another run id) killed midway.
+    done = subprocess.run([sys.executable, "-m", "vibrofeed.cli", "run", "single_part", "-q",
+                           "-o", str(tmp_path / "k.h5"), "-p", "t_end=0.002",
+                           "-p", "output_dt=2e-4"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    before = (tmp_path / "k.h5").read_bytes()
+    proc, out, part = start_run(tmp_path)
+    seen = wait_for_frames(part, 20, proc)
+    worker = children(proc.pid)[0]
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    end = time.monotonic() + 20  # the worker, sent SIGTERM, marks its file and ends
+    while Path(f"/proc/{worker}").exists() and time.monotonic() < end and \
+            "zombie" not in Path(f"/proc/{worker}/status").read_text():
+        time.sleep(0.05)
+    assert out.read_bytes() == before  # the finished file, untouched
+    assert check_file(out).ok
+    assert_valid_partial(part, seen, "interrupted")

@@ -9,9 +9,10 @@ or under its own ``mpirun`` on the local node, so a failing run inside a sweep
 never takes the sweep down with it.
 
 While the run goes, frames land in ``OUT.h5.part``; only a completed run is
-renamed to ``OUT.h5``. A run that fails or is interrupted after writing frames
-leaves ``OUT.h5.part`` with its frames and ``parameters/run@status`` saying
-what happened; one that fails before its first frame leaves nothing.
+renamed to ``OUT.h5``, replacing an earlier one only then. A run that fails or
+is interrupted after writing frames leaves ``OUT.h5.part`` with its frames and
+``parameters/run@status`` saying what happened; one that fails before its first
+frame leaves nothing.
 """
 
 from __future__ import annotations
@@ -301,8 +302,9 @@ def run_deck(deck: Deck, params: Mapping[str, str], output, *, ranks: int = 1,
         kept = _reusable(out, rid, deck, values, ranks)
         if kept is not None:
             return kept
-    for stale in (out, part):
-        stale.unlink(missing_ok=True)
+    # An earlier OUT.h5 stays until this run completes and replaces it (os.replace in finish):
+    # a rerun that fails or is killed must not take a finished result with it.
+    part.unlink(missing_ok=True)
     scratch.remove_abandoned(out.parent)
 
     run = _Run(deck, values, rid, out, part, log, ranks, on_event, target_error)
