@@ -116,5 +116,7 @@ def screen(spec: StudySpec, values: dict) -> Screened:
     numbers = {name: _number(v) for name, v in values.items()}
     for q in spec.inequalities:
         m = q.margin(numbers)
-        margins[q.text] = m if not q.holds(numbers) else min(m, 0.0)
+        # a strict inequality met with equality is broken by no amount: by the least positive
+        # one, so that it still rules the setting out (margin 0 would count as holding)
+        margins[q.text] = m if q.holds(numbers) else max(m, math.ulp(0.0))
     return Screened(drives, margins)

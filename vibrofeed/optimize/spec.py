@@ -322,6 +322,10 @@ def _budget(table: dict, r: KeyReader) -> dict:
         if isinstance(value, bool) or not isinstance(value, int) or value < low:
             r.fail(("budget", key), f"{key} must be a whole number >= {low}, got {value!r}")
         out[key] = value
+    for key in ("confirm", "replicates"):  # confirmation runs are jobs 10000 + 100 x rank + replicate
+        if out[key] > 100:
+            r.fail(("budget", key), f"{key} must be at most 100 (confirmation runs are numbered "
+                                    f"10000 + 100 x rank + replicate), got {out[key]}")
     if out["seeds"] > out["runs"]:
         r.fail(("budget", "seeds"), f"seeds ({out['seeds']}) exceeds runs ({out['runs']}): the "
                                     "screen's settings are part of the search's runs")

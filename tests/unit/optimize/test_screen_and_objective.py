@@ -191,3 +191,167 @@ def test_an_unreadable_study_file_says_why(tmp_path):
     with pytest.raises(InputError) as err:
         load(tmp_path / "missing.toml")
     assert str(err.value) == f"cannot read study file {tmp_path / 'missing.toml'}: No such file or directory"
+
+
+def test_hopping_starts_strictly_above_gravity():
+    from vibrofeed.models.deck import waveform
+    from vibrofeed.optimize.screen import SAMPLES
+
+    # the normal amplitude whose sampled floor acceleration bottoms out at exactly -g (found on
+    # the model itself, as the screen samples it): the part only just keeps contact, no hop
+    t = np.arange(SAMPLES) / (SAMPLES * 100.0)
+
+    def lowest(an):
+        return float(np.min(waveform({**SINE, "amp_n": an}).acceleration(t)[1]))
+
+    an = -G / lowest(1.0)  # within an ulp or two of the limit: step onto it
+    for _ in range(8):
+        if lowest(an) == -G:
+            break
+        an = math.nextafter(an, 0.0) if lowest(an) < -G else math.nextafter(an, 1.0)
+    assert lowest(an) == -G
+    assert not drive({**SINE, "amp_n": an}, 1, with_model=False).hops
+    above = an * (1 + 1e-9)
+    assert lowest(above) < -G and drive({**SINE, "amp_n": above}, 1, with_model=False).hops
+
+
+def test_a_deck_without_an_incline_is_level():
+    # Gamma_n = 0.99993: below 1, so no hop on a level track, but above cos(1 deg) = 0.99985,
+    # so a default incline of even one degree either way would make it hop
+    w = 2 * math.pi * 100.0
+    level = {k: v for k, v in SINE.items() if k != "incline"}
+    assert not drive({**level, "amp_n": 0.99993 * G / (w * w)}, 1, with_model=False).hops
+    assert drive({**SINE, "amp_n": 0.99993 * G / (w * w), "incline": 1.0}, 1, with_model=False).hops
+
+
+def test_a_deck_without_sections_has_one():
+    from vibrofeed.optimize.screen import sections
+
+    assert sections({}) == 1 and sections({"sections": "2"}) == 2
+    sc = screen(study("[constraints]\nmax_acceleration = 2.5\n"), dict(SINE))  # no "sections" key
+    assert [d.section for d in sc.drives] == [1] and list(sc.margins) == ["section 1: peak acceleration [g]"]
+
+
+def test_the_model_speed_margin_and_notes():
+    from vibrofeed.models.deck import transport
+
+    s = study("[constraints]\nmin_model_speed = 1e-3\n")
+    fast = screen(s, {**SINE, "sections": 1})
+    v = transport(SINE).velocity
+    assert v > 1e-3 and fast.drives[0].note == ""  # converged: nothing to say
+    assert fast.margins["section 1: model speed [m/s]"] == pytest.approx(1e-3 - v, rel=1e-12)
+    assert fast.feasible
+    # the model cannot say (a parameter missing, KeyError; a value it refuses, ValueError):
+    # no speed, so the setting cannot show it conveys: broken by an unbounded amount
+    for values in ({k: x for k, x in SINE.items() if k != "mu"}, {**SINE, "mu": -1.0}):
+        sc = screen(s, {**values, "sections": 1})
+        d = sc.drives[0]
+        assert d.speed is None and d.note.startswith("model not applicable (")
+        assert sc.margins["section 1: model speed [m/s]"] == math.inf and not sc.feasible
+
+
+def test_values_that_are_not_numbers_pass_through_the_screen():
+    # resolved deck values hold strings (a mesh file) and may hold None: neither is a number,
+    # neither stops the screen
+    s = study('[constraints]\nmax_acceleration = 2.5\nrequire = ["amp_n <= 2 * amp_t"]\n')
+    plain = screen(s, {**SINE, "sections": 1})
+    extra = screen(s, {**SINE, "sections": "1", "freq": "100.0", "mesh": "tray.stl", "label": None})
+    assert extra.margins == plain.margins
+
+
+def test_the_screens_margins_are_the_amounts_broken_or_to_spare():
+    s = study('[constraints]\nno_hopping = [1]\nrequire = ["amp_n <= 2 * amp_t"]\n')
+    ok = screen(s, {**SINE, "sections": 1, "freq": 150.0, "amp_t": 1e-4, "amp_n": 1e-5})
+    assert ok.margins["section 1: hops"] == 0.0  # no hop: broken by nothing
+    # holds with 2e-4 - 1e-5 to spare; broken by 5e-5 - 2e-5
+    assert ok.margins["amp_n <= 2 * amp_t"] == pytest.approx(1e-5 - 2e-4, rel=1e-9) and ok.feasible
+    bad = screen(s, {**SINE, "sections": 1, "freq": 150.0, "amp_t": 1e-5, "amp_n": 5e-5})
+    assert bad.margins["amp_n <= 2 * amp_t"] == pytest.approx(3e-5, rel=1e-9)
+    assert "amp_n <= 2 * amp_t" in bad.broken
+
+
+def test_ties_are_not_better_and_no_error_is_no_caution():
+    assert not O.better(0.3, 0.3, "doubles_rate") and not O.better(2.0, 2.0, "parts_per_s")
+    assert O.cautious(18.0, None, "singulated_rate") == 18.0
+    assert O.cautious(0.3, None, "cv_interarrival") == 0.3
+    assert O.cautious(18.0, 0.0, "singulated_rate") == 18.0
+
+
+def test_a_product_with_one_error_unknown_has_no_error():
+    # the rate's error missing, the fraction's known (and the other way round): no error
+    row = {"parts_per_s": 20.0, "singulated_fraction": 0.9, "n_arrivals": 100}
+    v, e = O.value_and_error(row, "singulated_rate")
+    assert v == pytest.approx(18.0, rel=1e-12) and e is None
+    row = {"parts_per_s": 20.0, "parts_per_s_err": 1.0, "singulated_fraction": 0.9}
+    assert O.value_and_error(row, "singulated_rate") == (pytest.approx(18.0, rel=1e-12), None)
+
+
+def test_a_fraction_rounded_past_one_has_no_error_rather_than_a_crash():
+    above = math.nextafter(1.0, 2.0)  # f (1 - f) is then -2.2e-16: clamped to 0
+    row = {"singulated_fraction": above, "n_arrivals": 10}
+    assert O.value_and_error(row, "singulated_fraction") == (above, 0.0)
+
+
+def test_the_unit_cube_edges_and_a_choice_before_other_variables():
+    s = study(variables='shape = { choices = [0, 1, 2] }\nfreq = { low = 50, high = 150 }')
+    # u = 1 is the top edge of the last choice's bin, and the upper bound
+    assert from_unit(s, np.array([1.0, 1.0])) == {"shape": 2, "freq": 150.0}
+    assert from_unit(s, np.array([0.34, 0.5])) == {"shape": 1, "freq": pytest.approx(100.0, rel=1e-12)}
+
+
+def test_replicates_own_errors_add_in_quadrature():
+    # no scatter; own errors 2 and 2: sqrt(4 + 4) / 2
+    mean, err = _mean_and_error([10.0, 10.0], [2.0, 2.0])
+    assert mean == 10.0 and err == pytest.approx(math.sqrt(8.0) / 2, rel=1e-12)
+
+
+def test_the_seed_offset_is_a_fixed_hash_of_the_setting():
+    import hashlib
+
+    # every search run's seed is the study's seed plus this offset: a study (and the benchmark
+    # docs/optimize.md quotes) reproduces only while the derivation stays the same: the first
+    # 32 bits of the SHA-256 of the setting as sorted JSON of deck strings, modulo 10^6
+    text = '{"freq": "75.0", "shape": "1"}'
+    expected = int(hashlib.sha256(text.encode()).hexdigest()[:8], 16) % 1_000_000
+    assert setting_index({"shape": 1, "freq": 75.0}) == expected
+    # spread over the whole range, not bunched at its bottom
+    offsets = [setting_index({"freq": 50.0 + i}) for i in range(100)]
+    assert max(offsets) > 900_000 and min(offsets) < 100_000 and len(set(offsets)) == 100
+
+
+def test_confirmation_groups_replicates_by_their_job_numbers():
+    # job 10000 + 100 x rank + replicate: the 100th replicate of the first (10099) is its own
+    s = study()
+    rows = [{"job": 10000, "stage": "confirm", "objective": 10.0, "objective_err": 1.0},
+            {"job": 10099, "stage": "confirm", "objective": 12.0, "objective_err": 1.0},
+            {"job": 10100, "stage": "confirm", "objective": 5.0, "objective_err": 1.0},
+            {"job": 10200, "stage": "confirm", "objective": 99.0, "objective_err": 1.0}]  # a third rank's
+    out = _confirmed(s, [{"amp_n": 1e-5}, {"amp_n": 2e-5}], rows)
+    assert [(c["setting"]["amp_n"], c["runs"]) for c in out] == [(1e-5, 2), (2e-5, 1)]
+    assert out[0]["parts_per_s"][0] == 11.0 and out[1]["parts_per_s"] == (5.0, pytest.approx(1.0, rel=1e-12))
+
+
+def test_a_confirmed_value_without_an_error_still_counts():
+    (entry,) = _confirmed(study(), [{"amp_n": 1e-5}], [{"job": 10000, "stage": "confirm", "objective": 5.0}])
+    assert entry["parts_per_s"] == (5.0, None) and entry["parts_per_s_measured"] == 1
+
+
+def test_two_objectives_are_confirmed_in_the_first_ones_order():
+    s = parse('deck = "bulk_feeder"\n[variables]\namp_n = { low = 1e-5, high = 1e-4 }\n[objective]\n'
+              'maximize = ["parts_per_s", "singulated_fraction"]\n', "s.toml")
+    rows = [{"job": 10000, "stage": "confirm", "objective": 20.0, "objective_2": 0.5},
+            {"job": 10100, "stage": "confirm", "objective": 10.0, "objective_2": 0.9}]
+    out = _confirmed(s, [{"amp_n": 1e-5}, {"amp_n": 2e-5}], rows)
+    assert [c["setting"]["amp_n"] for c in out] == [1e-5, 2e-5]  # 20 > 10, though 0.5 < 0.9
+    assert out[1]["singulated_fraction"] == (0.9, None)
+
+
+def test_a_strict_inequality_met_with_equality_rules_the_setting_out():
+    # amp_n < amp_t at amp_n == amp_t is broken (Inequality.holds says so) by no amount: the
+    # screen must still count it broken (feasible: every margin <= 0), or a setting the study
+    # excludes is sent to DEM; <= at equality holds
+    s = study('[constraints]\nrequire = ["amp_n < amp_t", "amp_n <= amp_t"]\n')
+    sc = screen(s, {**SINE, "sections": 1})  # amp_n == amp_t == 5e-5
+    assert 0.0 < sc.margins["amp_n < amp_t"] < 1e-300  # broken, by a vanishing amount
+    assert sc.margins["amp_n <= amp_t"] == 0.0
+    assert not sc.feasible and sc.broken == ["amp_n < amp_t"]

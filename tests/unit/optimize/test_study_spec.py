@@ -135,3 +135,100 @@ def test_defaults_and_two_objectives():
     # zero is a bound a study may state (0 <= seeds, confirm)
     s0 = parse(GOOD.replace("seeds = 4", "seeds = 0"), "s.toml")
     assert s0.budget["seeds"] == 0
+
+
+@pytest.mark.parametrize("change, words", [
+    # each bound exactly at its limit is refused where the rule is strict
+    ((FREQ, "freq = { low = 50, high = 50 }"), "needs numbers low < high"),
+    (("frequency = [50, 200]", "frequency = [0, 200]"), "0 < low < high"),
+    (("frequency = [50, 200]", "frequency = [100, 100]"), "0 < low < high"),
+    (("seed = 11", "seed = -1"), "seed must be a whole number >= 0"),
+    (("seed = 11", "seed = 1.5"), "seed must be a whole number >= 0"),
+    (("seed = 11", "seed = true"), "seed must be a whole number >= 0"),
+    (('deck = "bulk_feeder"', 'deck = "   "'), "deck must be a deck name or file"),
+    # section numbers start at 1; a boolean is not a section; one number is not a list
+    (("max_acceleration = 6.0", "no_hopping = [0]"), "no_hopping must list section numbers"),
+    (("max_acceleration = 6.0", "no_hopping = [true]"), "no_hopping must list section numbers"),
+    (("max_acceleration = 6.0", "no_hopping = 2"), "no_hopping must list section numbers"),
+    # one choice is no choice; a choice is a scalar
+    (("shape = { choices = [0, 1] }", "shape = { choices = [0] }"), "choices must list two or more"),
+    (("shape = { choices = [0, 1] }", "shape = { choices = [[0], 1] }"), "choices must list two or more"),
+    (("shape = { choices = [0, 1] }", "shape = { choices = 0 }"), "choices must list two or more"),
+    (("at_least = { parts_per_s = 25 }", "at_least = { speed = 25 }"), "at_least: speed = 25 must be"),
+    (("at_least = { parts_per_s = 25 }", 'at_least = { parts_per_s = "many" }'), "must be a known metric"),
+    (('maximize = "singulated_rate"', "maximize = []"), "maximize must name a metric"),
+    (("seeds = 4", "seeds = 4\nreplicates = 0"), "replicates must be a whole number >= 1"),
+    (("seeds = 4", "seeds = 4\nreplicates = 2.5"), "replicates must be a whole number >= 1"),
+    (("seeds = 4", "seeds = 4\nconfirm = true"), "confirm must be a whole number >= 0"),
+    (("seeds = 4", "seeds = 4\nscreen = 3"), "screen (3) must be at least seeds (4)"),
+    (("mu = [0.4, 0.6]", "mu = []"), "robustness mu must list the values to try"),
+    (("mu = [0.4, 0.6]", "mu = 0.4"), "robustness mu must list the values to try"),
+    (("mu = [0.4, 0.6]", "mu = [[0.4]]"), "robustness mu must list the values to try"),
+])
+def test_refusals_at_and_just_past_each_limit(change, words):
+    text = GOOD.replace(*change)
+    assert text != GOOD
+    with pytest.raises(InputError) as err:
+        parse(text, "study.toml")
+    assert words in str(err.value) and "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize("key", ["fixed", "variables", "constraints", "objective", "budget", "robustness"])
+def test_each_section_must_be_a_table(key):
+    text = f'deck = "bulk_feeder"\n{key} = 3\n'
+    with pytest.raises(InputError, match=rf"^s\.toml:2: {key} must be a table \[{key}\]$"):
+        parse(text, "s.toml")
+
+
+@pytest.mark.parametrize("change, check", [
+    # the lowest values each rule allows are accepted as given
+    (("seed = 11", "seed = 0"), lambda s: s.seed == 0),
+    (("frequency = [50, 200]", "frequency = [0.5, 200]"), lambda s: s.constraints["frequency"] == [0.5, 200]),
+    (("max_acceleration = 6.0", "no_hopping = [1, 2]"), lambda s: s.constraints["no_hopping"] == [1, 2]),
+    (("runs = 12", "runs = 4"), lambda s: s.budget["runs"] == s.budget["seeds"] == 4),  # seeds == runs
+    (("seeds = 4", "seeds = 4\nscreen = 4"), lambda s: s.budget["screen"] == 4),  # screen == seeds
+    (("runs = 12\nseeds = 4", "runs = 1\nseeds = 1\nscreen = 1\nconfirm = 0\nreplicates = 1"),
+     lambda s: s.budget == {"runs": 1, "seeds": 1, "screen": 1, "confirm": 0, "replicates": 1}),
+    (("mu = [0.4, 0.6]", 'mu = [0.5]\nmesh = ["chip.stl"]'),
+     lambda s: s.robustness == {"mu": [0.5], "mesh": ["chip.stl"]}),
+])
+def test_values_at_each_limit_are_accepted(change, check):
+    text = GOOD.replace(*change)
+    assert text != GOOD
+    assert check(parse(text, "study.toml"))
+
+
+def study_with(require: str):
+    return parse(GOOD.replace('["s2_amp_t >= 2 * amp_t", "abs(s2_amp_t - amp_t) < 2e-4"]', require), "s.toml")
+
+
+def test_strict_inequalities_fail_at_equality_and_others_hold_by_any_amount():
+    spec = study_with('["amp_t < s2_amp_t", "amp_t > s2_amp_t", "amp_t <= s2_amp_t"]')
+    less, more, at_most = spec.inequalities
+    equal = {"amp_t": 5e-5, "s2_amp_t": 5e-5}
+    assert less.margin(equal) == 0.0 and not less.holds(equal) and not more.holds(equal)
+    assert at_most.holds(equal)
+    # a margin well inside (-1, 0) still holds: the sign decides, not the size
+    small = {"amp_t": 5e-5, "s2_amp_t": 6e-5}
+    assert less.margin(small) == pytest.approx(-1e-5, rel=1e-9) and less.holds(small)
+    assert more.margin(small) == pytest.approx(1e-5, rel=1e-9) and not more.holds(small)
+
+
+def test_signs_in_an_inequality_are_evaluated():
+    neg, pos = study_with('["-amp_t > -2 * s2_amp_t", "+amp_t <= s2_amp_t"]').inequalities
+    values = {"amp_t": 3.5e-5, "s2_amp_t": 1e-4}
+    # > : margin = right - left = -2 * 1e-4 - (-3.5e-5)
+    assert neg.margin(values) == pytest.approx(3.5e-5 - 2e-4, rel=1e-9) and neg.holds(values)
+    # unary plus changes nothing: 3.5e-5 - 1e-4
+    assert pos.margin(values) == pytest.approx(3.5e-5 - 1e-4, rel=1e-9)
+
+
+@pytest.mark.parametrize("key", ["confirm", "replicates"])
+def test_confirmation_runs_fit_their_job_numbers(key):
+    # confirmation runs are jobs 10000 + 100 x rank + replicate (rows of the ledger by job):
+    # a 101st rank or replicate would take another run's number
+    assert parse(GOOD.replace("seeds = 4", f"seeds = 4\n{key} = 100"), "s.toml").budget[key] == 100
+    with pytest.raises(InputError) as err:
+        parse(GOOD.replace("seeds = 4", f"seeds = 4\n{key} = 101"), "study.toml")
+    assert str(err.value).startswith(f"study.toml:26: {key} must be at most 100")
+    assert "\n" not in str(err.value)
