@@ -132,7 +132,7 @@ def chip_template(edge: float, thickness: float) -> np.ndarray:
     """A flat square die (edge x edge x thickness) as a grid of spheres of diameter
     ``thickness`` in the plane z = 0. The centres span edge - thickness, so the clump's
     outline is the die's square; their spacing is at most CLUMP_SPACING x thickness."""
-    span = edge - thickness
+    span = max(edge - thickness, 0.0)  # a die no wider than thick: one sphere, at the centre
     n = max(2, math.ceil(span / (CLUMP_SPACING * thickness) - 1e-9) + 1) if span > 0 else 1
     c = np.linspace(-span / 2, span / 2, n)
     gx, gy = np.meshgrid(c, c, indexing="ij")

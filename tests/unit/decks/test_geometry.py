@@ -17,6 +17,7 @@ from vibrofeed.geometry import (
     chip_template,
     disc_template,
     insertion_seeds,
+    prepare_bowl_feeder,
     prepare_bulk_feeder,
     shape_code,
     track_mesh,
@@ -265,3 +266,241 @@ def test_no_cross_tilt_is_the_level_track_bit_for_bit():
     a = track_mesh(L, W, H, gate_width=8e-4, gate_x=0.7 * L)
     b = track_mesh(L, W, H, gate_width=8e-4, gate_x=0.7 * L, cross_tilt=0.0)
     assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
+
+
+# ------------------------------------------------------------------ wall stations, by hand
+def test_stations_are_the_fewest_uniform_ones_within_the_spacing():
+    # a length that is a whole number of spacings: exactly that many steps, no extra station
+    # (binary fractions: exact)
+    xs, half = wall_stations(1.0, 0.5, spacing=0.25)
+    assert xs.tolist() == [0.0, 0.25, 0.5, 0.75, 1.0] and half.tolist() == [0.25] * 5
+    # default spacing 1 mm: 2 cm in 20 steps of 1 mm (20 spacings up to rounding)
+    xs, _ = wall_stations(0.02, 2e-3)
+    assert len(xs) == 21 and all_same(np.diff(xs), 1e-3)
+    # one step more than a whole number: ceil
+    xs, _ = wall_stations(1.0, 0.5, spacing=0.3)
+    assert len(xs) == 5 and all_same(np.diff(xs), 0.25)
+
+
+@pytest.mark.parametrize("length, spacing", [(5e-4, None), (1.0, 2e9)])
+def test_a_track_shorter_than_a_spacing_is_one_step(length, spacing):
+    # the default spacing is 1 mm; a spacing 2e9 times the length (below the ceil's 1e-9 slack)
+    # still leaves a first and a last station
+    xs, half = wall_stations(length, 2e-3, spacing=spacing)
+    assert xs.tolist() == [0.0, length] and half.tolist() == [1e-3, 1e-3]
+
+
+def hand_half(x, width, gate_width, gate_x):
+    """The walls' half width by hand: full up to the gate, a 45 degree taper, then the gate."""
+    taper_end = gate_x + (width - gate_width) / 2
+    return np.where(x <= gate_x, width / 2,
+                    np.where(x >= taper_end, gate_width / 2, width / 2 - (x - gate_x)))
+
+
+@pytest.mark.parametrize("gate_x", [0.0, 0.25, 0.875])
+def test_gate_walls_full_width_up_to_the_gate_then_a_45_degree_taper(gate_x):
+    # binary fractions: the stations and half widths are exact
+    xs, half = wall_stations(1.0, 0.5, gate_width=0.25, gate_x=gate_x, spacing=0.125)
+    assert gate_x in xs and gate_x + 0.125 in xs  # both kinks are stations
+    assert np.array_equal(half, hand_half(xs, 0.5, 0.25, gate_x))
+    assert xs[0] == 0.0 and xs[-1] == 1.0 and np.all(np.diff(xs) > 0)
+
+
+@pytest.mark.parametrize("gate_x", [-0.5, -1e-9])
+def test_a_gate_before_the_back_wall_is_refused(gate_x):
+    with pytest.raises(ParameterError, match="gate does not fit"):
+        wall_stations(1.0, 0.5, gate_width=0.25, gate_x=gate_x)
+
+
+def test_a_gate_whose_taper_rounds_to_no_length_is_refused():
+    # 2**-53 narrower than the track: half of it added to gate_x = 0.5 rounds away, so the
+    # taper would run from 0.5 to 0.5; the check asks gate_x < taper_end strictly
+    narrow = np.nextafter(1.0, 0.0)
+    assert 0.5 + (1.0 - narrow) / 2 == 0.5
+    with pytest.raises(ParameterError, match="gate does not fit"):
+        wall_stations(2.0, 1.0, gate_width=narrow, gate_x=0.5)
+
+
+def test_the_gate_kinks_are_kept_to_a_picometre_and_merge_with_a_station_as_close():
+    # the kinks keep their position to the mesh's 1 pm, wherever they fall
+    gate_x = 0.014 + 3.7e-12
+    xs, _ = wall_stations(L, W, gate_width=8e-4, gate_x=gate_x)
+    taper_end = gate_x + (W - 8e-4) / 2
+    assert np.abs(xs - gate_x).min() <= PM and np.abs(xs - taper_end).min() <= PM
+    # a kink within 1 pm of a uniform station (0.014 m) is that station: no sliver face
+    xs, _ = wall_stations(L, W, gate_width=8e-4, gate_x=0.014 + 3e-13)
+    assert np.diff(xs).min() > PM
+    assert len(xs) == 21 + 1  # the uniform 21 and the taper's end (0.0146 m)
+
+
+def test_no_gate_by_default_even_on_a_track_wider_than_a_metre():
+    xs, half = wall_stations(4.0, 2.0, spacing=0.5)
+    assert half.tolist() == [1.0] * 9
+    v, _ = track_mesh(4.0, 2.0, 1.0, spacing=0.5)
+    assert np.all(np.abs(v[:, 1]) == 1.0)  # straight walls: every vertex on one of them
+
+
+def test_a_gate_at_the_back_wall_keeps_the_back_wall_full_width():
+    v, t = track_mesh(L, W, H, gate_width=8e-4, gate_x=0.0)
+    back = v[same(v[:, 0], 0)]
+    assert all_same([back[:, 1].min(), back[:, 1].max()], [-W / 2, W / 2])
+    for p, q in open_edges(v, t):  # still closed but at the outlet and along the wall tops
+        assert (same(p[0], L) and same(q[0], L)) or (same(p[2], H) and same(q[2], H)), (p, q)
+
+
+# ------------------------------------------------------------------ catch face, clumps
+def test_catch_face_covers_its_rectangle():
+    v, t = catch_face(length=2.0, width=0.5, z=0.25)
+    assert {tuple(p) for p in v[t].reshape(-1, 3).tolist()} == {
+        (0.0, -0.25, 0.25), (0.0, 0.25, 0.25), (2.0, 0.25, 0.25), (2.0, -0.25, 0.25)}
+    cross = np.cross(v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]])
+    assert np.all(cross[:, 2] < 0)  # every triangle a real one, facing down
+    assert np.abs(cross[:, 2]).sum() / 2 == pytest.approx(1.0, rel=1e-15)  # area 2 x 0.5: no gap
+
+
+def test_a_chip_of_an_edge_up_to_a_spacing_beyond_its_thickness_is_two_by_two():
+    t = 1e-4
+    rows = chip_template(1.5 * t, t)  # centres span 0.5 t <= 0.75 t: two a side are enough
+    assert rows.shape == (4, 4)
+    assert all_same(np.sort(np.unique(np.round(rows[:, 0], 15))), [-t / 4, t / 4])
+
+
+@pytest.mark.parametrize("edge", [1e-4, 8e-5])
+def test_a_chip_no_wider_than_thick_is_one_sphere(edge):
+    # (a sphere run writes the chip template too, whatever part_size and part_thickness are)
+    rows = chip_template(edge, 1e-4)
+    assert rows.tolist() == [[0.0, 0.0, 0.0, 5e-5]]  # at the body frame's origin
+
+
+@pytest.mark.parametrize("diameter", [1e-4, 8e-5])
+def test_a_disc_no_wider_than_thick_is_one_sphere(diameter):
+    rows = disc_template(diameter, 1e-4)
+    assert rows.tolist() == [[0.0, 0.0, 0.0, 5e-5]]
+
+
+def rings(rows):
+    """The clump's rings about the centre sphere: [(radius, sphere count, angles)]."""
+    rho = np.hypot(rows[:, 0], rows[:, 1])
+    out = []
+    for r in np.unique(np.round(rho[1:], 15)):
+        on = np.abs(rho - r) <= PM
+        out.append((r, int(on.sum()), np.sort(np.mod(np.arctan2(rows[on, 1], rows[on, 0]), 2 * np.pi))))
+    return out
+
+
+T = 1e-4
+RING_12 = 12 * CLUMP_SPACING * T / (2 * math.pi)  # a ring of exactly 12 spacings round
+
+
+@pytest.mark.parametrize("diameter, counts", [
+    (5e-4, [6, 12, 17]),  # outer 2e-4 = 2.67 spacings: 3 rings; ceil(2 pi k (2/3) / 0.75) = 5.6, 11.2, 16.8
+    (4e-4, [7, 13]),  # outer 1.5e-4, exactly 2 spacings: 2 rings; ceil(2 pi) = 7, ceil(4 pi) = 13
+    (T + 2 * RING_12, [6, 12]),  # rings of exactly 6 and 12 spacings round: 6 and 12 spheres
+    (1.8e-4, [6]),  # outer 0.4e-4: one ring, 3.4 spacings round, but 6 spheres at least
+])
+def test_disc_rings_are_the_fewest_that_keep_the_spacing(diameter, counts):
+    rows = disc_template(diameter, T)
+    assert len(rows) == 1 + sum(counts) and rows[0].tolist() == [0.0, 0.0, 0.0, T / 2]
+    outer = (diameter - T) / 2
+    got = rings(rows)
+    assert [n for _, n, _ in got] == counts
+    # rings equally spaced out to the rim, radially within the spacing
+    n = len(counts)
+    assert all_same([r for r, _, _ in got], [outer * k / n for k in range(1, n + 1)])
+    assert outer / n <= CLUMP_SPACING * T * (1 + 1e-12)
+    for _, m, angles in got:  # each ring equally spaced from angle 0
+        assert np.allclose(angles, 2 * np.pi * np.arange(m) / m, rtol=0, atol=1e-12)  # rad: rounding
+
+
+# ------------------------------------------------------------------ seeds
+def test_is_prime_against_a_sieve():
+    from vibrofeed.geometry import _is_prime
+
+    limit = 2000
+    sieve = np.ones(limit, dtype=bool)
+    sieve[:2] = False
+    for d in range(2, int(limit**0.5) + 1):
+        sieve[d * d::d] = False
+    assert [_is_prime(n) for n in range(-3, limit)] == [False] * 3 + sieve.tolist()
+    assert not _is_prime(7159**2) and _is_prime(2**31 - 1)
+
+
+@pytest.mark.parametrize("seed", [5138, 20101, 66397])
+def test_seeds_are_primes_where_the_scan_meets_a_primes_square(seed):
+    # these seeds' scans pass 7159**2, 14159**2, 25733**2 before any prime: a divisor test
+    # stopping short of the square root would take the square for a prime
+    for p in insertion_seeds(seed, 6):
+        assert all(p % d for d in range(2, math.isqrt(p) + 1)), p
+
+
+# ------------------------------------------------------------------ the prepare hooks
+def seed_lines(text):
+    return [line for line in text.splitlines() if line.startswith("variable seed_")]
+
+
+def test_prepare_writes_the_six_insertion_seeds_of_the_seed_and_of_the_decks_default(tmp_path):
+    def want(seed):
+        return [f"variable seed_{k} equal {p}" for k, p in zip(range(1, 7), insertion_seeds(seed, 6))]
+
+    prepare_bulk_feeder({**VALUES, "seed": "1"}, tmp_path / "a")
+    assert seed_lines((tmp_path / "a" / "prepared.in").read_text()) == want(1)
+    # no seed: the deck's default, 5489 (decks/bulk_feeder.liggghts: variable seed index 5489)
+    values = {k: v for k, v in VALUES.items() if k != "seed"}
+    prepare_bulk_feeder(values, tmp_path / "b")
+    assert seed_lines((tmp_path / "b" / "prepared.in").read_text()) == want(5489)
+
+
+def test_prepare_makes_its_folder_with_the_parents_and_a_disc_template(tmp_path):
+    folder = tmp_path / "runs" / "r1" / "mesh"
+    p = prepare_bulk_feeder({**VALUES, "shape": "disc"}, folder)
+    assert (folder / "prepared.in").is_file()
+    assert all_same(p.body_template, disc_template(3e-4, 1.5e-4))
+    text = (folder / "prepared.in").read_text()
+    assert f"variable n_sph_disc equal {len(disc_template(3e-4, 1.5e-4))}\n" in text
+    spec = p.to_spec()
+    assert np.array_equal(np.array(spec["track"][1]), p.track[1])  # the triangles, as indices
+
+
+def test_prepare_track_is_level_without_cross_tilt_and_tilted_with_it(tmp_path):
+    args = (0.02, 0.002, 0.001, 0.0, 0.7 * 0.02)
+    level = prepare_bulk_feeder(VALUES, tmp_path / "l").track
+    want = track_mesh(*args)
+    assert np.array_equal(level[0], want[0]) and np.array_equal(level[1], want[1])
+    tilted = prepare_bulk_feeder({**VALUES, "cross_tilt": "5"}, tmp_path / "t").track
+    assert np.array_equal(tilted[0], track_mesh(*args, cross_tilt=5.0)[0])
+
+
+@pytest.mark.parametrize("change, words", [
+    ({"track_width": None}, "needs the parameter 'track_width'"),
+    ({"part_size": "big"}, "part_size='big' is not a number"),
+])
+def test_prepare_refuses_a_missing_or_unreadable_number_in_one_line(tmp_path, change, words):
+    values = {k: v for k, v in {**VALUES, **change}.items() if v is not None}
+    with pytest.raises(ParameterError, match=words):
+        prepare_bulk_feeder(values, tmp_path)
+
+
+BOWL_VALUES = {"bowl_diameter": "0.02", "track_width": "0.0012", "helix_angle": "3", "turns": "1.5",
+               "wall_height": "0.001", "cone_angle": "3", "cross_tilt": "3", "lip_height": "0",
+               "chute_length": "0.008", "drop_from": "0", "drop_to": "0", "drop_width": "0",
+               "wiper_height": "0", "wiper_at": "0.5", "part_size": "3e-4", "part_thickness": "1.5e-4",
+               "shape": "chip", "size_spread": "0", "seed": "7"}
+
+
+def test_prepare_bowl_feeder_writes_its_files_again_and_again_into_a_new_folder(tmp_path):
+    from vibrofeed.bowl import bowl_from, bowl_mesh
+
+    folder = tmp_path / "runs" / "bowl"
+    for _ in range(2):  # a new folder with its parents, then the same folder again (a rerun)
+        p = prepare_bowl_feeder(BOWL_VALUES, folder)
+    names = sorted(f.name for f in folder.iterdir())
+    assert names == ["bowl.stl", "catch.stl", "chip.multisphere", "disc.multisphere", "prepared.in"]
+    text = (folder / "prepared.in").read_text()
+    assert text.startswith("# written by vibrofeed.geometry.prepare_bowl_feeder for one run\n")
+    assert seed_lines(text) == [f"variable seed_{k} equal {s}" for k, s in
+                                zip(range(1, 7), insertion_seeds(7, 6))]
+    assert "variable bowl_pitch equal " in text
+    assert all_same(p.body_template, chip_template(3e-4, 1.5e-4))
+    want = bowl_mesh(bowl_from({k: float(v) for k, v in BOWL_VALUES.items() if k != "shape"}))
+    assert np.array_equal(p.track[0], want[0]) and np.array_equal(p.track[1], want[1])
+    assert p.variables == {"mesh_dir": str(folder.resolve())}

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from vibrofeed.engine.bodies import aggregate, fit_quaternions, quaternion_matrix, spheres
+from vibrofeed.rotations import quaternion_matrices
 
 # a chip: 3 x 3 spheres in a plane (planar: the hardest case for a fit), and a 3-D clump
 CHIP = np.array([[x, y, 0.0] for x in (-7.5e-5, 0, 7.5e-5) for y in (-7.5e-5, 0, 7.5e-5)])
@@ -24,6 +25,20 @@ def test_quaternion_matrix_is_a_rotation():
     # 90 degrees about z carries x to y
     q = np.array([np.cos(np.pi / 4), 0, 0, np.sin(np.pi / 4)])
     assert np.allclose(quaternion_matrix(q) @ [1, 0, 0], [0, 1, 0], rtol=0, atol=1e-15)
+
+
+def test_quaternions_are_normalised_and_an_empty_one_is_the_identity():
+    # 90 degrees about z, given 3 times too long: normalised first, it still carries x to y
+    c = np.cos(np.pi / 4)
+    r = quaternion_matrices([3 * c, 0, 0, 3 * c])
+    assert np.allclose(r, [[0, -1, 0], [1, 0, 0], [0, 0, 1]], rtol=0, atol=1e-15)
+    # NaN (an empty slot), zero (no orientation), infinite: the identity, and no
+    # floating-point warning on the way (an empty slot is in every frame)
+    with np.errstate(all="raise"):
+        r = quaternion_matrices([[np.nan] * 4, [0.0] * 4, [np.nan, 0, 0, 0], [np.inf, 0, 0, 0], [c, c, 0, 0]])
+    assert r.shape == (5, 3, 3)
+    assert np.array_equal(r[:4], np.broadcast_to(np.eye(3), (4, 3, 3)))
+    assert np.allclose(r[4], [[1, 0, 0], [0, 0, -1], [0, 1, 0]], rtol=0, atol=1e-15)  # about x
 
 
 @pytest.mark.parametrize("template", [CHIP, CLUMP], ids=["planar chip", "3-D clump"])
@@ -80,7 +95,8 @@ def test_aggregate_bodies():
     # LIGGGHTS: each sphere carries the body's mass (atol 1e-12 of it: numpy's default atol=1e-8 kg
     # would pass the nine spheres' sum, 9e-9 kg)
     assert np.allclose(parts["mass"], 1e-9, rtol=0, atol=1e-21)
-    assert np.isnan(parts["force"]).all()  # not reachable for clumps (see bodies.aggregate)
+    # not reachable for clumps (see bodies.aggregate): a NaN 3-vector a part, as for spheres
+    assert parts["force"].shape == (b, 3) and np.isnan(parts["force"]).all()
     # enclosing radius: corner sphere at sqrt(2) * 75 um plus its radius
     assert np.allclose(parts["radius"], 7.5e-5 * (1 + np.sqrt(2)), rtol=1e-12, atol=0)
     same = np.minimum(np.abs(parts["orientation"] - q).max(1), np.abs(parts["orientation"] + q).max(1))
@@ -164,3 +180,51 @@ def test_a_frame_of_only_fragments_has_no_parts_with_the_shapes_of_parts():
     assert {k: v.shape for k, v in parts.items()} == {
         "id": (0,), "species": (0,), "radius": (0,), "mass": (0,), "orientation": (0, 4),
         "position": (0, 3), "velocity": (0, 3), "angular_velocity": (0, 3), "force": (0, 3)}
+
+
+def test_bodies_numbered_against_their_atom_ids():
+    # body 2 holds atoms 1-5 and body 1 atoms 6-10: parts come by body id, each with its
+    # spheres in atom-id (= template) order, whatever order the ranks hand them over in
+    q = random_quaternions(2, seed=10)
+    centres = np.array([[1e-3, 0, 0], [0, 2e-3, 0]])
+    atoms = clump_atoms(CLUMP, q, centres, np.zeros((2, 3)), np.zeros((2, 3)))
+    atoms["molecule"] = np.repeat([2, 1], 5).astype(np.int32)
+    rng = np.random.default_rng(14)
+    for pick in [np.arange(10), np.arange(10)[::-1], *(rng.permutation(10) for _ in range(8))]:
+        parts, incomplete = aggregate({k: a[pick] for k, a in atoms.items()}, CLUMP, 5)
+        assert incomplete == 0 and parts["id"].tolist() == [1, 2]
+        assert np.allclose(parts["position"], centres[::-1], rtol=0, atol=1e-18)
+        assert np.abs(parts["orientation"] - q[::-1]).max() < 1e-12
+
+
+def test_without_a_template_bodies_get_the_identity():
+    # no template from the prepare hook and none taken yet: sums and means, no orientation
+    q = random_quaternions(2, seed=11)
+    centres = np.array([[1e-3, 0, 0], [0, 2e-3, 0]])
+    parts, incomplete = aggregate(clump_atoms(CLUMP, q, centres, np.zeros((2, 3)), np.zeros((2, 3))),
+                                  None, 5)
+    assert incomplete == 0
+    assert np.allclose(parts["position"], centres, rtol=0, atol=1e-18)
+    assert parts["orientation"].tolist() == [[1, 0, 0, 0]] * 2
+
+
+def test_a_clump_of_one_sphere_has_no_orientation_to_fit():
+    # one sphere fixes no rotation: the identity, not an arbitrary eigenvector
+    centres = np.array([[1e-3, 0, 0], [0, 2e-3, 0]])
+    atoms = clump_atoms(CLUMP[:1], random_quaternions(2, seed=12), centres, np.zeros((2, 3)),
+                        np.zeros((2, 3)))
+    parts, incomplete = aggregate(atoms, CLUMP[:1], 1)
+    assert incomplete == 0 and parts["id"].tolist() == [100, 101]
+    assert parts["orientation"].tolist() == [[1, 0, 0, 0]] * 2
+
+
+def test_a_two_sphere_clump_gets_its_axis():
+    # a dumbbell: the turn about its own axis is undetermined, the axis is not
+    dumbbell = np.array([[0, 0, 0], [2e-4, 0, 0]])
+    q = random_quaternions(20, seed=13)
+    atoms = clump_atoms(dumbbell, q, np.zeros((20, 3)), np.zeros((20, 3)), np.zeros((20, 3)))
+    parts, incomplete = aggregate(atoms, dumbbell, 2)
+    assert incomplete == 0
+    axis = quaternion_matrix(parts["orientation"]) @ (dumbbell[1] - dumbbell[0])
+    x = atoms["x"].reshape(20, 2, 3)
+    assert np.allclose(axis, x[:, 1] - x[:, 0], rtol=0, atol=1e-16)  # m: 2e-4 m to round-off
