@@ -361,3 +361,239 @@ def test_one_missing_value_makes_an_integer_column_float_and_none_reads_none(tmp
     back = S.read(tmp_path)[0]
     assert [r["n_events"] for r in back] == [288.0, None, 290.0]
     assert type(back[0]["n_events"]) is float and type(back[0]["n_parts"]) is int
+
+
+# ------------------------------------------------------------------ when a snapshot is due
+def test_a_snapshot_is_due_at_64_rows_pending_or_a_quarter_of_the_rows(tmp_path, monkeypatch):
+    monkeypatch.setattr(S.Ledger, "INTERVAL", math.inf)  # the row rule alone
+    monkeypatch.setattr(S.os, "fdatasync", lambda fd: None)  # the disk's speed is not tested here
+    (tmp_path / "a").mkdir()
+    ledger = S.Ledger(tmp_path / "a", PARAMS, {})
+    assert ledger.compactions == 1 and ledger.pending == 0
+    for job in range(63):
+        ledger.add(row(job))
+    assert (ledger.compactions, ledger.pending) == (1, 63)
+    ledger.add(row(63))  # 64 pending: max(64, 64 // 4)
+    assert (ledger.compactions, ledger.pending) == (2, 0)
+    for job in range(64, 127):
+        ledger.add(row(job))
+    assert ledger.compactions == 2  # 63 pending since: not yet
+    ledger.add(row(127))
+    assert ledger.compactions == 3
+    ledger.close()
+    assert [r["job"] for r in S.read(tmp_path / "a")[0]] == list(range(128))
+    # 200 rows kept: after m adds, due once m >= (200 + m) // 4, first at m = 66 (266 // 4 = 66;
+    # at m = 65, 265 // 4 = 66 is one more than pending)
+    (tmp_path / "b").mkdir()
+    ledger = S.Ledger(tmp_path / "b", PARAMS, {}, rows=[row(job) for job in range(200)])
+    for job in range(200, 265):
+        ledger.add(row(job))
+    assert (ledger.compactions, ledger.pending) == (1, 65)
+    ledger.add(row(265))
+    assert (ledger.compactions, ledger.pending) == (2, 0)
+    ledger.close()
+
+
+def test_the_snapshot_is_due_a_minute_after_the_last_one(tmp_path, monkeypatch):
+    now = [1000.0]
+    monkeypatch.setattr(S.time, "monotonic", lambda: now[0])  # snapshots then take no time
+    ledger = S.Ledger(tmp_path, PARAMS, {})
+    now[0] += 59.999
+    ledger.add(row(0))
+    assert ledger.compactions == 1 and csv_jobs(tmp_path) == []
+    now[0] = 1000.0 + 60.0
+    ledger.add(row(1))
+    assert ledger.compactions == 2 and csv_jobs(tmp_path) == [0, 1]
+    ledger.close()
+
+
+def test_rows_and_stem_are_keyword_arguments(tmp_path):
+    ledger = S.Ledger(folder=tmp_path, parameters=PARAMS, meta={}, rows=[row(0)], stem="study")
+    ledger.close()
+    assert [r["job"] for r in S.read(tmp_path, stem="study")[0]] == [0]
+    with pytest.raises(TypeError):
+        S.Ledger(tmp_path, PARAMS, {}, [row(1)])  # rows must be named
+
+
+# ------------------------------------------------------------------ the journal's file
+def test_a_short_write_of_the_journals_header_leaves_an_empty_journal(tmp_path, monkeypatch):
+    ledger = S.Ledger(tmp_path, PARAMS, {}, rows=[row(0)])
+    write = os.write
+    monkeypatch.setattr(os, "write", lambda fd, data: write(fd, data[: len(data) // 2]))  # disk full
+    with pytest.raises(OSError) as info:
+        ledger.add(row(1))  # the first add opens the journal: its header is cut short
+    monkeypatch.undo()
+    assert info.value.errno == errno.ENOSPC  # the full disk, not a failure to undo it
+    assert (tmp_path / S.JOURNAL_NAME).read_bytes() == b""  # the half header undone
+    assert [r["job"] for r in S.read(tmp_path)[0]] == [0]
+    ledger.add(row(2))  # a new journal, its header whole
+    assert [r["job"] for r in S.read(tmp_path)[0]] == [0, 2] and journal_jobs(tmp_path) == [2]
+    ledger.close()
+
+
+def test_the_journal_is_readable_by_all_and_executable_by_none(tmp_path):
+    old = os.umask(0o022)
+    try:
+        ledger = S.Ledger(tmp_path, PARAMS, {})
+        ledger.add(row(0))
+    finally:
+        os.umask(old)
+    assert (tmp_path / S.JOURNAL_NAME).stat().st_mode & 0o777 == 0o644
+    ledger.close()
+
+
+def test_a_folder_that_cannot_be_fsynced_or_opened_still_gets_its_summary(tmp_path, monkeypatch):
+    import stat
+
+    fsync = os.fsync
+
+    def files_only(fd):  # some file systems refuse fsync on a directory (EINVAL)
+        if stat.S_ISDIR(os.fstat(fd).st_mode):
+            raise OSError(errno.EINVAL, "Invalid argument")
+        fsync(fd)
+
+    monkeypatch.setattr(S.os, "fsync", files_only)
+    S.write(tmp_path, [row(0), row(1)], PARAMS, {})
+    assert [r["job"] for r in S.read(tmp_path)[0]] == [0, 1]
+    monkeypatch.undo()
+    open_ = os.open
+
+    def no_folders(path, flags, *args):  # nor may a directory always be opened
+        if os.path.isdir(path):
+            raise OSError(errno.EACCES, "Permission denied")
+        return open_(path, flags, *args)
+
+    monkeypatch.setattr(S.os, "open", no_folders)
+    ledger = S.Ledger(tmp_path, PARAMS, {}, rows=[row(0)])
+    ledger.add(row(1))  # the journal's folder is not opened either
+    ledger.close()
+    monkeypatch.undo()
+    assert [r["job"] for r in S.read(tmp_path)[0]] == [0, 1]
+
+
+# ------------------------------------------------------------------ the snapshot's file
+def test_the_snapshot_carries_the_format_version_format_md_gives(tmp_path):
+    import re
+    from pathlib import Path
+
+    import h5py
+
+    doc = (Path(__file__).resolve().parents[3] / "FORMAT.md").read_text()
+    found = re.search(r'format = "vibrofeed-sweep-summary", \+format_version = \[(\d+), (\d+)\]', doc)
+    S.write(tmp_path, [row(0)], PARAMS, {})
+    with h5py.File(tmp_path / S.H5_NAME, "r") as f:
+        assert f.attrs["format"] == S.FORMAT
+        assert f.attrs["format_version"].tolist() == [int(found[1]), int(found[2])]
+
+
+def _damage(folder, how):
+    """A snapshot of two rows, then damaged ``how``."""
+    import h5py
+
+    S.write(folder, [row(0), row(1)], PARAMS, {})
+    path = folder / S.H5_NAME
+    if how == "not hdf5":
+        path.write_bytes(b"not an HDF5 file at all")
+        return
+    with h5py.File(path, "a") as f:
+        g = f["jobs"]
+        if how == "no jobs":
+            del f["jobs"]
+        elif how == "columns not a list":
+            g.attrs["columns"] = 5
+        elif how == "undecodable text":
+            del g["file"]
+            g.create_dataset("file", data=np.array([b"\xff", b"x"], dtype=object),
+                             dtype=h5py.string_dtype("ascii"))
+        elif how == "a column too short":  # the job column has three rows, the others two
+            del g["job"]
+            g.create_dataset("job", data=np.array([0, 1, 2], dtype=np.int64))
+
+
+@pytest.mark.parametrize("how, error", [
+    ("not hdf5", "OSError"),
+    ("no jobs", "KeyError"),
+    ("columns not a list", "TypeError"),
+    ("undecodable text", "UnicodeDecodeError"),
+    ("a column too short", "IndexError"),
+])
+def test_a_damaged_snapshot_is_a_result_error_naming_the_file_and_why(tmp_path, how, error):
+    _damage(tmp_path, how)
+    with pytest.raises(ResultError) as info:
+        S.read(tmp_path)
+    message = str(info.value)
+    assert message.startswith(f"{tmp_path / S.H5_NAME}: not a readable sweep summary ({error}: "), message
+    assert "\n" not in message and info.value.__cause__ is None
+
+
+def test_a_damaged_snapshot_names_the_first_line_of_a_long_error(tmp_path, monkeypatch):
+    import h5py
+
+    S.write(tmp_path, [row(0)], PARAMS, {})
+
+    def stack(*args, **kwargs):  # HDF5 can report a stack of errors, one a line
+        raise OSError("Unable to open file (bad object header)\n  #001: H5Oint.c line 1 in H5O_protect")
+
+    monkeypatch.setattr(h5py, "File", stack)
+    with pytest.raises(ResultError) as info:
+        S.read(tmp_path)
+    assert str(info.value).endswith("(OSError: Unable to open file (bad object header))")
+
+
+def test_the_interval_stretches_to_fifty_times_the_last_snapshots_duration(tmp_path, monkeypatch):
+    now = [1000.0]
+    monkeypatch.setattr(S.time, "monotonic", lambda: now[0])
+    write_snapshot = S._write_snapshot
+
+    def slow(*args):  # each snapshot takes 2 s: the next is due 50 x 2 = 100 s later, not 60
+        write_snapshot(*args)
+        now[0] += 2.0
+
+    monkeypatch.setattr(S, "_write_snapshot", slow)
+    ledger = S.Ledger(tmp_path, PARAMS, {})  # its first snapshot ends at 1002 s
+    now[0] = 1002.0 + 99.999
+    ledger.add(row(0))
+    assert ledger.compactions == 1
+    now[0] = 1002.0 + 100.0
+    ledger.add(row(1))
+    assert ledger.compactions == 2 and csv_jobs(tmp_path) == [0, 1]
+    ledger.close()
+
+
+def test_an_interruption_just_after_the_rename_propagates_as_it_is(tmp_path, monkeypatch):
+    replace = os.replace
+
+    def renamed_then_killed(src, dst):  # e.g. SIGINT's KeyboardInterrupt as os.replace returns
+        replace(src, dst)
+        raise Killed
+
+    S.write(tmp_path, [row(0)], PARAMS, {})
+    monkeypatch.setattr(os, "replace", renamed_then_killed)
+    with pytest.raises(Killed):  # not a FileNotFoundError from cleaning the renamed file up
+        S.replace_atomically(tmp_path / "x.txt", lambda tmp: tmp.write_text("new"))
+    monkeypatch.undo()
+    assert (tmp_path / "x.txt").read_text() == "new"
+    assert not list(tmp_path.glob(".*.tmp"))
+
+
+@pytest.mark.parametrize("head, rows", [
+    ({"format": "another-journal", "generation": "g"}, []),   # another format
+    ([1, 2], []),                                             # JSON, not a header
+    ({"format": S.JOURNAL_FORMAT, "generation": "g"}, [{"status": "done"}]),  # a row without job
+    ({"format": S.JOURNAL_FORMAT, "generation": "g"}, [[0]]),                 # a row not a table
+])
+def test_a_journal_vibrofeed_did_not_write_is_a_result_error_naming_it(tmp_path, head, rows):
+    S.write(tmp_path, [row(0)], PARAMS, {})
+    lines = [json.dumps(head)] + [json.dumps(r) for r in rows]
+    (tmp_path / S.JOURNAL_NAME).write_text("".join(line + "\n" for line in lines))
+    with pytest.raises(ResultError, match=f"{S.JOURNAL_NAME}: not a vibrofeed sweep journal"):
+        S.read(tmp_path)
+
+
+def test_a_snapshot_without_columns_holds_no_rows(tmp_path):
+    import h5py
+
+    S.write(tmp_path, [row(0)], PARAMS, {})
+    with h5py.File(tmp_path / S.H5_NAME, "a") as f:
+        f["jobs"].attrs["columns"] = np.array([], dtype=h5py.string_dtype())
+    assert S.read(tmp_path)[0] == []

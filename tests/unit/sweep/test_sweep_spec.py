@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import csv
 import hashlib
+import json
 import math
 import os
 
@@ -713,3 +714,230 @@ def test_a_folder_of_a_sweep_changed_in_seven_keys_names_six_and_counts_one(tmp_
         F.check_folder(folder, edited)
     assert ("differs in fixed.p0, fixed.p1, fixed.p2, fixed.p3, fixed.p4, fixed.p5 and 1 more); "
             "its results would be mixed") in str(info.value)
+
+
+# ------------------------------------------------------------------ key lines, exactly
+def test_key_lines_skip_every_line_inside_a_multiline_value_and_record_nothing_else():
+    # Line 3 reads like a table header and lines 7-8 like keys: all three are inside a
+    # value. The "]" and the quotes of line 1's comment close nothing; line 5's two
+    # one-line strings leave no string open.
+    text = ("a = [          # ] a bracket in a comment does not close it\n"  # 1
+            "  [1, 2],\n"                                                   # 2
+            "  [3, 4]\n"                                                    # 3
+            "]\n"                                                           # 4
+            'b = ["""x""", """y"""]\n'                                      # 5
+            "c = '''\n"                                                     # 6
+            "d = 1\n"                                                       # 7
+            "e = 2\n"                                                       # 8
+            "'''\n"                                                         # 9
+            "[t]\n"                                                         # 10
+            "f = 3\n")                                                      # 11
+    assert key_lines(text) == {("a",): 1, ("b",): 5, ("c",): 6, ("t",): 10, ("t", "f"): 11}
+
+
+def test_key_lines_of_a_dotted_key_name_its_key_and_its_tables_only():
+    # a key path, its dotted prefixes; never the value's words, never the empty path
+    assert key_lines('g.h = "x y"\n[p.q]\nr = 1\n') == {("g",): 1, ("g", "h"): 1, ("p",): 2,
+                                                        ("p", "q"): 2, ("p", "q", "r"): 3}
+
+
+# ------------------------------------------------------------------ the top-level keys
+def test_defaults_of_an_almost_empty_sweep_file():
+    spec = spec_of('deck = " bulk_feeder "\n')
+    assert (spec.deck, spec.ranks_per_run, spec.replicates, spec.description) == ("bulk_feeder", 1, 1, "")
+    assert spec.target_error is None and spec.fixed == {} and spec.axes == []
+
+
+@pytest.mark.parametrize("text, line, words", [
+    ('deck = "bulk_feeder"\nfixed = 1\n', 2, "fixed must be a table [fixed]"),
+    ('deck = "bulk_feeder"\ngrid = [1, 2]\n', 2, "grid must be a table [grid]"),
+    ('deck = "bulk_feeder"\nzip = "s"\n', 2, "zip must be a table [zip]"),
+    ('deck = "bulk_feeder"\npoint = 1\n', 2, "point must be [[point]] tables"),
+    ('deck = "bulk_feeder"\n[point]\nmu = 0.3\n', 2, "point must be [[point]] tables"),
+    ('deck = "bulk_feeder"\n[zip.s]\n', 2, "zip.s must be a table of lists"),       # an empty group
+    ('deck = "bulk_feeder"\n[zip]\ns = 5\n', 3, "zip.s must be a table of lists"),  # not a table
+    ('deck = "  "\n', 1, "deck must be a deck name or a file name"),
+    ("deck = 5\n", 1, "deck must be a deck name or a file name"),
+    # two replicates already set the seeds: a varied seed is refused from two on
+    ('deck = "bulk_feeder"\nreplicates = 2\n[grid]\nseed = [1, 2]\n', 4, "replicates set the seeds"),
+])
+def test_sections_of_the_wrong_kind_are_refused_naming_the_line(text, line, words):
+    message = refused(text)
+    assert message.startswith(f"s.toml:{line}: "), message
+    assert words in message, message
+
+
+@pytest.mark.parametrize("value", ['"0.05"', "0", "0.0", "-0.5", "1", "1.5", "true"])
+def test_a_target_error_outside_the_open_unit_interval_or_not_a_number_is_refused(value):
+    message = refused(f'deck = "bulk_feeder"\ntarget_error = {value}\n')
+    assert message.startswith("s.toml:2: target_error must be a number in (0, 1)"), message
+
+
+@pytest.mark.parametrize("value", [1e-9, 0.05, 0.999])
+def test_a_target_error_inside_the_open_unit_interval_is_kept(value):
+    assert spec_of(f'deck = "bulk_feeder"\ntarget_error = {value!r}\n').target_error == value
+
+
+def test_the_change_ignores_the_key_order_inside_a_point_table():
+    from vibrofeed.sweep.spec import describe_change
+
+    # a point's keys as the file gives them (not sorted); sweep.json keeps that order
+    text = 'deck = "bulk_feeder"\nreplicates = {}\n[[point]]\nmu = 0.3\nfill_to = 0.5\n'
+    old = json.loads(json.dumps(parse(text.format(2), "s.toml").data))
+    new = parse(text.format(3), "s.toml").data
+    assert list(new["point"][0]) == ["mu", "fill_to"]
+    assert describe_change(old, new) == "replicates"
+
+
+# ------------------------------------------------------------------ plan: seeds, values, file names
+def _seedless_deck(tmp_path):
+    """single_part without its seed variable (nothing in it is random)."""
+    from helpers import DECKS
+
+    text = (DECKS / "single_part.liggghts").read_text()
+    kept = [line for line in text.splitlines(keepends=True) if not line.startswith("variable seed ")]
+    assert len(kept) == len(text.splitlines()) - 1
+    (tmp_path / "noseed.liggghts").write_text("".join(kept).replace("${deck_dir}/include",
+                                                                    str(DECKS / "include")))
+
+
+def test_replicates_of_a_deck_without_a_seed_are_refused_one_run_is_not(tmp_path):
+    _seedless_deck(tmp_path)
+    for text in ('deck = "noseed.liggghts"\n', 'deck = "noseed.liggghts"\nreplicates = 1\n'):
+        (job,) = P.plan(parse(text, tmp_path / "s.toml"))
+        assert job.seed is None and "seed" not in job.params
+    with pytest.raises(ParameterError) as info:
+        P.plan(parse('deck = "noseed.liggghts"\nreplicates = 2\n', tmp_path / "s.toml"))
+    assert str(info.value).startswith(f"{tmp_path / 's.toml'}:2: deck noseed has no seed parameter")
+
+
+def test_one_invalid_job_is_named_without_a_count():
+    # restitution must be in (0.05, 1]: job 1 alone is refused
+    message = refused('deck = "single_part"\n[grid]\nrestitution = [0.5, 0.01, 0.6]\n',
+                      ParameterError, planned=True)
+    assert message.startswith("s.toml:3: job 1 (restitution=0.01): parameter restitution=0.01"), message
+    assert "jobs are invalid" not in message and message.endswith("coefficientRestitution > 0.05)")
+
+
+def test_a_value_is_passed_to_the_deck_as_written():
+    assert (P.value_text("0.5"), P.value_text(3), P.value_text(5e-5), P.value_text(0.1)) == \
+        ("0.5", "3", "5e-05", "0.1")
+    (job,) = P.plan(spec_of('deck = "bulk_feeder"\n[fixed]\nt_end = "0.5"\n'))  # a number as a string
+    assert job.params["t_end"] == "0.5" and job.values["t_end"] == "0.5"
+
+
+@pytest.mark.parametrize("replicates, first, last", [
+    (10000, "jobs/job-0000.h5", "jobs/job-9999.h5"),     # four digits hold job 9999
+    (10001, "jobs/job-00000.h5", "jobs/job-10000.h5"),   # job 10000 needs five: every name gets them
+])
+def test_job_files_are_numbered_with_as_many_digits_as_the_last_job_needs(monkeypatch, replicates,
+                                                                          first, last):
+    import vibrofeed.engine.runner as runner
+
+    # checking 10 000 jobs for real takes seconds: the names alone are tested here
+    monkeypatch.setattr(P, "resolve", lambda deck, params: dict(params))
+    monkeypatch.setattr(runner, "run_id", lambda deck, values, target_error=None: "id")
+    jobs = P.plan(spec_of(f'deck = "single_part"\nreplicates = {replicates}\n'))
+    assert len(jobs) == replicates and (jobs[0].file, jobs[-1].file) == (first, last)
+    assert len({j.file for j in jobs}) == replicates
+
+
+# ------------------------------------------------------------------ the folder
+def test_a_complete_result_without_frames_is_not_a_done_job(tmp_path):
+    job = P.plan(spec_of(ISSUE))[0]
+    job.file = "jobs/a.h5"
+    (tmp_path / "jobs").mkdir()
+    path = write_result(tmp_path / job.file, [])
+    job.run_id = hashlib.sha256(str(path).encode()).hexdigest()  # the id write_result gives
+    assert not F.result_is_true(tmp_path, job)
+    write_result(path, [(0, 0.0, parts([1], [[0, 0, 5e-4]]))])
+    assert F.result_is_true(tmp_path, job)  # one frame: done
+
+
+def test_a_sweep_json_that_is_not_json_or_cannot_be_read_is_refused(tmp_path, monkeypatch):
+    spec = spec_of(ISSUE, tmp_path)
+    (tmp_path / F.SPEC_NAME).write_text('{"fingerprint": ')  # cut short
+    with pytest.raises(UsageError, match="sweep.json is not readable; it is not a sweep folder"):
+        F.check_folder(tmp_path, spec)
+    from pathlib import Path
+
+    def unreadable(self, *args, **kwargs):
+        raise OSError(5, "Input/output error")
+
+    monkeypatch.setattr(Path, "read_text", unreadable)  # a disk error (root reads any mode)
+    with pytest.raises(UsageError, match="sweep.json is not readable; it is not a sweep folder"):
+        F.check_folder(tmp_path, spec)
+
+
+def test_clear_leftovers_removes_temporary_copies_and_scratch_folders_only(tmp_path):
+    (tmp_path / "jobs" / ".vibrofeed-abc").mkdir(parents=True)
+    (tmp_path / "jobs" / ".vibrofeed-abc" / "log.lammps").write_text("x")
+    (tmp_path / ".summary.h5.x1.tmp").write_text("half")
+    (tmp_path / ".sweep.json.x2.tmp").write_text("half")
+    kept = [tmp_path / "summary.h5", tmp_path / "jobs" / "job-0000.h5", tmp_path / "jobs" / ".vibrofeed-x.h5"]
+    for p in kept:
+        p.write_text("keep")
+    gone = F.clear_leftovers(tmp_path)
+    assert sorted(p.name for p in gone) == [".summary.h5.x1.tmp", ".sweep.json.x2.tmp", ".vibrofeed-abc"]
+    assert not any(p.exists() for p in gone) and all(p.exists() for p in kept)
+
+
+def test_a_name_the_deck_lacks_is_refused_before_any_job_is_checked():
+    deck = P.find_deck(spec_of('deck = "bulk_feeder"\n'))
+    message = refused('deck = "bulk_feeder"\n[fixed]\nt_end = 0.5\n[grid]\namp_nn = [1e-5, 2e-5]\n',
+                      ParameterError, planned=True)
+    # not as a job's error (no "job 0 (...)", no count of invalid jobs): the name, the deck's names
+    assert message == ("s.toml:5: unknown parameter 'amp_nn' for deck bulk_feeder (did you mean 'amp_n'?); "
+                       f"valid parameters: {', '.join(deck.tunables)}")
+    message = refused('deck = "bulk_feeder"\n[fixed]\ndeck_dir = "x"\n', ParameterError, planned=True)
+    assert message == "s.toml:3: parameter 'deck_dir' is set by vibrofeed itself, not by a sweep"
+
+
+def test_a_refused_job_names_the_line_of_the_parameter_its_error_is_about():
+    # amp_n comes first in the file and in the alphabet, but the error is about fill_to
+    message = refused('deck = "bulk_feeder"\n[grid]\namp_n = [5e-5, 1e-4]\nfill_to = [0.5, 1.5]\n',
+                      ParameterError, planned=True)
+    assert message.startswith("s.toml:4: job 1 (amp_n=5e-05 fill_to=1.5): parameter fill_to=1.5 "), message
+
+
+@pytest.mark.parametrize("text, line, words", [
+    # the same setting, its keys in another order
+    ('deck = "bulk_feeder"\n[[point]]\nmu = 0.3\nfill_to = 0.5\n[[point]]\nfill_to = 0.5\nmu = 0.3\n', 2,
+     "two [[point]] tables are the same setting"),
+    ('deck = "bulk_feeder"\n[[point]]\n[[point]]\nmu = 0.3\n', 2, "each [[point]] must set at least one"),
+    ('deck = "bulk_feeder"\npoint = [1, 2]\n', 2, "each [[point]] must set at least one"),
+])
+def test_points_that_set_nothing_or_the_same_setting_are_refused(text, line, words):
+    message = refused(text)
+    assert message.startswith(f"s.toml:{line}: "), message
+    assert words in message, message
+
+
+def test_key_lines_end_a_multiline_string_at_its_closing_quotes_whatever_the_comment_holds():
+    text = ("c = '''\n"                                  # 1
+            "text\n"                                     # 2
+            "''' # closed: ''' and ''' in a comment\n"   # 3: three quotes, the first close it
+            "d = 1\n")                                   # 4
+    assert key_lines(text) == {("c",): 1, ("d",): 4}
+
+
+def test_clear_leftovers_neither_follows_nor_trips_on_a_linked_scratch_folder(tmp_path):
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    (elsewhere / "data").write_text("keep")
+    (tmp_path / "out" / "jobs").mkdir(parents=True)
+    (tmp_path / "out" / "jobs" / ".vibrofeed-link").symlink_to(elsewhere, target_is_directory=True)
+    F.clear_leftovers(tmp_path / "out")  # rmtree refuses a link: ignored, never raised
+    assert (elsewhere / "data").read_text() == "keep"
+
+
+def test_the_lock_file_is_readable_by_all_and_executable_by_none(tmp_path):
+    old = os.umask(0o022)
+    try:
+        fd = F.lock(tmp_path)
+    finally:
+        os.umask(old)
+    try:
+        assert (tmp_path / F.LOCK_NAME).stat().st_mode & 0o777 == 0o644
+    finally:
+        os.close(fd)
