@@ -117,12 +117,28 @@ def _fsync_dir(folder: Path) -> None:
         os.close(fd)
 
 
+def _umask() -> int:
+    """The process' umask, read without changing it (Linux), else set and restored."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("Umask:"):
+                return int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
 def replace_atomically(path: Path, write) -> None:
     """``write(tmp_path)`` then fsync and rename over ``path``: readers see the
     old file or the new one, never a part of either."""
     path = Path(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
+    try:  # mkstemp's 0600 would keep the summary from the rest of the group: a new file's mode
+        os.fchmod(fd, 0o666 & ~_umask())
+    finally:
+        os.close(fd)
     try:
         write(Path(tmp))
         with open(tmp, "rb+") as f:
@@ -217,7 +233,10 @@ def _read_snapshot(path: Path) -> tuple[list[dict], dict]:
                 data[c] = [int(v) for v in ds[()]]
             else:
                 data[c] = to_json(ds[()])  # NaN: None
-    n = len(data[cols[0]]) if cols else 0
+    lengths = {len(data[c]) for c in cols}
+    if len(lengths) > 1:  # a torn or edited file: rows cut short would pass for the sweep
+        raise ValueError(f"its columns hold {min(lengths)} to {max(lengths)} rows")
+    n = lengths.pop() if lengths else 0
     return [{c: data[c][i] for c in cols} for i in range(n)], meta
 
 

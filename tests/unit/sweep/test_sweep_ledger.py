@@ -508,6 +508,9 @@ def _damage(folder, how):
         elif how == "a column too short":  # the job column has three rows, the others two
             del g["job"]
             g.create_dataset("job", data=np.array([0, 1, 2], dtype=np.int64))
+        elif how == "the job column too short":  # one row, the others two: never cut to one
+            del g["job"]
+            g.create_dataset("job", data=np.array([0], dtype=np.int64))
 
 
 @pytest.mark.parametrize("how, error", [
@@ -515,7 +518,8 @@ def _damage(folder, how):
     ("no jobs", "KeyError"),
     ("columns not a list", "TypeError"),
     ("undecodable text", "UnicodeDecodeError"),
-    ("a column too short", "IndexError"),
+    ("a column too short", "ValueError"),
+    ("the job column too short", "ValueError"),
 ])
 def test_a_damaged_snapshot_is_a_result_error_naming_the_file_and_why(tmp_path, how, error):
     _damage(tmp_path, how)
@@ -597,3 +601,18 @@ def test_a_snapshot_without_columns_holds_no_rows(tmp_path):
     with h5py.File(tmp_path / S.H5_NAME, "a") as f:
         f["jobs"].attrs["columns"] = np.array([], dtype=h5py.string_dtype())
     assert S.read(tmp_path)[0] == []
+
+
+@pytest.mark.parametrize("mask", [0o022, 0o077, 0o002])
+def test_snapshots_and_sweep_files_have_the_mode_of_a_new_file(tmp_path, mask):
+    # (mkstemp makes its file 0600: a summary others in the group could not read)
+    old = os.umask(mask)
+    try:
+        S.replace_atomically(tmp_path / "a.csv", lambda tmp: tmp.write_text("x"))
+        ledger = S.Ledger(tmp_path, PARAMS, {})
+        ledger.add(row(0))
+        ledger.close()
+    finally:
+        os.umask(old)
+    for name in ("a.csv", S.CSV_NAME, S.H5_NAME):
+        assert (tmp_path / name).stat().st_mode & 0o777 == 0o666 & ~mask, name
