@@ -179,3 +179,27 @@ def test_no_deck_line_is_a_long_formula():
     for path in sorted(DECKS.rglob("*.liggghts")):
         for number, line in enumerate(path.read_text().splitlines(), start=1):
             assert len(line) <= 120, f"{path.name}:{number} is {len(line)} characters"
+
+
+def test_header_drops_one_mark_and_one_space_and_title_is_the_description(tmp_path):
+    p = tmp_path / "h.liggghts"
+    p.write_text("# Deck h\n#\n# Moves a part. Then stops.\n#   indented\n#tight\n"
+                 "variable a index 1 # [m] a\n")
+    deck = Deck(p)
+    # '#' and one space go; more indent and an unspaced first letter stay
+    assert deck.header == "Deck h\n\nMoves a part. Then stops.\n  indented\ntight"
+    assert deck.title == "Moves a part"  # the second paragraph's first sentence
+    p.write_text("# Only a description. More.\nvariable a index 1 # [m] a\n")
+    assert Deck(p).title == "Only a description"  # one paragraph: that one
+
+
+def test_find_by_name_takes_a_bare_name_only(tmp_path):
+    assert Deck.find("single_part").name == "single_part"
+    assert Deck.find("single_part.liggghts").name == "single_part"
+    with pytest.raises(DeckError, match=r"no deck 'no_such_deck' \(not a file; decks available by name: .*"
+                                        r"single_part"):
+        Deck.find("no_such_deck")
+    # a path in another folder is not a name: no fallback to the project's deck of that name
+    elsewhere = tmp_path / "single_part"
+    with pytest.raises(DeckError, match="no deck .*single_part"):
+        Deck.find(elsewhere)

@@ -10,6 +10,7 @@ import pytest
 from helpers import vibrofeed
 from vibrofeed.decks import Deck
 from vibrofeed.parameters import ParameterError, ParameterWarning, resolve
+from vibrofeed.plausibility import advice
 
 SINGLE, BULK = Deck.find("single_part"), Deck.find("bulk_feeder")
 LINE = {"sections": "2"}  # a feeder line with the deck's section 2
@@ -70,6 +71,15 @@ def said(deck, given) -> list[str]:
     (BULK, {**LINE, "s2_drop_width": "1e-3"}, "s2_drop_width has no effect: it shapes the side drop: "
                                               "s2_drop_to <= s2_drop_from has none"),
     (BULK, {**LINE, "s2_drop_from": "0.2"}, "s2_drop_from has no effect: it shapes the side drop"),
+    # each limit just past it (its value at the limit says nothing: see below)
+    (SINGLE, {"density": "99.5"}, "density=99.5 kg/m³ is lighter than any solid"),
+    (SINGLE, {"density": "25010"}, "density=25010 kg/m³ is denser than any solid"),
+    (BULK, {"surface_energy": "10.01"}, "surface_energy=10.01 J/m² exceeds the surface energies of solids"),
+    (SINGLE, {"mu": "2.01"}, "mu=2.01 exceeds the friction of solids"),
+    # an angle of 2 pi (just below it: 6.283185 < 2 pi) is still a whole turn in radians
+    (SINGLE, {"phase": "6.283185"}, "phase=6.28318 deg is 2 pi: an angle in radians?"),
+    # the inlet's batches without an inlet (the deck's inlet_rate is 0)
+    (BULK, {"inlet_batch": "5"}, "inlet_batch has no effect: it groups the inlet's parts: inlet_rate=0"),
 ])
 def test_an_implausible_value_is_named_with_its_likely_slip(deck, given, words):
     lines = said(deck, given)
@@ -89,6 +99,14 @@ def test_an_implausible_value_is_named_with_its_likely_slip(deck, given, words):
             "s2_width": "3e-3", "s2_wall_height": "1.5e-3", "track_width": "3e-3"}),
     (BULK, {**LINE, "s2_wiper_height": "6e-4", "s2_wiper_at": "0.8"}),
     (BULK, {**LINE, "s2_drop_from": "0.2", "s2_drop_to": "0.6", "s2_drop_width": "1.5e-3"}),
+    # the limits themselves are plausible
+    (SINGLE, {"density": "100"}), (SINGLE, {"density": "25000"}), (BULK, {"surface_energy": "10"}),
+    (SINGLE, {"mu": "2"}),
+    # angles: beyond 2 pi a multiple of 5 deg in radians (73 pi/36, 3 pi) is taken as degrees
+    (SINGLE, {"phase": "6.3705"}), (SINGLE, {"incline": "9.42478"}),
+    # frequencies: only 2 pi x a multiple of 5 Hz reads as rad/s, not 2 pi x 3 Hz nor 15 pi
+    (SINGLE, {"freq": "18.8496"}), (SINGLE, {"freq": "47.1239"}),
+    (BULK, {"inlet_batch": "5", "inlet_rate": "1"}),
 ])
 def test_plausible_values_and_options_in_effect_say_nothing(deck, given):
     assert said(deck, given) == []
@@ -124,3 +142,15 @@ def test_the_command_line_prints_a_warning_as_one_line(tmp_path):
     assert proc.returncode == 0
     assert proc.stderr == ("vibrofeed: warning: parameter density=2.33 kg/m³ is lighter than any solid: "
                            "a density in g/cm³? (silicon: 2330 kg/m³, not 2.33)\n")
+
+
+@pytest.mark.parametrize("p, name, why", [
+    # no air film declared is no air film: with hamaker=0, nothing for roughness to shape
+    ({"hamaker": 0.0, "roughness": 1e-8}, "roughness",
+     "shapes the surface forces: hamaker=0 and air_viscosity=0 turn them off"),
+    # no s2_drop_to declared is a drop to the section's end (1): from 1 on, none
+    ({"s2_drop_from": 1.0, "s2_drop_width": 1e-3}, "s2_drop_from",
+     "shapes the side drop: s2_drop_to <= s2_drop_from has none"),
+])
+def test_a_parameter_the_deck_does_not_declare_takes_its_neutral_value(p, name, why):
+    assert advice(p, {name}) == [f"parameter {name} has no effect: it {why}"]
