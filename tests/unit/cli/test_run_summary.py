@@ -2,9 +2,12 @@
 is still summarised (the run did what it said; its summary must not fail it)."""
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
+import pytest
 
+import vibrofeed.run_summary as RS
 from helpers import parts, write_result
 from vibrofeed.engine.runner import RunResult
 from vibrofeed.run_summary import run_summary
@@ -36,3 +39,79 @@ def test_frames_too_sparse_for_the_hops_are_said_not_to_count_them(tmp_path):
 def test_frames_that_follow_the_surface_count_the_hops(tmp_path):
     line = run_summary(one_part(tmp_path / "dense.h5", frames_per_period=20))
     assert "0 hops" in line and "hops not counted" not in line
+
+
+# ---------------------------------------------------------------- the line from a faked result
+class FakeResult:
+    """What run_summary reads of a result, set by hand."""
+
+    def __init__(self, n=1, n_frames=3, balance=None, parameters=None):
+        self.part_ids = list(range(n))
+        self.n_frames = n_frames
+        self.mass_balance = balance
+        self.parameters = {"freq": "50"} if parameters is None else parameters
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+
+def fake_run(**kw):
+    run = dict(reused=False, deck="d", sim_time=1.0, target_error=None, stop_reason="",
+               stopped_early=False, wall=2.0, steps_per_second=5000.0, ranks=1, frames=3,
+               output="o.h5", run_id="0" * 40)
+    run.update(kw)
+    return SimpleNamespace(**run)
+
+
+def analyses(monkeypatch, velocity=0.0, durations=()):
+    transport = SimpleNamespace(mean_velocity=velocity)
+    flights = SimpleNamespace(durations=np.asarray(durations, float), n_hops=len(durations),
+                              airborne_fraction=0.5, max_gap=2e-3)
+    def analysis(results):
+        return lambda r: SimpleNamespace(run=lambda: SimpleNamespace(results=results))
+
+    monkeypatch.setattr(RS, "Transport", analysis(transport))
+    monkeypatch.setattr(RS, "Flights", analysis(flights))
+
+
+@pytest.mark.parametrize("x, text", [(1.5, "1.5 m/s"), (1.0, "1 m/s"), (0.0025, "2.5 mm/s"),
+                                     (2.5e-6, "2.5 um/s"), (2.5e-8, "0.025 um/s")])
+def test_speeds_take_the_largest_prefix_they_reach(x, text):
+    assert RS._si(x, "m/s") == text
+
+
+def test_the_reason_a_run_stopped_is_said_only_with_a_target_error():
+    assert RS._stopped(fake_run(target_error=None, stop_reason="time limit")) == ""
+    assert RS._stopped(fake_run(target_error=0.1, stop_reason="")) == ""
+    assert RS._stopped(fake_run(target_error=0.1, stop_reason="error reached",
+                                stopped_early=True)) == " (stopped early: error reached)"
+
+
+def test_a_feeder_line_says_where_its_parts_went(monkeypatch):
+    balance = {k: np.array([0, v]) for k, v in
+               dict(inserted=10, on_track=3, exited=5, lost=1, rejected=1).items()}
+    monkeypatch.setattr(RS, "Result", lambda path: FakeResult(n=4, balance=balance))
+    line = run_summary(fake_run())
+    assert line.endswith(" | 10 parts fed: 5 exited, 1 rejected, 3 on the track, 1 lost")
+    balance["returned"] = np.array([0, 2])
+    del balance["rejected"]
+    line = run_summary(fake_run())
+    assert line.endswith(" | 8 parts fed + 2 returned: 5 exited, 3 on the track, 1 lost")
+
+
+def test_without_a_frequency_a_hop_is_one_lasting_a_twentieth_of_a_second(monkeypatch):
+    # no "freq": a period of 1 s; hops last >= 0.05 s, shorter ones are rebounds
+    monkeypatch.setattr(RS, "Result", lambda path: FakeResult(parameters={}))
+    analyses(monkeypatch, velocity=0.01, durations=[0.03, 0.06])
+    line = run_summary(fake_run())
+    assert line.endswith(" | 1 part, mean speed 10 mm/s along x, 1 hops (+1 short rebounds), "
+                         "airborne 50% of the time, highest 2 mm")
+
+
+def test_two_frames_are_too_few_for_a_speed_or_hops(monkeypatch):
+    monkeypatch.setattr(RS, "Result", lambda path: FakeResult(n_frames=2))
+    analyses(monkeypatch, velocity=0.01, durations=[0.03])
+    assert run_summary(fake_run()).endswith(" | 1 part")
