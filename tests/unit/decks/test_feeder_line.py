@@ -16,6 +16,7 @@ from vibrofeed.errors import ParameterError
 from vibrofeed.geometry import prepare_bulk_feeder, track_mesh
 from vibrofeed.line import (
     Section,
+    check_line,
     combined,
     joint_motion,
     joint_steps,
@@ -132,6 +133,7 @@ def test_a_drop_needs_a_length_and_must_leave_a_floor():
     assert section(drop_from=0.25, drop_to=0.5, drop_width=2.5e-4).has_drop
     assert not section(drop_from=0.3, drop_to=0.3, drop_width=2.5e-4).has_drop  # no length
     assert not section(drop_from=0.25, drop_to=0.5, drop_width=4.2e-4).has_drop  # as wide as the track
+    assert not section(drop_from=0.25, drop_to=0.5, drop_width=0.0).has_drop  # no floor left: none
 
 
 def test_each_section_has_its_own_drive():
@@ -199,17 +201,29 @@ def test_a_single_section_is_the_bulk_feeder_unchanged(tmp_path):
     ({"size_spread": 0.45, "gate_width": 4.5e-4, "s2_width": 4.3e-4}, "narrower than a part"),
     ({"s2_step": 2e-5, "s2_phase": -30}, "must step down by more than"),
     ({"s2_step": 3e-4}, "not a small step"),
+    ({"s2_step": 3e-4}, "(with the cross tilts it is"),  # the step at the gate's low end, as asked
+    ({"s2_step": 3e-4, "s2_cross_tilt": 0}, "not a small step"),  # a part's thickness exactly
     ({"s2_amp_t": 2.6e-4}, "joint opens"),
+    ({"s2_amp_t": 2.6e-4}, "more than half a part (0.00015 m)"),  # part_size 3e-4 m
     ({"amp_t": 2.5e-5, "s2_amp_t": 1.75e-4}, "joint opens"),  # by exactly half a part
     ({"s2_wiper_height": 2e-4}, "lower than a part's thickness"),
     ({"s2_wiper_height": 7e-4}, "not below the walls"),
+    ({"s2_wiper_height": 6e-4}, "not below the walls"),  # as high as the walls
     ({"s2_wiper_height": 4e-4, "s2_wiper_at": 0.99}, "runs past the outlet"),
-    ({"s2_drop_to": 0.5, "s2_drop_width": 1e-4}, "less than half a part"),
+    ({"s2_drop_to": 0.5, "s2_drop_width": 1e-4}, "less than half a part (0.00015 m)"),
+    ({"s2_drop_to": 0.5, "s2_drop_width": 0}, "must be > 0"),  # a drop's extent with no floor left
     ({"s2_drop_to": 0.5, "s2_drop_width": 5e-4}, "narrower than s2_width"),
     ({"s2_drop_to": 0.5, "s2_drop_width": 4.2e-4}, "narrower than s2_width"),  # as wide
     ({"s2_wall_height": 1e-4}, "no higher than a part's centre"),
+    ({"s2_wall_height": 1.5e-4}, "no higher than a part's centre"),  # exactly there
     ({"waveform": 1}, "sines"),
     ({"hamaker": 1e-19}, "section 1's floor only"),
+    ({"air_viscosity": 1.81e-5}, "section 1's floor only"),  # air's
+    # no gate (gate_width 0): section 1's exit is its whole width, 1.2e-3 m
+    ({"gate_width": 0, "s2_width": 1e-3}, "narrower than section 1's exit (0.0012 m)"),
+    # two frequencies: the floors part by amp_n + s2_amp_n = 1e-4 m at most; a step of just
+    # that does not clear it (no cross tilt at the gate's high end: the step there is s2_step)
+    ({"s2_freq": 120, "s2_step": 1e-4}, "must step down by more than"),
     ({"s2_amp_n": 0.005}, "s2_amp_n=0.005 m at s2_freq=100 Hz"),
     ({"sections": 3}, "sections=3"),
 ])
@@ -218,6 +232,12 @@ def test_line_refusals_are_one_line(given, words):
     with pytest.raises(ParameterError) as err:
         resolve(deck, line_values(**given))
     assert words in str(err.value) and "\n" not in str(err.value)
+
+
+def test_a_step_without_cross_tilts_is_named_alone():
+    with pytest.raises(ParameterError) as err:
+        resolve(Deck(DECKS / "bulk_feeder.liggghts"), line_values(s2_step=3e-4, s2_cross_tilt=0))
+    assert "cross tilts" not in str(err.value)  # the step is s2_step everywhere
 
 
 def test_the_same_values_pass_with_one_section():
@@ -320,3 +340,171 @@ def test_a_tilted_section_one_must_still_step_down_everywhere():
         resolve(deck, level)
     assert "must step down by more than" in str(err.value) and "at its least" in str(err.value)
     resolve(deck, {**level, "s2_cross_tilt": "10"})  # tilted alike: a uniform 50 um step
+
+
+@pytest.mark.parametrize("given", [
+    {"s2_amp_t": 1.9e-4},  # the joint opens by 1.4e-4 m, just under half a part (1.5e-4 m)
+    {"s2_freq": 120, "s2_step": 1.01e-4},  # a step just over the floors' 1e-4 m apart
+    {"s2_wiper_height": 3e-4},  # a wiper exactly a part's thickness high lets it pass
+    {"s2_drop_to": 0.5, "s2_drop_width": 1.5e-4},  # a ledge of exactly half a part
+    # the wiper's bar, one part size long, ends exactly at the outlet edge (binary fractions:
+    # 0.96875 * 2^-7 + 2^-12 = 2^-7 m exactly)
+    {"track_length": 0.015625, "s2_length": 0.0078125, "part_size": 0.000244140625,
+     "s2_wiper_height": 4e-4, "s2_wiper_at": 0.96875},
+])
+def test_a_line_just_within_its_limits_passes(given):
+    values = resolve(Deck(DECKS / "bulk_feeder.liggghts"), line_values(**given))
+    s = section_from(values)
+    v, _ = section_mesh(s)  # and prepare meshes it
+    assert v[:, 0].max() == pytest.approx(s.x1, abs=TOL)
+    if s.has_wiper:
+        assert s.wiper_x[1] - s.wiper_x[0] == pytest.approx(float(values["part_size"]), abs=TOL)
+        assert s.wiper_x[1] <= s.x1
+        if "s2_wiper_at" in given:
+            assert s.wiper_x[1] == s.x1  # at the edge to the bit
+
+
+def test_a_wiper_just_past_the_outlet_edge_is_refused():
+    given = {"track_length": 0.015625, "s2_length": 0.0078125, "part_size": 0.000244140625,
+             "s2_wiper_height": 4e-4, "s2_wiper_at": 0.97}  # its bar ends 2.3e-6 m past the edge
+    with pytest.raises(ParameterError) as err:
+        resolve(Deck(DECKS / "bulk_feeder.liggghts"), line_values(**given))
+    # the bar is one part size long
+    assert f"the wiper's bar ({2**-12:g} m long) runs past the outlet edge" in str(err.value)
+
+
+def minimal_line(**kw):
+    """A line's parameters given only what has no neutral value (no drive, no gate, no tooling)."""
+    return {"sections": 2, "part_size": 3e-4, "track_width": 4e-4, "s2_width": 4e-4,
+            "s2_length": 5e-3, "s2_wall_height": 6e-4, "s2_step": 5e-5, **kw}
+
+
+def test_check_line_takes_absent_options_as_off():
+    check_line({})  # a deck without a line (bowl, single part): nothing to check, no recirculation
+    # absent: spheres without spread, no gate, no drive, no surface forces, sines
+    check_line(minimal_line())
+    # a spread given alone applies to spheres: the largest (4.35e-4 m) is wider than section 2
+    with pytest.raises(ParameterError, match="narrower than a part"):
+        check_line(minimal_line(size_spread=0.45))
+
+
+def test_joint_motion_depends_on_the_phase_difference_only():
+    a = 5e-5
+    p = {"freq": 100, "s2_freq": 100, "amp_n": a, "s2_amp_n": a}
+    # 30 and 90 degrees: 60 apart, equal sines differ by one amplitude; 0 and 60 alike
+    for phases in [(30, 90), (0, 60), (90, 30)]:
+        dz, _ = joint_motion({**p, "phase": phases[0], "s2_phase": phases[1]})
+        assert dz == pytest.approx(a, rel=1e-12), phases
+
+
+def test_joint_motion_takes_absent_drive_values_as_zero():
+    # no frequencies or phases given: one drive, the same sine for both (equal amplitudes: no gap)
+    assert joint_motion({"amp_n": 5e-5, "s2_amp_n": 5e-5, "amp_t": 2e-5, "s2_amp_t": 2e-5}) == (0.0, 0.0)
+    # a section's amplitude not given: it does not move
+    assert joint_motion({"freq": 100, "s2_freq": 100, "s2_amp_n": 4e-5, "s2_amp_t": 3e-5}) == (4e-5, 3e-5)
+
+
+def test_joint_motion_of_nearly_equal_amplitudes_in_phase():
+    # in phase the gap is |a1 - a2| = 7e-14 m; the closed form a1^2 + a2^2 - 2 a1 a2 rounds to
+    # -8e-25 m^2 for these two, which must count as no gap, not a domain error
+    a1, a2 = 5e-5, 5.000000007e-5
+    dz, dx = joint_motion({"freq": 100, "s2_freq": 100, "amp_n": a1, "s2_amp_n": a2, "phase": 0,
+                           "s2_phase": 0})
+    # cancellation leaves sqrt(4 eps) a1 ~ 1.5e-12 m of accuracy
+    assert dz == pytest.approx(a2 - a1, abs=1e-11) and dx == 0.0
+
+
+def x_stations(v):
+    return np.unique(np.round(v[:, 0], 12))
+
+
+@pytest.mark.parametrize("width, n", [(4.2e-4, 20), (1.2e-3, 8)])
+def test_stations_are_the_fewest_uniform_ones_within_the_width_and_1_mm(width, n):
+    # 8 mm: 8 / 0.42 = 19.05 -> 20 spaces of 0.4 mm; a section over 1 mm wide: 8 spaces of 1 mm
+    s = section(width=width)
+    xs = x_stations(section_mesh(s)[0])
+    assert np.allclose(xs, np.linspace(s.x0, s.x1, n + 1), rtol=0, atol=TOL)
+
+
+@pytest.mark.parametrize("times", [2.0, 1e10])
+def test_a_spacing_longer_than_the_section_leaves_just_its_ends(times):
+    s = section()
+    xs = x_stations(section_mesh(s, spacing=times * s.length)[0])
+    assert np.allclose(xs, [s.x0, s.x1], rtol=0, atol=TOL)
+
+
+def areas(s, v, t):
+    """Area of the floor seen from above and of the wall at +w/2, each from its own triangles."""
+    c = v[t]
+    on_floor = np.all(same(c[:, :, 2], s.floor_z(c[:, :, 1])), axis=1)
+    on_hi = np.all(same(c[:, :, 1], s.width / 2), axis=1)
+    cross = np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]) / 2
+    return np.abs(cross[on_floor, 2]).sum(), np.abs(cross[on_hi, 1]).sum()
+
+
+@pytest.mark.parametrize("drop_from, drop_to", [(0.26, 0.51), (0.0, 0.3), (0.5, 1.0)])
+def test_the_side_drop_spans_exactly_its_fractions(drop_from, drop_to):
+    # ends off the 0.4 mm stations (0.26, 0.51) and at the section's ends (0, 1)
+    s = section(drop_from=drop_from, drop_to=drop_to, drop_width=2.5e-4)
+    v, t = section_mesh(s)
+    floor, wall = areas(s, v, t)
+    span = (drop_to - drop_from) * s.length
+    # m^2; vertices rounded to 1e-12 m over 8 mm: ~1e-14 m^2 (a station off moves 7e-8 m^2)
+    assert floor == pytest.approx(s.length * s.width - span * (s.width - 2.5e-4), abs=1e-13)
+    assert wall == pytest.approx((s.length - span) * s.wall_height, abs=1e-13)
+
+
+def test_a_drop_whose_ends_round_to_one_point_is_refused():
+    # drop_to > drop_from by one ulp: on the section both ends are x = 0.012 m to the bit
+    s = section(drop_from=0.25, drop_to=float(np.nextafter(0.25, 1.0)), drop_width=2.5e-4)
+    assert s.has_drop and s.drop_x[0] == s.drop_x[1]
+    with pytest.raises(ParameterError, match="side drop does not fit"):
+        section_mesh(s)
+
+
+def test_a_wiper_may_stand_at_the_joint():
+    s = section(wiper_height=3.5e-4, wiper_at=0.0, wiper_length=3e-4)
+    v, _ = section_mesh(s)
+    assert s.wiper_x[0] == s.x0
+    under = v[same(v[:, 2], s.floor_z(v[:, 1]) + 3.5e-4)]
+    assert np.allclose(np.unique(np.round(under[:, 0], 12)), [s.x0, s.x0 + 3e-4], rtol=0, atol=TOL)
+
+
+def test_a_section_is_a_value():
+    import dataclasses
+
+    s = section(drop_from=0.25, drop_to=0.5, drop_width=2.5e-4)
+    assert s == section(drop_from=0.25, drop_to=0.5, drop_width=2.5e-4) and hash(s) == hash(section(
+        drop_from=0.25, drop_to=0.5, drop_width=2.5e-4))
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        s.step = 0.0
+
+
+def test_a_wiper_may_end_at_the_outlet_edge():
+    # binary fractions: the bar ends at x1 = 2^-7 + 2^-7 m to the bit
+    s = section(x0=2**-7, length=2**-7, wiper_height=3.5e-4, wiper_at=0.75, wiper_length=2**-9)
+    assert s.wiper_x[1] == s.x1
+    v, _ = section_mesh(s)
+    upstream = v[same(v[:, 0], s.wiper_x[0]) & (v[:, 2] > s.floor_z(v[:, 1]) + TOL)]
+    assert len(upstream)  # the bar is there
+
+
+@pytest.mark.parametrize("x0", [0.01, 0.01 + 3e-12, 0.0123456789012])
+def test_section_two_starts_where_section_one_ends(x0):
+    # any track length: both meshes put the joint at the same x, to their 1e-12 m rounding
+    v1, _ = track_mesh(x0, W1, 1e-3, gate_width=4.2e-4, gate_x=0.6 * x0)
+    v2, _ = section_mesh(section(x0=x0))
+    assert v2[:, 0].min() == pytest.approx(v1[:, 0].max(), abs=TOL)
+    assert v2[:, 0].min() == pytest.approx(x0, abs=TOL)
+
+
+def test_a_sections_tooling_defaults_are_the_decks():
+    import dataclasses
+
+    deck = resolve(Deck(DECKS / "bulk_feeder.liggghts"), {})
+    defaults = {f.name: f.default for f in dataclasses.fields(Section)}
+    for name in ("cross_tilt", "drop_from", "drop_to", "drop_width", "wiper_height", "wiper_at"):
+        assert defaults[name] == float(deck[f"s2_{name}"]), name
+    # section_from without s2_wiper_at: the deck's place (mid-length)
+    given = {"track_length": 0.01, "s2_length": 8e-3, "s2_wiper_height": 4e-4, "part_size": 3e-4}
+    assert section_from(given).wiper_at == float(deck["s2_wiper_at"])

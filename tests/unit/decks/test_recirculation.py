@@ -161,3 +161,38 @@ def test_returns_need_a_line(tmp_path):
         ResultWriter(tmp_path / "x.h5", deck_name="x", deck_path="x", deck_text="", variables={},
                      derived={}, engine_version="", seed=None, returns=True)
     assert not (tmp_path / "x.h5").exists()
+
+
+def test_return_fixes_never_replay_the_decks_own_insertion_seeds():
+    # the deck's insertion and template fixes take insertion_seeds(seed, 6); a return fix
+    # with one of them would insert along the same random stream as a deck fix
+    from vibrofeed.geometry import insertion_seeds
+
+    lmp, comm, seed = Engine(), OneRank(), 5489
+    r = Returns(delay=0.0, seed=seed, dt=1e-7)
+    seeds = []
+    for k in range(1, 4):  # one more reject due at each frame: a new fix each time
+        fix, opts = fix_of(r.schedule(lmp, comm, 0.01 * k, 0.01 * np.arange(1, k + 1)))
+        lmp.inserted[fix] = 1
+        seeds.append(int(opts["seed"]))
+    assert len(set(seeds)) == 3
+    assert not set(seeds) & set(insertion_seeds(seed, 6))
+
+
+def test_a_long_runs_return_fixes_draw_distinct_seeds(monkeypatch):
+    # fix k's seed derives from seed + m k, and insertion_seeds repeats with a period of
+    # 200 000 in its argument: m coprime with it keeps every fix's stream its own (m = 7920
+    # would give fix 2501 fix 1's seed). The primes are left out (slow): the argument is kept
+    import vibrofeed.engine.returns as returns
+
+    monkeypatch.setattr(returns, "insertion_seeds", lambda seed, count: [seed % 200_000])
+    lmp, comm = Engine(), OneRank()
+    r = Returns(delay=0.0, seed=5489, dt=1e-7)
+    n = 2501
+    times = 1e-3 * np.arange(1, n + 1)
+    seeds = []
+    for k in range(1, n + 1):  # one more reject due at each frame: a fix of its own each time
+        fix, opts = fix_of(r.schedule(lmp, comm, times[k - 1], times[:k]))
+        lmp.inserted[fix] = 1
+        seeds.append(opts["seed"])
+    assert len(set(seeds)) == n

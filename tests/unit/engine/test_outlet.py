@@ -6,7 +6,7 @@ import warnings
 import numpy as np
 import pytest
 
-from vibrofeed.engine.outlet import Outlet, ballistic_crossing, gravity_vector
+from vibrofeed.engine.outlet import LineOutlet, Outlet, ballistic_crossing, gravity_vector
 
 G = gravity_vector(9.81, 0.0)
 
@@ -110,3 +110,62 @@ def test_an_event_that_did_not_fly_freely_is_timed_at_its_frame_and_counted():
     out = Outlet(outlet_x=0.0, catch_z=0.0, gravity=G)
     ev, _ = out.step(2.0, frame([1], [0.01], [-1e-3], vz=-0.01), inserted=1)
     assert ev["time"].tolist() == [2.0] and out.not_ballistic == 1
+
+
+def test_a_part_on_the_plane_rising_or_without_gravity_rising_is_timed_at_its_frame():
+    # on the plane and rising (d = 0, v_z > 0): sqrt(D) - v_z = 0, no descending crossing
+    # behind it; rising with no gravity never came down through the plane: both tau = 0
+    # and the frame's own state (not 0/0 or 2d/0)
+    at = np.array([[0.01, 0.0, 0.0]])
+    tau, pos, vel = ballistic_crossing(at, np.array([[0.0, 0, 0.5]]), 0.0, G)
+    assert tau.tolist() == [0.0] and pos.tolist() == at.tolist() and vel[0, 2] == 0.5
+    below = np.array([[0.01, 0.0, -1e-3]])
+    tau, pos, _ = ballistic_crossing(below, np.array([[0.0, 0, 0.5]]), 0.0, np.zeros(3))
+    assert tau.tolist() == [0.0] and pos.tolist() == below.tolist()
+
+
+def test_a_flight_whose_apex_just_touched_the_plane_crossed_it_there():
+    # D = 0: g_z = -8, d = -1/16, v_z = -1 (v_z^2 = 2 g_z d, all exact in binary): the apex,
+    # tau = v_z / g_z = -1/8 s ago, sat on the plane; that is its crossing, not tau = 0
+    tau, pos, vel = ballistic_crossing(np.array([[0.0, 0, -0.0625]]), np.array([[0.0, 0, -1.0]]),
+                                       0.0, np.array([0.0, 0.0, -8.0]))
+    assert tau.tolist() == [-0.125]
+    assert pos[0, 2] == 0.0 and vel[0, 2] == 0.0
+
+
+def test_a_part_exactly_on_the_catch_plane_has_not_left_yet():
+    # below means z < catch_z: beyond the edge at z = catch_z is no event yet, nor before
+    # the edge a reject; a hair lower it is
+    out = Outlet(outlet_x=0.02, catch_z=-3e-4, gravity=G)
+    ev, c = out.step(0.0, frame([1], [0.021], [-3e-4]), inserted=1)
+    assert ev is None and c == dict(inserted=1, on_track=1, exited=0, lost=0)
+    ev, c = out.step(0.01, frame([1], [0.021], [-3.01e-4]), inserted=1)
+    assert ev["id"].tolist() == [1] and c["exited"] == 1 and c["on_track"] == 0
+    # beyond means x > outlet_x: below the plane right at the edge it has not left
+    ev, c = out.step(0.02, frame([1, 2], [0.021, 0.02], [-2e-3, -5e-4]), inserted=2)
+    assert ev is None and c == dict(inserted=2, on_track=1, exited=1, lost=0)
+    line = LineOutlet(outlet_x=0.02, catch_z=-3e-4, gravity=G, section_x=(0.0, 0.006))
+    ev, rej, c = line.step(0.0, frame([1, 2], [0.021, 0.01], [-3e-4, -3e-4]), inserted=2)
+    assert ev is None and rej is None
+    assert c == dict(inserted=2, on_track=2, exited=0, rejected=0, lost=0)
+
+
+def test_a_part_below_the_plane_right_at_the_outlet_edge_is_a_reject():
+    # it left when x > outlet_x; at x = outlet_x it had not got over the edge: it fell off
+    # a side of section 2
+    line = LineOutlet(outlet_x=0.02, catch_z=-3e-4, gravity=G, section_x=(0.0, 0.006))
+    ev, rej, c = line.step(0.5, frame([4], [0.02], [-5e-4]), inserted=1)
+    assert ev is None and rej["id"].tolist() == [4] and rej["section"].tolist() == [2]
+    assert c == dict(inserted=1, on_track=0, exited=0, rejected=1, lost=0)
+    assert line.reject_times.tolist() == rej["time"].tolist()
+
+
+def test_a_reject_is_of_the_section_where_it_crossed_the_plane_behind_the_inlet_section_1():
+    # sections start at 0 and 6 mm; crossings (flown back at 0.04 m/s along x) behind the
+    # inlet wall (x < 0), on section 1 and on section 2
+    line = LineOutlet(outlet_x=0.02, catch_z=-3e-4, gravity=G, section_x=(0.0, 0.006))
+    _, rej, c = line.step(1.0, frame([1, 2, 3], [-1e-4, 0.003, 0.01], [-5e-4] * 3), inserted=3)
+    assert rej["position"][:, 0].max() < 0.01 and rej["position"][:, 0].min() < 0.0
+    by_id = dict(zip(rej["id"].tolist(), rej["section"].tolist()))
+    assert by_id == {1: 1, 2: 1, 3: 2}
+    assert c["rejected"] == 3 and c["lost"] == 0

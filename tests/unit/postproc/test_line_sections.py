@@ -4,6 +4,8 @@ known speeds on each section, exiting or falling off at known places): the flux 
 joint, the speed, line density and hold-up of each section, the rejects by tooling, and
 whether the bed is steady over the window (single tracks too)."""
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -315,6 +317,15 @@ def test_drift_compares_the_thirds_with_the_scatter_about_a_line():
     assert not drifts(0.02, 0.02 * (1 + 1e-15), 0.0)                   # equal up to round-off
 
 
+def test_drifts_error_is_the_scatter_times_the_root_of_two_over_a_third():
+    # nine batches, thirds of three: y = 2 + x/2 + d e with e (1, -1, 0, 0, 0, 0, 0, -1, 1)
+    # orthogonal to 1 and x: residuals d e, scatter sqrt(4 d^2 / 7), thirds' means 2.5, 5.5
+    e = np.array([1.0, -1, 0, 0, 0, 0, 0, -1, 1])
+    first, last, error = drift(2 + 0.5 * np.arange(9.0) + 0.7 * e)
+    assert (first, last) == pytest.approx((2.5, 5.5), abs=1e-12)
+    assert error == pytest.approx(2 * 0.7 / np.sqrt(7) * np.sqrt(2 / 3), rel=1e-12)
+
+
 def test_drift_takes_the_means_of_the_thirds_not_their_medians():
     first, last, _ = drift([1.0, 1.0, 4.0, 2.0, 2.0, 2.0, 3.0, 3.0, 6.0])  # medians 1 and 3
     assert (first, last) == pytest.approx((2.0, 4.0), abs=1e-12)
@@ -400,3 +411,126 @@ def test_unsteady_says_every_drift():
 def test_a_window_shorter_than_two_periods_is_one_batch():
     assert batch_cuts(0.0, 0.01, 100.0, 10).tolist() == [0.0, 0.01]  # one period at 100 Hz
     assert len(batch_cuts(0.0, 0.1, 100.0, 4)) == 5  # ten periods: four batches
+
+
+# -- the pieces at their limits -----------------------------------------------------------------
+def test_section_bounds_of_a_single_track_a_line_and_which_section_a_part_is_over():
+    from vibrofeed.postproc.line import section_bounds, section_index
+
+    assert section_bounds({"sections": "1"}, 0.02) == [(0.0, 0.02)]
+    assert section_bounds({"sections": "2", "track_length": "0.006"}, 0.011) == [(0.0, 0.006),
+                                                                             (0.006, 0.011)]
+    # x < joint: section 1; joint <= x <= edge: section 2; beyond the edge (falling) or no
+    # part: -1; without an edge nothing is beyond it
+    x = [0.001, JOINT, EDGE, EDGE + 1e-6, np.nan]
+    assert section_index(x, [JOINT], EDGE).tolist() == [0, 1, 1, -1, -1]
+    assert section_index(x, [JOINT], np.inf).tolist() == [0, 1, 1, 1, -1]
+
+
+def test_a_part_first_seen_exactly_at_the_joint_is_over_section_2_and_does_not_cross_it(tmp_path):
+    # part 1 sits at x = joint at the first frame (over section 2 already) and moves on:
+    # first seen beyond the joint, no crossing; part 2 crosses between the frames
+    rows = [{1: JOINT, 2: 5.9 * MM}, {1: 6.1 * MM, 2: 6.1 * MM}]
+    with hand_line(tmp_path / "at_joint.h5", rows, [0.0, 0.01]) as r:
+        crossings, counts = bed_pass(r, [0, 1], [JOINT], EDGE)
+    assert crossings[0][1].tolist() == [2]
+    assert crossings[0][0] == pytest.approx([0.005], abs=1e-12)
+    assert counts.tolist() == [[1, 1], [0, 2]]
+
+
+def test_a_part_that_crosses_rests_on_the_joint_and_goes_back_does_not_count(tmp_path):
+    # part 1 crosses up (5.9 -> 6 mm: x >= joint), then from x = joint back below it: its
+    # last crossing is back, it did not stay; part 2 crosses and stays
+    rows = [{1: 5.9 * MM, 2: 5.9 * MM}, {1: JOINT, 2: 6.1 * MM}, {1: 5.9 * MM, 2: 6.2 * MM}]
+    with hand_line(tmp_path / "back.h5", rows, [0.0, 0.01, 0.02]) as r:
+        crossings, counts = bed_pass(r, [0, 1, 2], [JOINT], EDGE)
+    assert crossings[0][1].tolist() == [2]
+    assert counts.tolist() == [[2, 0], [0, 2], [1, 1]]
+
+
+def test_parts_gone_at_or_before_a_frame_are_on_no_section(tmp_path):
+    # three parts gone, given out of id order: 3 (on section 2) exactly at the second frame's
+    # time, 2 (on section 1) before it, 1 after it; 4 never
+    rows = [{1: 5.0 * MM, 2: 5.5 * MM, 3: 6.5 * MM, 4: 7.0 * MM},
+            {1: 5.1 * MM, 2: 5.6 * MM, 3: 6.6 * MM, 4: 7.1 * MM}]
+    with hand_line(tmp_path / "gone.h5", rows, [0.0, 0.02]) as r:
+        _, counts = bed_pass(r, [0, 1], [JOINT], EDGE, gone_ids=[3, 2, 1],
+                             gone_times=[0.02, 0.015, 0.03])
+    assert counts.tolist() == [[2, 2], [1, 1]]
+
+
+def test_a_pass_over_a_single_frame_counts_its_parts(tmp_path):
+    # no pair of frames, so no crossing, but the frame's hold-up all the same
+    with hand_line(tmp_path / "one.h5", FLICKER_ROWS[:1], FLICKER_TIMES[:1]) as r:
+        crossings, counts = bed_pass(r, [0], [JOINT], EDGE)
+    assert counts.tolist() == [[2, 1]]
+    assert crossings[0][1].tolist() == [] and crossings[0][0].tolist() == []
+
+
+def test_line_tooling_at_the_exact_ends_of_each_stretch():
+    # the bounds are inclusive: a reject exactly at the side drop's widened ends or at the
+    # wiper's reach and bar end belongs to that tool
+    from vibrofeed.line import section_from
+
+    s = section_from({"track_length": JOINT, "s2_length": S2_LENGTH, "s2_width": 4.2e-4,
+                      "s2_drop_from": 0.2, "s2_drop_to": 0.6, "s2_drop_width": 2e-4,
+                      "s2_wiper_height": 4e-4, "s2_wiper_at": 0.9, "part_size": D})
+    (d0, d1), (w0, w1) = s.drop_x, s.wiper_x
+    names = np.array(["side_drop", "wiper", "other"])
+    at = np.array([d0 - D, d1 + D, w0 - 3.0 * D, w1, d0 - D])
+    got = names[tooling(at, [2, 2, 2, 2, 1], s, D)]
+    assert got.tolist() == ["side_drop", "side_drop", "wiper", "wiper", "other"]
+
+
+def test_bowl_tooling_at_the_exact_ends_of_each_stretch():
+    from vibrofeed.bowl import bowl_from
+    from vibrofeed.postproc.line import TOOLING, bowl_tooling
+
+    size = 3e-4
+    b = bowl_from({"bowl_diameter": 0.02, "track_width": 1.2e-3, "helix_angle": 3.0, "turns": 1.5,
+                   "wall_height": 1e-3, "cone_angle": 3.0, "cross_tilt": 3.0, "lip_height": 0.0,
+                   "chute_length": 8e-3, "part_size": size, "drop_from": 0.5, "drop_to": 0.7,
+                   "drop_width": 4e-4, "wiper_height": 4.5e-4, "wiper_at": 0.2})
+    d0, d1 = (float(b.arc_length(t)) for t in b.drop)
+    w0, w1 = (float(b.arc_length(t)) for t in b.wiper)
+    where = np.array([d0 - size, d1 + size, w0 - 3.0 * size, w1])
+    assert [TOOLING[k] for k in bowl_tooling(where, b, size)] == ["side_drop", "side_drop",
+                                                                  "wiper", "wiper"]
+
+
+def test_batch_cuts_without_a_frequency_at_a_slow_one_and_under_half_a_period():
+    # no frequency: 200 equal units, ten batches of 20
+    assert batch_cuts(0.0, 1.0, 0.0, 10) == pytest.approx(np.arange(11) / 10, abs=1e-15)
+    # 0.5 Hz over 20 s: ten whole periods in four batches of 3, 3, 2, 2 periods (2 s each)
+    assert batch_cuts(0.0, 20.0, 0.5, 4) == pytest.approx([0.0, 6.0, 12.0, 16.0, 20.0], abs=1e-12)
+    # 0.4 of a period: still one batch over the whole window
+    assert batch_cuts(1.0, 1.004, 100.0, 10) == pytest.approx([1.0, 1.004], abs=1e-15)
+
+
+def test_batch_means_put_each_time_in_its_batch_the_last_one_closed():
+    from vibrofeed.postproc.line import batch_means
+
+    cuts = np.array([0.0, 1.0, 2.0, 3.0])
+    # at each inner cut a value starts the next batch; at the last cut it ends the last one;
+    # before the first cut or after the last: left out; batch 2 holds one value alone
+    times = [-0.5, 0.0, 0.5, 1.0, 2.0, 2.5, 3.0, 3.5]
+    values = [100.0, 1.0, 3.0, 7.0, 10.0, 20.0, 60.0, 100.0]
+    assert batch_means(times, values, cuts) == pytest.approx([2.0, 7.0, 30.0], abs=1e-12)
+    with warnings.catch_warnings():   # an empty batch is NaN without a 0/0 warning
+        warnings.simplefilter("error")
+        got = batch_means([0.5], [4.0], cuts)
+    assert got[0] == 4.0 and np.isnan(got[1:]).all()
+
+
+def test_a_change_of_exactly_three_errors_is_no_drift():
+    assert not drifts(1.0, 4.0, 1.0) and drifts(1.0, 4.0 + 1e-9, 1.0)   # 3 x 1.0 exactly
+    # without scatter, a change of exactly 1e-9 of the values is still taken for round-off
+    assert not drifts(999999999.0, 1e9, 0.0) and drifts(999999998.0, 1e9, 0.0)
+
+
+def test_unsteady_tells_speeds_in_millimetres_per_second():
+    # 0.5 m/s is 500.0 mm/s exactly (a scale off by 0.1 % shows in the first decimal)
+    t = {"section": 2, "quantity": "conveying speed", "first": 0.5, "last": 0.25, "error": 0.01,
+         "drifts": True}
+    assert unsteady([t]) == ("not steady: the bed's conveying speed on section 2 falls 500.0 -> "
+                             "250.0 mm/s over the window (more than 3 standard errors: 30 mm/s)")
