@@ -15,6 +15,17 @@ REPO = Path(__file__).resolve().parent.parent
 DECKS = REPO / "decks"
 
 
+class FakeClock:
+    """A stand-in for the ``time`` module's ``monotonic``, moved by hand (``now``): no
+    sleeping, no race with a thread that reads the clock."""
+
+    def __init__(self):
+        self.now = 0.0
+
+    def monotonic(self):
+        return self.now
+
+
 def vibrofeed(*args, cwd=None, check=False, timeout=600):
     """Run the CLI in a child process (as a user would); returns CompletedProcess."""
     env = dict(os.environ)

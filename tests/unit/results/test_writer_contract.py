@@ -8,7 +8,7 @@ import h5py
 import numpy as np
 import pytest
 
-from helpers import parts
+from helpers import FakeClock, parts
 from vibrofeed.results import layout as L
 from vibrofeed.results import writer as writer_module
 from vibrofeed.results.check import check_file
@@ -80,19 +80,9 @@ def test_a_malformed_track_mesh_is_refused(tmp_path, vertices, triangles, what):
         new_writer(tmp_path / "t.h5", track=(vertices, np.asarray(triangles)))
 
 
-class FakeClock:
-    """The writer's clock, moved by hand: no sleeping, no race with the flusher thread."""
-
-    def __init__(self):
-        self.now = 0.0
-
-    def monotonic(self):
-        return self.now
-
-
 @pytest.fixture
 def clock(monkeypatch):
-    fake = FakeClock()
+    fake = FakeClock()  # the writer's clock: no race with the flusher thread
     monkeypatch.setattr(writer_module, "_time", fake)
     return fake
 

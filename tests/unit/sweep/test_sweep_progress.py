@@ -9,20 +9,13 @@ from types import SimpleNamespace
 
 import pytest
 
+from helpers import FakeClock
 from vibrofeed.sweep import progress as P
-
-
-class Clock:
-    def __init__(self):
-        self.now = 0.0
-
-    def monotonic(self):
-        return self.now
 
 
 @pytest.fixture
 def clock(monkeypatch):
-    c = Clock()
+    c = FakeClock()
     monkeypatch.setattr(P, "time", c)
     return c
 
