@@ -35,6 +35,9 @@ unchanged (an interrupted run goes on where it stopped). When only the operators
 functions or ``--operators`` changed, a new session keeps the outcomes of the mutants both
 share (same module, operator, occurrence and position): adding an operator or a larger sample
 tests only the new mutants, and ``--operators 'slips/.*'`` followed by a plain run tests the rest.
+When some of a target's modules changed, the new session keeps the outcomes of its unchanged
+modules (compared with the copy of the sources the last session mutated) and tests the changed
+ones' mutants afresh.
 ``--retest-survivors`` copies the current tests and runs the survivors again. Survivors listed
 in tests/mutation/EQUIVALENT.md (same module, operator and source line) count as equivalent
 mutants. The score is (killed + equivalent) / mutants tested, per target. A target with
@@ -199,10 +202,25 @@ def restrict(db: Path, functions: dict[str, list[str]], operators: str | None = 
 _KEY = "s.module_path, s.operator_name, s.occurrence, s.start_pos_row, s.start_pos_col"
 
 
-def carry_results(old: Path, new: Path) -> int:
-    """Copy the outcomes of mutants tested in the old session (same modules: same mutant for the
-    same module, operator, occurrence and position) into the new one, where it tests them too:
-    a new operator, target option or sample adds mutants without testing the old ones again."""
+def unchanged_modules(home: Path, modules) -> set[str]:
+    """The target's module files whose source is byte for byte the one the last session mutated
+    (its copy in ``home/sources``): their mutants are the same mutants."""
+    out = set()
+    for f in module_files(modules):
+        rel = f.relative_to(REPO)
+        before = home / "sources" / rel
+        if before.exists() and before.read_bytes() == f.read_bytes():
+            out.add(rel.as_posix())
+    return out
+
+
+def carry_results(old: Path, new: Path, modules: set[str] | None = None) -> int:
+    """Copy the outcomes of mutants tested in the old session (same mutant: same module,
+    operator, occurrence and position) into the new one, where it tests them too: a new operator,
+    target option or sample adds mutants without testing the old ones again. ``modules``: carry
+    only those modules' outcomes (the others changed: their positions moved, so they start over).
+    A kept outcome was reached with the tests of its day; the tests only grow, and
+    ``--retest-survivors`` runs the kept survivors again."""
     with sqlite3.connect(old) as c:
         done = {tuple(k): v for *k, v in (
             (*r[:5], r[5:]) for r in c.execute(
@@ -212,7 +230,8 @@ def carry_results(old: Path, new: Path) -> int:
     with sqlite3.connect(new) as c:
         todo = list(c.execute(f"SELECT s.job_id, {_KEY} FROM mutation_specs s LEFT JOIN work_results r "
                               "ON r.job_id = s.job_id WHERE r.job_id IS NULL"))
-        out = [(*done[tuple(key)], job) for job, *key in todo if tuple(key) in done]
+        out = [(*done[tuple(key)], job) for job, *key in todo
+               if tuple(key) in done and (modules is None or Path(key[0]).as_posix() in modules)]
         c.executemany("INSERT INTO work_results (worker_outcome, output, test_outcome, diff, job_id) "
                       "VALUES (?, ?, ?, ?, ?)", out)
     return len(out)
@@ -233,7 +252,10 @@ def run_target(name: str, spec: dict, cfg: dict, workdir: Path, retest: bool, fr
     old = json.loads(stamp.read_text()) if stamp.exists() and db.exists() and not fresh else {}
     same = old == session
     # Same modules, other operators, sample or functions: a new session that keeps the outcomes.
-    carry = not same and old.get("modules") == fp
+    # Some modules changed: the unchanged ones keep theirs (a fix in one module of a target does
+    # not send the others' hundreds of mutants round again).
+    kept_modules = None if old.get("modules") == fp else unchanged_modules(home, spec["modules"])
+    carry = bool(old) and not same and kept_modules != set()
     make_tree(tree)  # fresh sources every time: an interrupted run may have left a mutant in place
     if retest and not same:
         raise SystemExit(f"{name}: the mutated modules, operators, sample or functions changed "
@@ -271,9 +293,10 @@ def run_target(name: str, spec: dict, cfg: dict, workdir: Path, retest: bool, fr
         if fraction is not None and fraction < 1:
             sample_out(db, float(fraction))
         if carry:
-            kept = carry_results(previous, db)
+            kept = carry_results(previous, db, kept_modules)
             previous.unlink()
-            print(f"{name}: new session, {kept} outcomes kept from the last one", flush=True)
+            where = "" if kept_modules is None else f" (unchanged: {', '.join(sorted(kept_modules))})"
+            print(f"{name}: new session, {kept} outcomes kept from the last one{where}", flush=True)
         stamp.write_text(json.dumps(session))
         # The sources as mutated, for the report (the repository may move on meanwhile).
         shutil.rmtree(home / "sources", ignore_errors=True)
