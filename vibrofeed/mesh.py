@@ -21,7 +21,7 @@ class MeshBuilder:
         self.triangles: list[tuple[int, int, int]] = []
 
     def vertex(self, p) -> int:
-        key = tuple(round(float(c), 12) + 0.0 for c in p)  # + 0.0: -0.0 and 0.0 are one vertex
+        key = tuple(round(float(c), 12) + 0.0 for c in p)  # + 0.0: a -0.0 is kept (and written) as 0.0
         if key not in self.index:
             self.index[key] = len(self.vertices)
             self.vertices.append(key)
