@@ -365,7 +365,7 @@ def track_sections(track, variables: dict) -> np.ndarray | None:
     vertices = track[0]
     try:
         second = section_mesh(section_from(variables))[0]
-    except (KeyError, ValueError):
+    except (ValueError, ArithmeticError):  # a bad value, or a dimension missing (0: a division by it)
         return None
     n1 = len(vertices) - len(second)
     if n1 <= 0 or not np.array_equal(vertices[n1:], second):

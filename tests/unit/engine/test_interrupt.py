@@ -57,7 +57,9 @@ def test_stop_all_stops_every_run_and_waits_for_their_threads(fresh):
     threads = [threading.Thread(target=run, args=(i, e)) for i, e in enumerate(events)]
     for t in threads:
         t.start()
+    deadline = time.monotonic() + 5  # fail, not hang, if the runs cannot register
     while len(interrupt._stoppers) < 3:
+        assert time.monotonic() < deadline, "the runs did not register"
         time.sleep(0.01)
     interrupt.stop_all(interrupt.Terminated())
     returned = time.monotonic()
@@ -67,3 +69,59 @@ def test_stop_all_stops_every_run_and_waits_for_their_threads(fresh):
         interrupt.register(lambda why: None)
     with pytest.raises(interrupt.Terminated):
         interrupt.check()
+
+
+def test_terminated_defaults_to_sigterm_and_ctrl_c_has_its_own_words():
+    exc = interrupt.Terminated()
+    assert exc.signum is signal.SIGTERM and exc.exit_code == 143
+    ctrl_c = KeyboardInterrupt()
+    assert interrupt.reason(ctrl_c) == "interrupted by the user"
+    assert interrupt.exit_code(ctrl_c) == 130
+
+
+def test_stopping_on_ctrl_c_tells_the_runs_why_and_refuses_new_ones(fresh):
+    told = []
+    key = interrupt.register(told.append)
+    other = interrupt.register(told.append)
+    assert key != other
+    interrupt.unregister(other)
+    interrupt.unregister(12345)  # an unknown key: nothing to do
+    assert list(interrupt._stoppers) == [key]
+    threading.Timer(0.05, interrupt.unregister, (key,)).start()  # the run records its end
+    interrupt.stop_all(KeyboardInterrupt(), timeout=5)
+    assert told == ["interrupted by the user"] and not interrupt._stoppers
+    with pytest.raises(KeyboardInterrupt) as caught:
+        interrupt.check()
+    assert not isinstance(caught.value, interrupt.Terminated)
+
+
+def test_a_new_run_is_refused_with_the_signal_that_stops_the_process(fresh):
+    interrupt.stop_all(interrupt.Terminated(signal.SIGHUP), timeout=0)
+    with pytest.raises(interrupt.Terminated) as caught:
+        interrupt.register(lambda why: None)
+    assert caught.value.signum is signal.SIGHUP and caught.value.exit_code == 129
+    assert not interrupt._stoppers
+
+
+def test_stop_all_waits_thirty_seconds_at_most(fresh, monkeypatch):
+    class Condition:
+        """threading.Condition, recording how long stop_all would wait."""
+
+        def __init__(self):
+            self.waits = []
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            return False
+
+        def wait_for(self, predicate, timeout=None):
+            self.waits.append((predicate(), timeout))
+            return predicate()
+
+    cond = Condition()
+    monkeypatch.setattr(interrupt, "_cond", cond)
+    monkeypatch.setitem(interrupt._stoppers, 1, lambda why: None)  # a run that never ends
+    interrupt.stop_all(KeyboardInterrupt())
+    assert cond.waits == [(False, 30.0)]

@@ -111,3 +111,55 @@ def test_engine_error_names_the_included_file():
     e = EngineError('Invalid fix style: "nope"', deck="decks/include/contact.liggghts", line=33,
                     command="fix m1 all nope", phase="deck")
     assert str(e).endswith("at decks/include/contact.liggghts:33: fix m1 all nope")
+
+
+def test_a_multi_line_error_is_read_whole():
+    assert find_error(MESH_ERROR).message == (
+        "Mesh (id plate): All 2 mesh elements have been lost / left the domain. Please use "
+        "'boundary m m m' or scale/translate/rotate the mesh or change its dynamics FYI: center of "
+        "mass of mesh including scale/tranlate/rotate is 0.000000 / 0.000000 / 0.000000 simulation "
+        "box x from -0.050000 to 0.050000 y from -0.005000 to 0.005000 z from -0.002000 to "
+        "0.010000 (gives indication about changes in scale/tranlate/rotate necessary to make "
+        "simulation run)")
+
+
+def test_an_error_ends_at_its_source_location():
+    err = find_error("ERROR: Cannot open mesh file\nmesh.stl (src/input_mesh_tri.cpp:98)\n"
+                     "Last command: fix m all mesh/surface file mesh.stl\n")
+    assert err.message == "Cannot open mesh file mesh.stl" and err.line_index == 0
+
+
+def test_an_error_without_a_source_location_ends_with_the_text():
+    err = find_error("x\nERROR: Lost atoms: original 10\ncurrent 9\n")
+    assert err.message == "Lost atoms: original 10 current 9" and err.line_index == 1
+
+
+def test_an_error_ends_at_a_blank_line_or_the_next_error():
+    assert find_error("ERROR: first\nstill first\n\nnot it\n").message == "first still first"
+    err = find_error("ERROR: first\nERROR on proc 2: second (src/a.cpp:1)\n")
+    assert err.message == "first" and err.proc is None
+
+
+def test_an_error_takes_at_most_twenty_more_lines():
+    text = "\n".join(["x"] * 5 + ["ERROR: head"] + [f"l{k}" for k in range(1, 31)])
+    err = find_error(text)
+    assert err.line_index == 5
+    assert err.message == "head " + " ".join(f"l{k}" for k in range(1, 21))
+
+
+def test_the_first_command_and_a_command_written_twice(tmp_path):
+    deck_path = tmp_path / "d.liggghts"
+    deck_path.write_text("units si\n"                                  # 1
+                         "variable freq index 50 # [Hz] f\n"           # 2
+                         "units si\n"                                  # 3
+                         "run 10\n"                                    # 4
+                         "units si\n")                                 # 5
+    deck = Deck(deck_path)
+    # echoed once: the first place it is written, not a later one
+    assert failed_command("LIGGGHTS (Version)\n\nunits si\nERROR: x\n", deck, before=3).line == 1
+    # each further echo is the next place it is written
+    assert failed_command("units si\nunits si\n", deck).line == 3
+    log = "units si\nvariable freq index 50 # [Hz] f\nunits si\n\nrun 10\nunits si\n"
+    assert failed_command(log, deck, before=3).line == 3
+    assert failed_command(log, deck).line == 5              # before None: the whole log; the last command
+    assert failed_command("LIGGGHTS (Version)\n", deck) is None

@@ -4,6 +4,10 @@ import os
 import socket
 import subprocess
 import sys
+import types
+from pathlib import Path
+
+import pytest
 
 from vibrofeed.engine import scratch
 
@@ -41,3 +45,62 @@ def test_only_folders_whose_owner_is_gone_are_removed(tmp_path):
     assert sorted(gone) == sorted([dead, reused_pid, old])
     assert all(p.is_dir() for p in (mine, elsewhere, fresh, unrelated))
     assert not any(p.exists() for p in gone)
+
+
+def test_a_process_start_is_field_22_of_its_stat(tmp_path):
+    """proc(5): starttime is the 22nd field; the name (field 2, in parentheses) may hold
+    spaces and parentheses, so fields are counted after its last ')'."""
+    import shutil
+
+    fields = Path(f"/proc/{os.getpid()}/stat").read_text().split()
+    assert " " not in fields[1] and scratch._started(os.getpid()) == fields[21]
+    odd = tmp_path / "a) b c"  # the process name: "(a) b c)", two more words in a naive split
+    odd.symlink_to(shutil.which("sleep"))
+    proc = subprocess.Popen([str(odd), "30"])
+    try:
+        text = Path(f"/proc/{proc.pid}/stat").read_text()
+        assert text.split()[1:4] == ["(a)", "b", "c)"]
+        assert scratch._started(proc.pid) == text.split()[23]
+    finally:
+        proc.kill()
+        proc.wait()
+    assert scratch._started(proc.pid) is None
+
+
+def test_a_folder_that_cannot_be_owned_is_not_left(tmp_path, monkeypatch):
+    def no_host():
+        raise OSError("no host name")
+
+    monkeypatch.setattr(scratch.socket, "gethostname", no_host)
+    with pytest.raises(OSError, match="no host name"):
+        scratch.make(tmp_path)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_an_unowned_folder_is_left_behind_only_past_its_age(tmp_path, monkeypatch):
+    folder = tmp_path / (scratch.PREFIX + "x")
+    folder.mkdir()
+    (folder / scratch.OWNER).write_text("only-two words\n")  # malformed: as without an owner
+    mtime = 1_000_000_000
+    os.utime(folder, ns=(mtime * 10**9, mtime * 10**9))
+    clock = types.SimpleNamespace(time=lambda: mtime + scratch.UNOWNED_AGE)
+    monkeypatch.setattr(scratch, "time", clock)
+    assert scratch.UNOWNED_AGE == 600.0
+    assert scratch._abandoned(folder) is False        # exactly the age: not yet
+    clock.time = lambda: mtime + scratch.UNOWNED_AGE + 0.5
+    assert scratch._abandoned(folder) is True
+    assert scratch._abandoned(tmp_path / "vanished") is False  # neither owner nor folder
+
+
+def test_an_owner_that_names_no_process_of_this_host_is_kept(tmp_path):
+    folder = tmp_path / (scratch.PREFIX + "x")
+    folder.mkdir()
+    (folder / scratch.OWNER).write_text(f"{socket.gethostname()} pid? 1\n")
+    assert scratch._abandoned(folder) is False
+
+
+def test_only_folders_are_removed(tmp_path):
+    note = tmp_path / (scratch.PREFIX + "note")
+    note.write_text("x")
+    os.utime(note, (1, 1))  # older than any scratch folder's age
+    assert scratch.remove_abandoned(tmp_path) == [] and note.exists()

@@ -122,6 +122,45 @@ def test_too_few_exits_measure_nothing(tmp_path):
     assert not some.reached and some.why == "too few exits to measure (6 in the window; need ≥ 10)"
 
 
+def test_exits_are_counted_up_to_the_judged_frame_inclusive(tmp_path):
+    # exits exactly at frame times (k x 5 ms): the frame at 25 ms has seen 5 of them; at 50 ms
+    # ten, which is enough to read the frames (FeedRate then counts those in its window)
+    exits = FRAME_DT * np.arange(1, 60)
+    with Result(fed(tmp_path / "a.h5", exits, 0.3, rate=200.0)) as r:
+        five = judge_feed_rate(r, 0.5, stop=6)
+        ten = judge_feed_rate(r, 0.5, stop=11)
+    assert five.t == 0.025 and five.why == "too few exits to measure (5 so far; need ≥ 10 in the window)"
+    assert ten.t == 0.05 and not ten.reached and math.isnan(ten.error)
+    assert ten.why == "too few exits to measure (8 in the window; need ≥ 10)"  # FeedRate's own
+
+
+def test_the_first_frame_alone_measures_nothing(tmp_path):
+    # ten parts over the edge at t = 0: enough exits, but FeedRate refuses a single frame
+    exits = np.concatenate([np.zeros(10), 2e-4 * np.arange(1, 40)])
+    with Result(fed(tmp_path / "a.h5", exits, 0.1, rate=1000.0)) as r:
+        v = judge_feed_rate(r, 0.5, stop=1)
+    assert (v.reached, v.t, v.why) == (False, 0.0, "feed rate: at least two frames are needed")
+
+
+def test_a_target_equal_to_the_error_is_reached(tmp_path):
+    """At or below the target: the error itself reaches it, the next float below does not."""
+    exits = (np.arange(400) + 0.5) / 300.0
+    with Result(fed(tmp_path / "a.h5", exits, 0.3, rate=300.0)) as r:
+        error = judge_feed_rate(r, 0.5).error
+        at = judge_feed_rate(r, error)
+        below = judge_feed_rate(r, float(np.nextafter(error, 0.0)))
+    assert at.reached and at.error == error and at.why == ""
+    assert not below.reached and below.error == error and below.why == f"relative error {error:.3g}"
+
+
+def test_a_feed_rate_below_one_part_per_second_is_measured(tmp_path):
+    # 0.8 parts/s, evenly spaced (every 1.25 s) for 50 s: a rate, its batch-means error 0
+    exits = (np.arange(40) + 0.5) / 0.8
+    with Result(fed(tmp_path / "slow.h5", exits, 50.0, frame_dt=0.5, rate=0.8)) as r:
+        v = judge_feed_rate(r, 0.01)
+    assert v.reached and v.error == pytest.approx(0.0, abs=1e-9) and v.t == 50.0
+
+
 # -- the worker's checks ---------------------------------------------------------------------
 class Replay:
     """Rank 0's writer of a run, frame by frame: the frames and events of a synthetic result

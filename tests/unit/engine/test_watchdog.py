@@ -51,3 +51,58 @@ def test_the_floor_comes_from_the_environment(monkeypatch):
     for bad in ("", "x", "-1", "0"):
         monkeypatch.setenv("VIBROFEED_STALL_SECONDS", bad)
         assert floor_seconds() == 60.0
+
+
+def test_the_floor_is_the_environments_unless_given(monkeypatch):
+    monkeypatch.setenv("VIBROFEED_STALL_SECONDS", "0.5")  # below 1 s is a floor too
+    assert floor_seconds() == 0.5 and Watchdog(0.0).floor == 0.5
+    assert Watchdog(0.0, floor=7).floor == 7.0
+
+
+def test_silence_of_exactly_the_floor_is_not_yet_a_hang():
+    w = Watchdog(0.0, floor=10.0)
+    assert w.stalled(10.0) is None
+    assert w.stalled(10.25) == "the engine worker has not answered for 10 s (stopped or frozen)"
+
+
+def test_a_standstill_of_exactly_the_limit_is_not_yet_a_hang():
+    w = Watchdog(0.0, floor=2.0)
+    beat(w, 0.0, 0)
+    w.saw({"event": "run"}, 0.0)
+    assert w.limit() == 2.0  # no pause seen yet: the floor
+    for t in (0.5, 1.0, 1.5, 2.0):
+        beat(w, t, 0)  # alive, no step
+    assert w.stalled(2.0) is None
+    beat(w, 2.5, 0)
+    assert w.stalled(2.5) == ("the engine took no step for 2 s (limit 2 s: 10 x the longest pause of "
+                              "this run, at least 2 s; a hung MPI rank?)")
+
+
+def test_the_first_step_seen_in_the_run_is_no_advance():
+    """No step to compare it with: the first advance is the next step seen, and the pause
+    runs from the start of the run to it."""
+    w = Watchdog(0.0, floor=10.0)
+    w.saw({"event": "run"}, 0.0)
+    beat(w, 5.0, 100)
+    assert w.limit() == 10.0 and w.slowest == 0.0
+    beat(w, 6.0, 200)
+    assert w.slowest == 6.0 and w.limit() == 60.0
+
+
+def test_a_heartbeat_without_a_step_is_no_advance():
+    w = Watchdog(0.0, floor=10.0)
+    beat(w, 0.0, 0)
+    w.saw({"event": "run"}, 0.0)
+    beat(w, 1.0, 100)
+    beat(w, 30.0, None)  # the engine's counter unreadable for a moment
+    assert w.slowest == 1.0 and w.limit() == 10.0
+
+
+def test_a_heartbeat_is_timed_when_it_was_sent_never_later_than_now():
+    w = Watchdog(0.0, floor=10.0)
+    beat(w, 0.0, 0)
+    w.saw({"event": "run"}, 0.0)
+    w.saw({"event": "alive", "step": 100}, 4.0)               # no time of its own: received now
+    assert w.slowest == 4.0 and w.last_advance == 4.0
+    w.saw({"event": "alive", "step": 200, "at": 50.0}, 6.0)   # a clock ahead: now at most
+    assert w.slowest == 4.0 and w.last_advance == 6.0 and w.last_seen == 6.0
