@@ -561,9 +561,16 @@ def test_a_bowl_without_the_optional_keys_has_no_cone_tilt_lip_or_chute():
     assert (b.radius, b.track_width, b.helix_angle, b.turns, b.wall_height) == (0.01, 1.2e-3, 3.0, 1.5, 1e-3)
     assert (b.cone_angle, b.cross_tilt, b.lip_height, b.chute_length) == (0.0, 0.0, 0.0, 0.0)
     assert (b.drop_from, b.drop_to, b.drop_width) == (0.0, 0.0, 0.0) and b.drop is None
+    assert (b.wiper_height, b.wiper_at, b.wiper_length) == (0.0, 0.5, 0.0) and b.wiper is None
     bare = Bowl(radius=0.01, track_width=1.2e-3, helix_angle=3.0, turns=1.5, wall_height=1e-3)
     assert (bare.cone_angle, bare.cross_tilt, bare.lip_height, bare.chute_length) == (0.0, 0.0, 0.0, 0.0)
     assert (bare.drop_from, bare.drop_to, bare.drop_width) == (0.0, 0.0, 0.0)
+    assert (bare.wiper_height, bare.wiper_at, bare.wiper_length) == (0.0, 0.5, 0.0) and bare.wiper is None
+    # a wiper given its height only: half way up the helix (and, from a deck, a part long)
+    wiper = bowl_from({**required, "wiper_height": 4e-4, "part_size": 3e-4})
+    t0, t1 = wiper.wiper
+    assert wiper.arc_length(t0) == pytest.approx(wiper.length / 2, rel=1e-12, abs=0)
+    assert wiper.arc_length(t1) - wiper.arc_length(t0) == pytest.approx(3e-4, rel=1e-9, abs=0)
     # so: a flat bottom, a floor level across, no chute
     assert bare.bottom_z(0.0) == 0.0 and bare.floor_z(-2.0, 0.0088) == bare.floor_z(-2.0, 0.01)
     assert bare.outlet_x == 0.0

@@ -51,3 +51,15 @@ def test_a_bowl_that_does_not_move_its_parts_is_warned_of_too():
          "wall_height": 1e-3}
     (text,) = climb_advice(p)
     assert "do not climb" in text and "(0 mm/s up its centre line)" in text
+
+
+@pytest.mark.parametrize("change", [{"mu": None}, {"restitution": None}, {"waveform": 7.0}])
+def test_a_bowl_the_model_cannot_judge_gets_no_warning(change):
+    """A value the model needs left unset (None: the model's KeyError) or one it does not know
+    (a waveform past 3: its ValueError): no judgement, so no warning, and no error either; the
+    same bowl with the values set is judged (the steep helix does not climb)."""
+    p = {"bowl_diameter": 0.02, "track_width": 1.2e-3, "helix_angle": 15.0, "freq": 100.0, "amp_t": 5e-5,
+         "amp_n": 3e-5, "phase": -20.0, "mu": 0.5, "restitution": 0.3, "part_size": 3e-4, "turns": 1.5,
+         "wall_height": 1e-3}
+    assert len(climb_advice(p)) == 1
+    assert climb_advice({**p, **change}) == []

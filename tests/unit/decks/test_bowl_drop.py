@@ -10,7 +10,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from vibrofeed.bowl import Bowl, bowl_mesh, check_bowl, fill_boxes, path_coordinate
+from vibrofeed.bowl import THETA_END, Bowl, bowl_from, bowl_mesh, check_bowl, fill_boxes, path_coordinate
 from vibrofeed.errors import ParameterError
 
 W, DW, PART = 1.2e-3, 4e-4, 3e-4  # [m] track, the floor over the drop, a part
@@ -121,7 +121,8 @@ def test_no_fill_cube_over_the_drop_nor_a_side_either_side_and_no_coordinate_bey
     ({"drop_to": 1.01}, "0 <= drop_from < drop_to <= 1"),
     ({"drop_from": -0.01}, "0 <= drop_from < drop_to <= 1"),
     ({"drop_from": 0.0, "drop_to": 0.0, "drop_width": DW}, None),      # no drop asked: accepted
-    ({"drop_from": 0.70, "drop_to": 0.705}, "fall on one station"),
+    # (1.5 turns, 540 deg, in 90 stations: 6 deg apart)
+    ({"drop_from": 0.70, "drop_to": 0.705}, r"fall on one station of the helix's mesh \(6 deg apart\)"),
     ({"drop_width": math.nextafter(PART, 0.0)}, "must hold a part"),
     ({"drop_width": math.nextafter(W - PART / 4, 1.0)}, r"a quarter part narrower .*at most 0\.00112 m"),
     ({"drop_from": 0.05, "drop_to": 0.2}, "less than a part"),          # the first turn's low shelf
@@ -170,3 +171,79 @@ def test_the_drop_adds_one_face_at_each_end_of_the_floor_and_none_elsewhere():
     dropped = bowl_mesh(BOWL)[1]
     assert BOWL.drop[0] > BOWL.theta_start + 2 * math.pi  # an upper turn's stretch
     assert len(dropped) == len(plain) + 2
+
+
+def polar_face(vertices, triangles, theta, r_lo, r_hi):
+    """The triangles all of whose corners lie on the radial line at polar angle ``theta``,
+    between radii r_lo and r_hi: a radial face's, as (n, 3, 3) corners."""
+    p = vertices[triangles]
+    r = np.hypot(p[..., 0], p[..., 1])
+    on = np.abs(np.angle(np.exp(1j * (np.arctan2(p[..., 1], p[..., 0]) - theta)))) < 1e-9
+    return p[np.all(on & (r > r_lo - LENGTH) & (r < r_hi + LENGTH), axis=1)]
+
+
+@pytest.mark.parametrize("k, cone, tilt, start, rows", [
+    (12.0, 0.0, 0.0, 10, (2, 12)),  # exactly ten widths high each: 12 / 6 and 12
+    (11.5, 0.0, 0.0, 20, (4, 12)),  # ceil(11.5 / 3) and ceil(11.5), the start on the +y side
+    (5.0, 0.0, 0.0, 10, (1, 5)),    # ceil(5 / 6): one row at the start
+    (12.0, 4.0, 1.0, 10, (3, 13)),  # the narrow edge 0.0052 rows higher: ceil(2.0052), ceil(12.0052)
+])
+def test_the_drops_end_faces_over_the_first_turn_are_in_the_fewest_rows_ten_widths_high(k, cone, tilt, start,
+                                                                                        rows):
+    """A 9 deg helix of one turn (60 stations) narrowed from its station ``start`` (drop_from
+    start / 60; 10: at -30 deg, 20: at +30 deg) to its end, the step Delta = pitch / (10 k) wide.
+    With the cone at least as steep as the tilt the track's inner edge starts on the cone, so
+    it stands rise = pitch i / 60 above the bottom at station i, the narrow floor's edge
+    Delta (tan cone - tan tilt) higher. Each end face: a trapezoid from the bottom to the floor
+    at both edges (its corners on the cone and the helicoid), in n = ceil(highest edge /
+    (10 Delta)) equal rows: at most ten times as high as wide, none more."""
+    r_mid = 0.01 - W / 2
+    pitch = 2 * math.pi * r_mid * math.tan(math.radians(9.0))
+    step = pitch / (10 * k)
+    b = Bowl(radius=0.01, track_width=W, helix_angle=9.0, turns=1.0, wall_height=1e-3, chute_length=0.02,
+             cone_angle=cone, cross_tilt=tilt, drop_from=start / 60, drop_to=1.0, drop_width=W - step)
+    check_bowl({**PARAMS, "helix_angle": 9.0, "turns": 1.0, "cone_angle": cone, "cross_tilt": tilt,
+                "chute_length": 0.02, "drop_from": start / 60, "drop_to": 1.0, "drop_width": W - step})
+    assert b.drop == pytest.approx((b.theta_start + math.pi * start / 30, THETA_END), rel=0, abs=1e-12)
+    vertices, triangles = bowl_mesh(b)
+    r_in, r_narrow = b.radius - W, b.radius - b.drop_width
+    extra = step * (math.tan(math.radians(cone)) - math.tan(math.radians(tilt)))
+    for t, i, n in zip(b.drop, (start, 60), rows):
+        rise = pitch * i / 60
+        face = polar_face(vertices, triangles, t, r_in, r_narrow)
+        area = 0.5 * np.linalg.norm(np.cross(face[:, 1] - face[:, 0], face[:, 2] - face[:, 0]), axis=1).sum()
+        # (to the vertices' rounding to 1e-12 m along the face's 20 mm outline)
+        assert area == pytest.approx(step * (rise + rise + extra) / 2, rel=0, abs=1e-14)
+        corners = face.reshape(-1, 3)
+        radius = np.hypot(corners[:, 0], corners[:, 1])
+        for r, high in ((r_in, rise), (r_narrow, rise + extra)):
+            z = np.unique(np.round(corners[np.abs(radius - r) < LENGTH, 2], 12))
+            bottom = float(b.bottom_z(r))
+            assert z[-1] == pytest.approx(float(b.floor_z(t, r)), rel=0, abs=LENGTH)
+            assert z == pytest.approx(np.linspace(bottom, bottom + high, n + 1), rel=0, abs=LENGTH), (t, r)
+            assert np.diff(z).max() <= 10 * step + LENGTH
+        assert len(face) == 2 * n
+
+
+@pytest.mark.parametrize("cone, tilt", [(5.0, 1.0), (1.0, 5.0)])
+def test_a_first_turn_shelf_exactly_a_part_high_over_the_drop_is_accepted_a_hair_lower_refused(cone, tilt):
+    """The narrow floor's edge (drop_width from the wall) at the drop's start, station 4 of 90
+    (drop_from 0.04) in the first turn: the floor there stands z_start + pitch 4 / 60 - (R - DW -
+    r_mid) tan(tilt) over the axis' level, the cone DW tan(cone) at that radius, z_start =
+    max(w/2 tan(tilt), w tan(cone) - w/2 tan(tilt)). Spheres exactly that high pass; a hair taller
+    are refused. (With the cone and the tilt unequal, the shelf at any other radius differs.)"""
+    tan_c, tan_t = math.tan(math.radians(cone)), math.tan(math.radians(tilt))
+    p = {**PARAMS, "cone_angle": cone, "cross_tilt": tilt, "drop_from": 0.04, "drop_to": 0.3}
+    b = bowl_from(p)
+    a, _ = b.drop
+    assert a == pytest.approx(b.theta_start + math.radians(24.0), rel=0, abs=1e-12)
+    r_mid = 0.01 - W / 2
+    z_start = max(W / 2 * tan_t, W * tan_c - W / 2 * tan_t)
+    shelf = z_start + b.pitch * 4 / 60 - (0.01 - DW - r_mid) * tan_t - DW * tan_c
+    # (the same height from the bowl's own surfaces, to the bit: the boundary itself)
+    exact = float(b.floor_z(a, b.radius - DW) - b.bottom_z(b.radius - DW))
+    assert exact == pytest.approx(shelf, rel=0, abs=1e-15)
+    assert 1e-4 < shelf < DW  # (a sphere that high fits the narrow floor)
+    check_bowl({**p, "part_size": exact})
+    with pytest.raises(ParameterError, match="the first turn's shelf is .* less than a part"):
+        check_bowl({**p, "part_size": math.nextafter(exact, 1.0)})

@@ -197,6 +197,11 @@ def test_a_bowls_chute_model_takes_its_drive_its_walls_and_its_parts():
     assert note == "" and v[-1] < mean < v[0]
     stalls, why = chute_mean_speed({**p, "chute_length": 0.014})  # past 12 mm it stops
     assert stalls == 0.0 and why.startswith("a lone part stalls on the chute by x = ")
+    # (the first of the points, 0 to 13.7 mm, where it stands or goes back: not the slot's)
+    xs = np.linspace(0.0, 0.014 - 3e-4, CHUTE_POINTS)
+    v = np.array([chute_speed({**p, "chute_length": 0.014}, float(x)).velocity for x in xs])
+    first = int(np.flatnonzero(v <= 0)[0])
+    assert v[0] > 0 and first > 0 and why == f"a lone part stalls on the chute by x = {xs[first]:.3g} m"
     hops, why = chute_mean_speed({**p, "amp_n": 3e-5})
     assert hops is None and "only slides" in why
 

@@ -373,3 +373,44 @@ def test_a_bowls_falls_by_tooling_where_they_left_the_helix():
     assert [TOOLING[k] for k in bowl_tooling(where, b, size)] == want
     plain = bowl_from(BOWL)  # no tooling: every fall is other
     assert set(bowl_tooling(where, plain, size)) == {TOOLING.index("other")}
+
+
+def test_no_falls_on_a_linear_track_nor_in_fewer_than_two_frames(tmp_path):
+    """falls: three empty arrays (the ids integers) on a linear track, and in a bowl's result
+    given a single frame (no pair of frames to fall between)."""
+    from vibrofeed.postproc.path import falls
+
+    with Result(linear_result(tmp_path / "l.h5", OUTLET)) as r:
+        found = [falls(r, np.arange(3)), falls(r, [])]
+    b = bowl_from(BOWL)
+    points = np.array([b.helix_point(b.theta_start + 2.0) + [0, 0, 1.5e-4]])
+    write_bowl(tmp_path / "b.h5", [0.0, 0.0], [0.0, 0.0], points)
+    with Result(tmp_path / "b.h5") as r:
+        found.append(falls(r, [1]))
+    for times, ids, where in found:
+        assert (times.shape, ids.shape, where.shape) == ((0,), (0,), (0,))
+        assert ids.dtype == np.int64
+
+
+def test_a_fall_is_into_the_bowl_within_its_wall_whichever_way_from_the_axis(tmp_path):
+    """Four parts on the helix at frame 0; at frame 1 parts 1 and 2 lie in the pile near the
+    wall, 8 mm from the axis along +y and +x (inside the 10 mm wall: falls), parts 3 and 4 have
+    left over the chute's end, 12 mm from the axis and more (outside it: no falls), one 6 mm
+    aside of the chute's line, one beyond its end on it: the distance from the axis is the
+    hypotenuse of both coordinates, not either alone."""
+    from vibrofeed.postproc.path import falls
+
+    b = bowl_from(BOWL)
+    on = b.helix_point(b.theta_start + np.array([1.0, 2.0, 3.0, 4.0])) + [0, 0, 1.5e-4]
+    away = np.array([[0.0, 8e-3, 2e-4], [8e-3, 0.0, 2e-4],
+                     [b.outlet_x + 4e-3, -6e-3, -3e-4], [b.outlet_x + 4e-3, -b.r_mid, -3e-4]])
+    assert np.all(np.hypot(away[:2, 0], away[:2, 1]) < b.radius - b.track_width)  # the pile
+    assert np.all(np.hypot(away[2:, 0], away[2:, 1]) > 1.2e-2)
+    frames = [(k, 5e-3 * k, parts(np.arange(1, 5), pos, radius=1.5e-4)) for k, pos in enumerate((on, away))]
+    variables = {k: (repr(v), "", k, repr(v)) for k, v in BOWL.items()}
+    path = write_bulk_result(tmp_path / "f.h5", frames, variables=variables,
+                             outlet={"outlet_x": b.outlet_x, "catch_z": -5e-4, "method": "synthetic"})
+    with Result(path) as r:
+        times, ids, where = falls(r, np.arange(2))
+    assert ids.tolist() == [1, 2] and times == pytest.approx([5e-3, 5e-3], rel=0, abs=1e-12)
+    assert where == pytest.approx(b.arc_length(b.theta_start + np.array([1.0, 2.0])), rel=1e-12, abs=0)

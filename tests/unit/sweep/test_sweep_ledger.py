@@ -616,3 +616,20 @@ def test_snapshots_and_sweep_files_have_the_mode_of_a_new_file(tmp_path, mask):
         os.umask(old)
     for name in ("a.csv", S.CSV_NAME, S.H5_NAME):
         assert (tmp_path / name).stat().st_mode & 0o777 == 0o666 & ~mask, name
+
+
+@pytest.mark.parametrize("mask", [0o022, 0o077, 0o002])
+def test_the_umask_is_read_without_setting_it(monkeypatch, mask):
+    # Setting the umask to learn it and restoring it would give a file another thread creates
+    # meanwhile the wrong mode: on Linux (the project's platform) it is read from /proc, and
+    # os.umask is never called.
+    old = os.umask(mask)
+    try:
+        def refuse(_):
+            raise AssertionError("the umask was set to read it")
+
+        monkeypatch.setattr(S.os, "umask", refuse)
+        assert S._umask() == mask
+    finally:
+        monkeypatch.undo()
+        os.umask(old)
