@@ -4,10 +4,14 @@ by a millionth of the amplitude, or lacks the drive's parameters, fails."""
 
 import math
 
+import h5py
 import numpy as np
+import pytest
 
-from helpers import parts
+from helpers import parts, write_result
+from vibrofeed.results import layout as L
 from vibrofeed.results.check import check_file
+from vibrofeed.results.reader import Result
 from vibrofeed.results.writer import ResultWriter
 
 DRIVE = {"freq": 100.0, "amp_t": 5e-5, "amp_n": 3e-5, "phase": -30.0, "bowl_diameter": 0.02,
@@ -30,20 +34,25 @@ def motion(steps):
     return angle, theta_amp * w * np.cos(w * t), lift, DRIVE["amp_n"] * w * np.cos(w * t + phi)
 
 
-def write(path, drive=DRIVE, tamper=None):
-    steps = np.arange(12) * EVERY
+def write(path, drive=DRIVE, tamper=None, **kw):
+    return check_file(write_file(path, drive, tamper, **kw))
+
+
+def write_file(path, drive=DRIVE, tamper=None, frames=12, derived=None):
+    steps = np.arange(frames) * EVERY
+    derived = {"dt_used": DT} if derived is None else derived
     angle, rate, lift, vz = motion(steps)
     if tamper:
         tamper(angle, rate, lift, vz)
     variables = {k: (repr(v), "", k, repr(v)) for k, v in drive.items()}
     w = ResultWriter(path, deck_name="bowl_feeder", deck_path="bowl_feeder.liggghts", deck_text="#\n",
-                     variables=variables, derived={"dt_used": DT}, engine_version=ENGINE,
+                     variables=variables, derived=derived, engine_version=ENGINE,
                      seed=1, run_id="y" * 64, rotating=True)
     for k, s in enumerate(steps):
         w.write_frame(int(s), float(s * DT), parts([1], [[0.0, -9.4e-3, 1e-3 + lift[k]]], radius=1.5e-4),
                       [0, 0, lift[k]], [0, 0, vz[k]], surface_rotation=([0, 0, angle[k]], [0, 0, rate[k]]))
     w.finish("complete")
-    return check_file(path)
+    return path
 
 
 def errors(report):
@@ -79,3 +88,50 @@ def test_without_the_drives_parameters_the_motion_cannot_be_verified(tmp_path):
     partial = {k: v for k, v in DRIVE.items() if k != "track_width"}
     bad = errors(write(tmp_path / "partial.h5", drive=partial))
     assert any("track_width" in e and "cannot be verified" in e for e in bad)
+
+
+def test_the_bowls_rotation_reads_back_and_a_fixed_surface_reads_none(tmp_path):
+    path = write_file(tmp_path / "bowl.h5")
+    angle, rate, lift, vz = motion(np.arange(12) * EVERY)
+    with Result(path) as r:
+        assert r.rotating is True
+        np.testing.assert_array_equal(r.read("surface_angle")[:, 2], angle)   # stored float64
+        np.testing.assert_array_equal(r.read("surface_angular_velocity", frames=[3, 1])[:, 2], rate[[3, 1]])
+        assert not r.read("surface_angle")[:, :2].any()
+        np.testing.assert_array_equal(r.read("surface_position")[:, 2], lift)
+    flat = write_result(tmp_path / "flat.h5", [(0, 0.0, parts([1], [[0, 0, 1e-4]])),
+                                                (1, 1e-3, parts([1], [[0, 0, 1e-4]]))])
+    with Result(flat) as r:
+        assert r.rotating is False
+        assert r.read("surface_angle").tolist() == [[0.0, 0.0, 0.0]] * 2   # zeros, one per frame
+        assert r.read("surface_angular_velocity", frames=-1).tolist() == [0.0, 0.0, 0.0]
+
+
+@pytest.mark.parametrize("missing", ["angle", "angular_velocity"])
+def test_a_rotating_surface_records_both_its_angle_and_its_rate(tmp_path, missing):
+    path = write_file(tmp_path / "half.h5")
+    with h5py.File(path, "r+") as f:
+        del f[f"{L.SURFACE}/{missing}"]
+    assert f"error: /{L.SURFACE}: a rotating surface records angle, angular_velocity: {missing} missing" \
+        in [str(p) for p in check_file(path).problems]
+
+
+def test_a_bowl_run_that_wrote_no_frame_has_no_motion_to_verify(tmp_path):
+    """Not even without a recorded time step (the engine died before telling it)."""
+    variables = {k: (repr(v), "", k, repr(v)) for k, v in DRIVE.items()}
+    w = ResultWriter(tmp_path / "died.h5", deck_name="bowl_feeder", deck_path="bowl_feeder.liggghts",
+                     deck_text="#\n", variables=variables, derived={}, engine_version=ENGINE, seed=1,
+                     run_id="c" * 64, rotating=True)
+    w.finish("failed", "the engine died before the first frame")
+    report = check_file(tmp_path / "died.h5", allow_incomplete=True)
+    assert report.ok and [p.message for p in report.problems] == [
+        "run status is 'failed': the engine died before the first frame"]
+
+
+def test_a_bowl_without_any_time_step_cannot_be_verified(tmp_path):
+    """With frames after the first, time / step stands for the unrecorded dt_used; with only
+    the frame at step 0 there is no step to compute the drive with."""
+    assert errors(write(tmp_path / "no_dt.h5", derived={})) == []
+    assert errors(write(tmp_path / "first.h5", frames=1, derived={})) == [
+        "error: /observables/surface: no time step recorded (derived/dt_used): the bowl's motion "
+        "cannot be verified"]

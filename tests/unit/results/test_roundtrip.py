@@ -591,3 +591,31 @@ def test_duplicate_ids_anywhere_in_a_frame_are_refused(tmp_path):
     for k, ids in enumerate(([1, 2, 2], [3, 1, 3], [5, 6, 7, 8, 6])):
         with pytest.raises(ValueError, match="duplicate"):
             write_result(tmp_path / f"d{k}.h5", [(0, 0.0, parts(ids, np.zeros((len(ids), 3))))])
+
+
+@pytest.mark.parametrize("frames, slots", [
+    ([3], None), ([0, 3], None), ([-4], None), (np.array([True, False]), None),  # 3 frames
+    (None, [2]), (None, [-3]), (1, [0, 2]), (slice(None), [1, 2])])               # 2 slots
+def test_a_selection_beyond_the_file_is_an_index_error(tmp_path, frames, slots):
+    """Indices past either end (negative ones count from the end) are refused, not clipped
+    as h5py would clip them."""
+    with Result(three_frames(tmp_path)) as r:
+        assert (r.n_frames, r.n_slots) == (3, 2)
+        with pytest.raises(IndexError, match="out of range|boolean selection"):
+            r.read("position", frames=frames, slots=slots)
+
+
+def test_a_run_that_wrote_no_frame_reads_as_no_parts(tmp_path):
+    from vibrofeed.results.writer import ResultWriter
+
+    path = tmp_path / "none.h5"
+    ResultWriter(path, deck_name="d", deck_path="d", deck_text="d", variables={}, derived={},
+                 engine_version="LIGGGHTS", seed=1).finish("failed", "died before the first frame")
+    with Result(path, allow_incomplete=True) as r:
+        assert r.n_frames == 0 and r.part_ids.tolist() == [] and r.part_ids.dtype.kind == "i"
+        present = r.present()
+        assert present.shape == (0,) and present.dtype.kind == "i"
+        assert [a.tolist() for a in r.locate(1)] == [[], []]
+        assert list(r.iter_frames()) == []
+        with pytest.raises(KeyError, match="does not appear"):
+            r.track(1)

@@ -63,10 +63,12 @@ def two_sections():
     return (np.vstack([v1, v2]), np.vstack([t, t + 4])), np.repeat([1, 2], 4)
 
 
-def write_line(path, shift=None, sections=2, track_sections=True):
+def write_line(path, shift=None, sections=2, track_sections=True, derived=None, frames=N_FRAMES):
     """A complete two-section line result; ``shift(position, velocity)`` may alter section 2's
-    recorded motion in place before it is written. ``sections=1`` records section 1 only."""
+    recorded motion in place before it is written. ``sections=1`` records section 1 only;
+    ``derived`` replaces the derived values ({"dt_used": DT}); ``frames``: the first ones only."""
     steps, times, s2_pos, s2_vel = section2_motion()
+    derived = {"dt_used": DT} if derived is None else derived
     if shift is not None:
         shift(s2_pos, s2_vel)
     w1 = 2 * math.pi * S1["freq"]
@@ -74,13 +76,13 @@ def write_line(path, shift=None, sections=2, track_sections=True):
                  for name, value in {**S1, **S2, "sections": 2, "track_length": JOINT}.items()}
     track, split = two_sections()
     w = ResultWriter(path, deck_name="synthetic_line", deck_path="synthetic_line.liggghts",
-                     deck_text="# synthetic line\n", variables=variables, derived={"dt_used": DT},
+                     deck_text="# synthetic line\n", variables=variables, derived=derived,
                      engine_version="LIGGGHTS (Version LIGGGHTS-PUBLIC 3.8.0, synthetic)", seed=1,
                      run_id=hashlib.sha256(str(path).encode()).hexdigest(), line=True,
                      outlet={"outlet_x": JOINT + 3e-3, "catch_z": -5e-4, "method": "synthetic"},
                      track=track, track_sections=split if track_sections else None,
                      sections=sections)
-    for k, (step, t) in enumerate(zip(steps, times)):
+    for k, (step, t) in enumerate(zip(steps[:frames], times[:frames])):
         s1 = [S1["amp_t"] * math.sin(w1 * t), 0, S1["amp_n"] * math.sin(w1 * t)]
         v1 = [S1["amp_t"] * w1 * math.cos(w1 * t), 0, S1["amp_n"] * w1 * math.cos(w1 * t)]
         # one part on each section, resting on its floor
@@ -159,6 +161,8 @@ def test_a_single_track_has_one_section(tmp_path):
         np.testing.assert_array_equal(r.section_surface(1)[0][:, 0], [1e-6, 2e-6])
         with pytest.raises(IndexError, match="section 2 out of range"):
             r.section_surface(2)
+        with pytest.raises(ResultError, match=r"records no motion of section 2 \(it has 1 section\)$"):
+            r.read("surface_s2_position")
         assert set(f["observables"]) == {"surface"}  # nothing new in a single track's file
 
 
@@ -193,6 +197,12 @@ def test_a_line_of_format_1_3_still_reads(line, tmp_path):
     report = check_file(old)
     assert report.ok, [str(p) for p in report.problems]  # a warning, not an error
     assert any("surface_s2" in str(p) and p.level == "warning" for p in report.problems)
+
+
+def test_reading_a_section_beyond_the_lines_names_its_sections(line):
+    with Result(line) as r:
+        with pytest.raises(ResultError, match=r"records no motion of section 3 \(it has 2 sections\)$"):
+            r.read("surface_s3_velocity")
 
 
 # -- vibrofeed check ---------------------------------------------------------------------------
@@ -322,3 +332,41 @@ def test_pyh5md_reads_section_2s_motion(line):
         assert position.element_type == "TimeElement"
         np.testing.assert_array_equal(position.value[()], r.section_surface(2)[0])
         np.testing.assert_array_equal(position.step[()], r.step)
+
+
+def test_a_section_the_run_does_not_have_is_reported_once_as_such(line, tmp_path):
+    """Not also as a section whose drive (s3_*) is missing: the run has no section 3."""
+    extra = tmp_path / "extra.h5"
+    extra.write_bytes(line.read_bytes())
+    with h5py.File(extra, "r+") as f:
+        f.copy("observables/surface_s2", "observables/surface_s3")
+    assert errors(extra) == ["error: /observables/surface_s3: the motion of a section the run does "
+                             "not have (sections = 2)"]
+
+
+@pytest.mark.parametrize("elements", [("angle",), ("angle", "angular_velocity")])
+def test_only_the_first_sections_surface_may_rotate(line, tmp_path, elements):
+    bad = tmp_path / "turning.h5"
+    bad.write_bytes(line.read_bytes())
+    with h5py.File(bad, "r+") as f:
+        for name in elements:   # a rotation's series: any (frames, 3) one will do
+            f.copy("observables/surface_s2/position", f"observables/surface_s2/{name}")
+    found = errors(bad)
+    assert found == ["error: /observables/surface_s2/angle: only the first section's surface may "
+                     "rotate"], found
+
+
+def test_the_drive_is_checked_at_the_recorded_step_else_at_time_over_step(tmp_path):
+    """derived/dt_used is the movers' step (a step 1 % longer moves section 2 elsewhere); a run
+    that did not record it is checked at time / step, the same step here."""
+    assert not errors(write_line(tmp_path / "no_dt.h5", derived={}))
+    found = errors(write_line(tmp_path / "other_dt.h5", derived={"dt_used": 1.01 * DT}))
+    assert any("/observables/surface_s2/position/value: section 2's position at frame" in e
+               for e in found), found
+
+
+def test_a_line_without_any_time_step_cannot_be_verified(tmp_path):
+    """One frame, at step 0, and no dt_used: no step to compute the drive with."""
+    found = errors(write_line(tmp_path / "first.h5", derived={}, frames=1))
+    assert found == ["error: /observables/surface_s2: no time step recorded (derived/dt_used): section "
+                     "2's motion cannot be verified"], found
