@@ -17,6 +17,8 @@ def fresh(monkeypatch):
     monkeypatch.setattr(interrupt, "_stoppers", {})
     monkeypatch.setattr(interrupt, "_stopping", None)
     saved = {s: signal.getsignal(s) for s in (signal.SIGTERM, signal.SIGHUP)}
+    for s in saved:  # as a command started from a terminal has them (the suite may run under nohup)
+        signal.signal(s, signal.SIG_DFL)
     yield
     for s, handler in saved.items():
         signal.signal(s, handler)
