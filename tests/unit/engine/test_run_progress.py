@@ -214,3 +214,22 @@ def test_a_bar_on_a_stream_that_is_no_terminal_gets_a_fixed_width(tmp_path):
             progress({"event": "run", "n_steps": 10, "dt": 0.1})
             assert progress.bar.ncols == 100 and not progress.bar.dynamic_ncols
             progress.close()
+
+
+def test_a_wall_time_of_a_second_or_less_still_gives_a_rate(clock):
+    """Any positive wall time measures a rate, however short: 5 steps in 1 s is 5 steps/s,
+    the 5 left take 1 s; 6 steps in 0.5 s is 12 steps/s, the 4 left take 1/3 s."""
+    lines = lines_of(RunProgress("p", stream=io.StringIO()), clock,
+                     [(5.0, {"step": 5, "time": 0.5, "wall": 1.0}),
+                      (10.0, {"step": 6, "time": 0.6, "wall": 0.5})])
+    assert lines == ["p: t = 0.5/1 s (50%), 0.005k steps/s, ETA 1s",
+                     "p: t = 0.6/1 s (60%), 0.012k steps/s, ETA 0s"]
+
+
+def test_a_thousand_steps_per_second_read_as_1k(clock):
+    # half of 10**6 steps in 500 s: 1000 steps/s, the other half in 500 s = 8m20s
+    progress = RunProgress("p", stream=io.StringIO())
+    progress({"event": "run", "n_steps": 10**6, "dt": 1e-6})
+    clock[0] = 500.0
+    progress({"event": "progress", "step": 500_000, "time": 0.5, "wall": 500.0})
+    assert progress.stream.getvalue() == "p: t = 0.5/1 s (50%), 1k steps/s, ETA 8m20s\n"

@@ -104,3 +104,48 @@ def test_only_folders_are_removed(tmp_path):
     note.write_text("x")
     os.utime(note, (1, 1))  # older than any scratch folder's age
     assert scratch.remove_abandoned(tmp_path) == [] and note.exists()
+
+
+def test_a_failed_make_reports_its_own_error_though_the_folder_is_gone(tmp_path, monkeypatch):
+    """The cleanup after a failed owner file never hides why: here the folder vanished
+    (removed by someone else) before the cleanup, which must not raise in its place."""
+    import shutil
+
+    def folder_gone_then_no_host():
+        for tmp in tmp_path.glob(scratch.PREFIX + "*"):
+            shutil.rmtree(tmp)
+        raise OSError("no host name")
+
+    monkeypatch.setattr(scratch.socket, "gethostname", folder_gone_then_no_host)
+    with pytest.raises(OSError, match="no host name"):
+        scratch.make(tmp_path)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_two_runs_sweeping_the_same_place_at_once_do_not_fail(tmp_path, monkeypatch):
+    """Another run starting beside this one may remove an abandoned folder first: this
+    run's sweep goes on without an error and removes the rest."""
+    import shutil
+
+    host = socket.gethostname()
+    left = []
+    for name in ("a", "b"):
+        path = tmp_path / (scratch.PREFIX + name)
+        path.mkdir()
+        (path / scratch.OWNER).write_text(f"{host} {dead_pid()} 1\n")
+        left.append(path)
+    judged = scratch._abandoned
+    raced = []
+
+    def other_run_first(tmp):
+        abandoned = judged(tmp)
+        if abandoned and not raced:  # the other run removes the first one between judge and remove
+            shutil.rmtree(tmp)
+            raced.append(tmp)
+        return abandoned
+
+    monkeypatch.setattr(scratch, "_abandoned", other_run_first)
+    gone = scratch.remove_abandoned(tmp_path)
+    assert len(raced) == 1 and not any(p.exists() for p in left)
+    second = next(p for p in left if p not in raced)
+    assert second in gone

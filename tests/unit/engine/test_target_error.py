@@ -161,6 +161,60 @@ def test_a_feed_rate_below_one_part_per_second_is_measured(tmp_path):
     assert v.reached and v.error == pytest.approx(0.0, abs=1e-9) and v.t == 50.0
 
 
+def test_a_window_that_opens_late_says_its_own_length(tmp_path):
+    # exits from 0.1 s on, three per period; judged at the frame at 0.185 s: 26 exits, so
+    # FeedRate's bins are whole periods, 18 // 10 -> two each, the last whole one ending at
+    # 0.18 s; the window opens with the feed at 0.1 s: 0.08 s, 8 periods, 8 of 10 batches
+    exits = (np.arange(400) + 0.5) / 300.0 + 0.1
+    with Result(fed(tmp_path / "late.h5", exits, 0.3, rate=300.0)) as r:
+        stop = int(np.searchsorted(r.time, 0.185 - 1e-9)) + 1
+        v = judge_feed_rate(r, 0.5, stop=stop)
+    assert not v.reached and v.t == pytest.approx(0.185, abs=1e-12) and math.isnan(v.error)
+    assert v.why == "the steady window (0.08 s) holds 8 of the 10 batches"
+
+
+def test_too_few_frames_to_judge_the_bed_never_stop(tmp_path):
+    # a frame every 3 periods up to 0.12 s: the window (12 periods, 36 exits, error 0) holds
+    # its ten batches, but its 5 frames give the bed fewer batch values than a drift needs
+    from vibrofeed.postproc.line import DRIFT_MIN_BATCHES
+
+    exits = (np.arange(400) + 0.5) / 300.0
+    with Result(fed(tmp_path / "coarse.h5", exits, 0.12, frame_dt=0.03, rate=300.0)) as r:
+        assert r.n_frames == 5 < DRIFT_MIN_BATCHES
+        v = judge_feed_rate(r, 0.5)
+    assert (v.reached, v.why) == (False, "too few frames in the window to judge the bed steady")
+    assert math.isnan(v.error)
+
+
+def test_a_result_without_a_frequency_is_judged_as_feedrate_judges_it(tmp_path):
+    """Without a vibration frequency FeedRate cuts the window into 200 units, its batches 20
+    each: the judge takes the same batches (not periods of some other frequency)."""
+    import h5py
+
+    exits = (np.arange(400) + 0.5) / 300.0
+    path = fed(tmp_path / "a.h5", exits, 0.3, rate=300.0)
+    with h5py.File(path, "r+") as f:
+        del f[L.VARIABLES]["freq"]
+    with Result(path) as r:
+        assert "freq" not in r.parameters
+        v = judge_feed_rate(r, 0.01)
+        fr = FeedRate(r, model=False).run().results
+    # evenly spaced exits: every batch of 0.03 s holds 9 of them, the error is 0
+    assert v.reached and v.error == pytest.approx(0.0, abs=1e-9)
+    assert v.error == pytest.approx(fr.parts_per_s_err / fr.parts_per_s, abs=1e-12)
+
+
+def test_judging_does_not_run_the_single_part_model(tmp_path, monkeypatch):
+    """Rank 0 judges during the run while the other ranks wait: it spares the single-part
+    model (which does not touch the rate), an integration of its own."""
+    from vibrofeed.postproc import feedrate
+
+    monkeypatch.setattr(feedrate, "dilute_limit", lambda *a: pytest.fail("the model was run"))
+    exits = (np.arange(400) + 0.5) / 300.0
+    with Result(fed(tmp_path / "a.h5", exits, 0.3, rate=300.0)) as r:
+        assert judge_feed_rate(r, 0.01).reached
+
+
 # -- the worker's checks ---------------------------------------------------------------------
 class Replay:
     """Rank 0's writer of a run, frame by frame: the frames and events of a synthetic result
