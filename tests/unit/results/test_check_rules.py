@@ -224,6 +224,7 @@ CORRUPTIONS = {
                           "unit attribute must be 's'"),
     "time backwards": (_set(f"{P}/position/time", 2, 0.005), f"{P}/position/time",
                        "not monotonically increasing"),
+    "step repeated": (_set(f"{P}/position/step", 2, 1), f"{P}/position/step", "not strictly increasing"),
     "short value": (_resize(f"{P}/position/value", 2, 0), f"{P}/position",
                     "step (3), time (3) and value (2) frame counts differ"),
     "fewer slots": (_resize(f"{P}/radius/value", 1, 1), P, "elements disagree on (frames, slots)"),
@@ -240,7 +241,11 @@ CORRUPTIONS = {
                           "differs from position/step"),
     "orientation slots": (_resize(f"{P}/orientation/value", 3, 1), f"{P}/orientation/value",
                           "(frames, slots) (3, 3), id has (3, 2)"),
-    # the surface's motion
+    # reported, not a crash of the unit-length test (one value per part: rank 2)
+    "orientation of rank 2": (_values(f"{P}/orientation/value", lambda v: v[..., 0]),
+                              f"{P}/orientation/value", "rank 2, expected 3"),
+    # the surface's motion (none at all: its elements are missing, the drive checks skip it)
+    "no surface": (_del(S), f"{S}/position", "missing"),
     "surface at other frames": (_shift_step(f"{S}/velocity"), f"{S}/velocity/step",
                                 "not sampled at the particle frames"),
     "non-finite surface": (_set(f"{S}/position/value", (1, 2), np.nan), f"{S}/position/value",
@@ -248,6 +253,7 @@ CORRUPTIONS = {
     # the outlet's event table
     "no method": (_attr(OUT, "method"), OUT, "attribute 'method' missing"),
     "event unit": (_attr(f"{OUT}/position", "unit", "mm"), f"{OUT}/position", "unit attribute must be 'm'"),
+    "no event orientation": (_del(f"{OUT}/orientation"), f"{OUT}/orientation", "missing"),
     "events of two lengths": (_resize(f"{OUT}/id", 0, 0), OUT, "the event datasets differ in length"),
     "non-finite event": (_set(f"{OUT}/velocity", (0, 2), np.inf), f"{OUT}/velocity", "non-finite values"),
     "misshapen event": (lambda f: _replace(f[OUT], "time", f[f"{OUT}/time"][()][:, None]), f"{OUT}/time",
@@ -358,6 +364,57 @@ def test_a_quaternion_within_a_millionth_of_unit_length_passes(bulk, tmp_path, n
     with h5py.File(path, "r+") as f:
         _quaternion_norm(norm)(f)
     assert problems(path) == []
+
+
+def test_time_may_repeat_where_step_may_not(tmp_path):
+    """FORMAT.md asks a strictly increasing step (a repeat fails, "step repeated" above); the
+    time must only never go back: two frames at one time pass (the part at rest)."""
+    path = sequence(tmp_path / "t.h5", frames_of([[1]] * 3, still(3)))
+    with h5py.File(path, "r+") as f:
+        _set(f"{L.PARTS}/position/time", 2, 1e-3)(f)
+        assert f[f"{L.PARTS}/position/time"][()].tolist() == [0.0, 1e-3, 1e-3]
+    assert problems(path) == []
+
+
+@pytest.mark.parametrize("version", [None, "1.4", np.array([b"one", b"four"])])
+def test_a_format_unrecorded_or_unreadable_is_the_first(bulk, tmp_path, version):
+    """As Result.format_version: the first files recorded none, they are format 1.0."""
+    path = copy(bulk, tmp_path / "v.h5")
+    with h5py.File(path, "r+") as f:
+        if version is None:
+            del f[L.PARAMETERS].attrs["format_version"]
+        else:
+            f[L.PARAMETERS].attrs["format_version"] = version
+        assert check_module.format_version(f) == (1, 0)
+
+
+def test_a_missing_surface_element_does_not_stop_the_checks_of_the_others(bulk, tmp_path):
+    """position is checked first: missing; velocity's non-finite value must still be reported."""
+    path = copy(bulk, tmp_path / "surface.h5")
+    with h5py.File(path, "r+") as f:
+        del f[f"{L.SURFACE}/position"]
+        _set(f"{L.SURFACE}/velocity/value", (1, 0), np.nan)(f)
+    found = errors(path)
+    assert has(found, f"{L.SURFACE}/position", "missing"), found
+    assert has(found, f"{L.SURFACE}/velocity/value", "non-finite values"), found
+
+
+def test_a_missing_section_does_not_stop_the_checks_of_the_next(tmp_path):
+    """A line of 3 sections without section 2's motion: section 3's is checked all the same
+    (its velocity in the wrong unit). Made from a 2-section line whose section 2 becomes 3."""
+    path = balance(tmp_path / "l.h5", LINE_PRESENT, LINE_COUNTS, events=[2], line=True, rejects=[3])
+    assert problems(path) == []
+    s2, s3 = L.surface_path(2), L.surface_path(3)
+    with h5py.File(path, "r+") as f:
+        _text_dataset(f"{L.VARIABLES}/sections", "3")(f)
+        for name in L.SECTION_DRIVE:
+            f.copy(f"{L.VARIABLES}/s2_{name}", f"{L.VARIABLES}/s3_{name}")
+        f.move(s2, s3)
+        f[f"{s3}/velocity/value"].attrs["unit"] = "mm s-1"
+    found = errors(path)
+    assert found == [f"error: /{s2}: missing: section 2's motion (the line has 3 sections; its sine "
+                     "drive must be recorded)",
+                     f"error: /{s3}/velocity/value: unit attribute must be 'm s-1'"], found
 
 
 def test_elements_that_disagree_on_the_slots_count_no_parts(bulk, tmp_path):
@@ -566,7 +623,7 @@ def test_returned_never_decreases_nor_exceeds_rejected(tmp_path, present, counts
     assert found == [f"error: /{L.MASS_BALANCE}/returned: {message}"], found
 
 
-# -- physics: speed, energy, jumps, region ---------------------------------------------------
+# -- physics: speed, mass, jumps, region -----------------------------------------------------
 def moving(path, speed, z0=0.0, variables=FREQ_ONLY, track=None):
     """Part 1 rests at height z0; part 2, at rest on the floor at x = 1 mm, is recorded moving
     at ``speed`` along x at frame 1 (its position unchanged: no jump)."""
@@ -597,16 +654,46 @@ def test_the_speed_limit_is_the_largest_of_its_terms(tmp_path, case):
                f"{limit:.3g} m/s" in e for e in found), found
 
 
-def test_the_kinetic_energy_may_not_exceed_that_of_every_part_at_the_limit(tmp_path):
-    """Two parts of equal mass, one at rest: the energy per kg is v^2 / 4, beyond limit^2 / 2
-    from v = sqrt(2) limit on (the speed alone fails from v = limit on)."""
+@pytest.mark.parametrize("v_factor", [1.40, 1.42, 3.0])
+def test_a_speed_beyond_the_limit_is_one_error_whatever_the_energy(tmp_path, v_factor):
+    """Two parts of equal mass, one at rest: their energy per kg, v^2 / 4, passes limit^2 / 2
+    from v = sqrt(2) limit on; the speed rule reports the part, and nothing else does."""
     limit = 100 * DRIVE_PEAK
-    found = errors(moving(tmp_path / "e1.h5", 1.40 * limit, variables=DRIVE))
-    assert len(found) == 1 and "moves at" in found[0], found
-    v = 1.42 * limit
-    found = errors(moving(tmp_path / "e2.h5", v, variables=DRIVE))
-    assert any(f"the parts' kinetic energy is {v ** 2 / 4:.3g} J/kg at frame 1 (t = 0.001 s), beyond "
-               f"the {limit ** 2 / 2:.3g} J/kg" in e for e in found), found
+    found = errors(moving(tmp_path / "e.h5", v_factor * limit, variables=DRIVE))
+    assert len(found) == 1 and "part 2 moves at" in found[0], found
+
+
+@pytest.mark.parametrize("vx, fails", [(0.9, False), (1.1, True)])
+def test_a_velocity_component_not_recorded_is_no_speed(tmp_path, vx, fails):
+    """FORMAT.md's Values rule fails a non-finite position only: a part's NaN velocity
+    components count as 0, its speed is that of the others (limit 1 m/s here)."""
+    frames = [(k * 1e-3, [1, 2], [[0, 0, 0], [1e-3, 0, 0]],
+               [[0, 0, 0], [vx, np.nan, np.nan] if k == 1 else [0, 0, 0]]) for k in range(3)]
+    found = errors(sequence(tmp_path / "nan.h5", frames))
+    if fails:
+        assert len(found) == 1 and "part 2 moves at 1.1 m/s at frame 1" in found[0], found
+    else:
+        assert found == []
+
+
+@pytest.mark.parametrize("bad", [-1e-6, 0.0, np.nan, np.inf])
+def test_a_part_whose_mass_is_not_finite_and_positive_fails(tmp_path, bad):
+    """Part 2's mass is bad from frame 1 on; part 1 moves within the limit (1 m/s) at 0.9 m/s.
+    (A negative mass once passed as an energy from nothing: (2 mg x 0.81 / 2) / (2 - 1) mg.)"""
+    frames = [(k, k * 1e-3, parts([1, 2], [[0, 0, 0], [1e-3, 0, 0]],
+                                  velocity=[[0.9 if k == 1 else 0.0, 0, 0], [0, 0, 0]])) for k in range(3)]
+    for k, _, p in frames:
+        p["mass"] = np.array([2e-6, bad if k else 1e-6])
+    found = errors(write_result(tmp_path / "m.h5", frames))
+    assert found == [f"error: /{L.PARTS}/mass/value: part 2 has a mass of {bad:.3g} kg at frame 1 "
+                     "(t = 0.001 s): a part's mass is finite and positive"], found
+
+
+def test_an_empty_slots_mass_is_not_judged(tmp_path):
+    """Part 2 leaves after frame 0: its slot's fill value is not a part's mass."""
+    frames = [(0, 0.0, parts([1, 2], [[0, 0, 0], [1e-3, 0, 0]])),
+              (1, 1e-3, parts([1], [[0, 0, 0]])), (2, 2e-3, parts([1], [[0, 0, 0]]))]
+    assert errors(write_result(tmp_path / "e.h5", frames)) == []
 
 
 def still(n, x=0.0):

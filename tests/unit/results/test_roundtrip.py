@@ -224,7 +224,8 @@ def conveyor(tmp_path, n_parts=30, n_frames=60, seed=5):
 
 
 FRAME_SELECTIONS = [None, 7, -1, slice(3, 40, 5), slice(None, None, -3), slice(50, 10),
-                    [40, 2, 2, 17], np.array([0, 59]), np.arange(60) % 7 == 0, [], [5]]
+                    [40, 2, 2, 17], np.array([0, 59]), np.arange(60) % 7 == 0, [], [5],
+                    [4, 4, 4]]   # one frame repeated: evenly spaced by 0, no slice of step 0
 
 
 @pytest.mark.parametrize("dense", [0.0, 2.0])  # scattered frames read as one block / point by point
@@ -284,6 +285,10 @@ def test_tracks_and_frames_read_only_what_they_need(tmp_path, monkeypatch):
         fr, sl = np.array([0, 1, 2, 2, 9, 9, 30]), np.array([0, 0, 1, 0, 0, 2, 2])
         assert np.array_equal(r.gather("position", fr, sl), whole.position[fr, sl], equal_nan=True)
         assert r.gather("position", [], []).shape == (0, 3)
+        # the slot one lower at the next frame is another part: a new run, not slot 1's
+        k = next(k for k in range(59) if (ids[k + 1, :2] >= 0).all())
+        fr, sl = np.array([k, k + 1]), np.array([1, 0])
+        assert np.array_equal(r.gather("position", fr, sl), whole.position[fr, sl], equal_nan=True)
         frame = r.frame(-1, fields=("position", "mass", "surface_position"))
         present = np.nonzero(ids[-1] >= 0)[0]
         assert frame.index == 59 and frame.time == whole.time[-1] and frame.step == whole.step[-1]
@@ -293,6 +298,59 @@ def test_tracks_and_frames_read_only_what_they_need(tmp_path, monkeypatch):
         seen = [(f.index, f.ids.tolist()) for f in r.iter_frames(slice(0, None, 7), fields=())]
         assert seen == [(j, ids[j][ids[j] >= 0].tolist()) for j in range(0, 60, 7)]
         assert not {"ids", "position", "velocity"} & set(vars(r))
+
+
+class _Reads:
+    """An h5py dataset that records the frames each read takes (its first index)."""
+
+    def __init__(self, ds, log):
+        self.ds, self.log, self.shape, self.dtype = ds, log, ds.shape, ds.dtype
+
+    def __getitem__(self, key):
+        first = key[0] if isinstance(key, tuple) else key
+        frames = range(*first.indices(self.shape[0])) if isinstance(first, slice) else first
+        self.log.append(np.atleast_1d(frames).tolist())
+        return self.ds[key]
+
+
+@pytest.mark.parametrize("frames, reads", [
+    ([50, 3, 20], [[3, 20, 50]]),       # 3 of the 48 frames spanned: those 3 only, sorted
+    ([5, 3, 4, 7], [[3, 4, 5, 6, 7]]),  # 4 of 5 (at least a quarter): the span, in one read
+])
+def test_scattered_frames_are_read_alone_unless_they_fill_a_quarter_of_their_span(
+        tmp_path, monkeypatch, frames, reads):
+    """read() reads only the selected frames, except that a selection covering at least
+    _DENSE = 1/4 of the frames it spans is read as that span at once."""
+    log, dataset = [], Result._dataset
+
+    def spied(self, name):
+        ds, per_part = dataset(self, name)
+        return _Reads(ds, log), per_part
+
+    monkeypatch.setattr(Result, "_dataset", spied)
+    path = conveyor(tmp_path)
+    with h5py.File(path, "r") as f:
+        expected = f[f"{L.PARTS}/position/value"][()][frames]
+    with Result(path) as r:
+        assert np.array_equal(r.read("position", frames=frames), expected, equal_nan=True)
+    assert log == reads
+
+
+def test_recorded_is_true_for_a_file_without_parts(tmp_path):
+    """No frame holds a part to judge by: a float field is taken as recorded."""
+    path = write_result(tmp_path / "empty.h5", [(k, k * 1e-3, parts([], np.zeros((0, 3)))) for k in range(2)])
+    with Result(path) as r:
+        assert r.n_frames == 2 and r.part_ids.tolist() == []
+        assert r.recorded("force") and r.recorded("velocity")
+
+
+def test_a_file_that_does_not_record_its_format_is_of_format_1_0(tmp_path):
+    """The first files had no format_version: they are format 1.0."""
+    path = three_frames(tmp_path)
+    with h5py.File(path, "r+") as f:
+        del f[L.PARAMETERS].attrs["format_version"]
+    with Result(path) as r:
+        assert r.format_version == (1, 0)
 
 
 def test_check_warns_about_a_missing_run_id(tmp_path):
