@@ -220,17 +220,17 @@ def test_check_fails_a_part_faster_than_the_drive_can_make_it(tmp_path):
                for p in problems), problems
 
 
-def test_check_fails_kinetic_energy_beyond_what_the_drive_gives(tmp_path):
+def test_check_fails_a_part_of_negative_mass(tmp_path):
     path = _conveyed(tmp_path)
 
-    def everyone_fast(v):  # every part just under the speed limit in x and y: energy beyond
-        live = np.isfinite(v[..., 0])
-        v[7][live[7]] = [4.0, 4.0, 0.0]  # 5.66 m/s: above the limit too (the speed rule says so)
-        return v
+    def negative(m):  # one part's mass turned negative at frame 7 (no faster, no farther)
+        m[7, np.flatnonzero(np.isfinite(m[7]) & (m[7] > 0))[0]] *= -1
+        return m
 
-    _rewrite(path, "velocity", everyone_fast)
+    _rewrite(path, "mass", negative)
     problems = _problems(path)
-    assert any("kinetic energy is 16 J/kg at frame 7" in p for p in problems), problems
+    assert len(problems) == 1 and "at frame 7 (t = 0.07 s): a part's mass is finite and positive" \
+        in problems[0], problems
 
 
 def test_check_fails_a_part_a_metre_away(tmp_path):
