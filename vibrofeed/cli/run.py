@@ -37,23 +37,25 @@ def run(args) -> int:
 
     # The summary's analyses import scipy (~0.3 s): load them while the worker starts
     # and runs, not before (a short single-part run lasts about as long).
-    warm = threading.Thread(target=importlib.import_module, args=("vibrofeed.run_summary",), daemon=True)
-    warm.start()
     deck = Deck.find(args.deck)
     params = parse_assignments(args.param)
     output = str(file_destination("-o", args.output or f"{deck.name}.h5", parents=True))
     progress = RunProgress(deck.name, enabled=False if args.quiet else None)
+    warm = threading.Thread(target=importlib.import_module, args=("vibrofeed.run_summary",), daemon=True)
+    warm.start()
     try:
         result = run_deck(deck, params, output, ranks=args.ranks, on_event=progress,
                           reuse=args.reuse, command=shlex.join(["vibrofeed"] + sys.argv[1:]),
                           target_error=args.target_error)
     finally:
         progress.close()
+        # Joined on every way out: a run that fails at once would otherwise end the
+        # interpreter mid-import in this thread, and Python can crash (SIGSEGV) doing so.
+        warm.join()
     if result.reused:
         print(f"vibrofeed: kept {result.output}: a complete result of the same run "
               f"(run id {result.run_id[:12]}...)", file=sys.stderr)
     written(result.output)
-    warm.join()
     from ..run_summary import run_summary
 
     print(run_summary(result))
