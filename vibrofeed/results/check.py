@@ -665,7 +665,9 @@ class _Physics:
             b = min(frames, a + block)
             i, x, v, m = ids[a:b], pos[a:b], vel[a:b], mass[a:b]
             live = i != L.ID_FILL
-            self._speeds_and_masses(i, v, m, live, a, time, limit, found)
+            self._speeds(i, v, live, a, time, limit, found)
+            if "mass" not in found:
+                self._masses(i, m, live, a, time, found)
             if region is not None and "region" not in found:
                 self._region(i, x, live, a, time, region, found)
             if jumps and "jump" not in found:
@@ -687,7 +689,7 @@ class _Physics:
                 travel = max(travel, float(d.max()))
         return travel
 
-    def _speeds_and_masses(self, ids, v, m, live, a, time, limit, found) -> None:
+    def _speeds(self, ids, v, live, a, time, limit, found) -> None:
         speed = np.where(live, np.linalg.norm(np.nan_to_num(v, nan=0.0), axis=-1), 0.0)
         if "speed" not in found and np.any(speed > limit):
             k, j = np.unravel_index(int(np.argmax(speed > limit)), speed.shape)
@@ -696,19 +698,19 @@ class _Physics:
                          f"part {int(ids[k, j])} moves at {speed[k, j]:.3g} m/s at frame {a + k} "
                          f"(t = {time[a + k]:g} s), beyond the {limit:.3g} m/s any part can reach "
                          "(100 x the surface's peak speed + free fall from the scene's height)")
+
+    def _masses(self, ids, m, live, a, time, found) -> None:
         # (No energy rule: with finite, positive masses the kinetic energy per kg is a
         # mass-weighted mean of v^2 / 2, beyond limit^2 / 2 only where a speed is beyond the
-        # limit, which the rule above reports; a bad mass is reported as such.)
-        if "mass" not in found:
-            m = np.asarray(m, float)
-            with np.errstate(invalid="ignore"):
-                bad = live & ~(np.isfinite(m) & (m > 0))
-            if np.any(bad):
-                k, j = np.unravel_index(int(np.argmax(bad)), bad.shape)
-                found.add("mass")
-                self.c.error(f"{L.PARTS}/mass/value",
-                             f"part {int(ids[k, j])} has a mass of {float(m[k, j]):.3g} kg at frame "
-                             f"{a + k} (t = {time[a + k]:g} s): a part's mass is finite and positive")
+        # limit, which the speed rule reports.)
+        m = np.asarray(m, float)
+        bad = live & ~(np.isfinite(m) & (m > 0))
+        if np.any(bad):
+            k, j = np.unravel_index(int(np.argmax(bad)), bad.shape)
+            found.add("mass")
+            self.c.error(f"{L.PARTS}/mass/value",
+                         f"part {int(ids[k, j])} has a mass of {float(m[k, j]):.3g} kg at frame "
+                         f"{a + k} (t = {time[a + k]:g} s): a part's mass is finite and positive")
 
     def _region(self, ids, x, live, a, time, region, found) -> None:
         lo, hi = region
