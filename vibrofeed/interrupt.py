@@ -8,7 +8,9 @@ signal takes one path: every run in flight is stopped, its file marked
 for in other threads (sweeps, validation) cannot see the main thread's
 exception: the runner registers a stopper for each run here, and
 :func:`stop_all` calls them and waits until their threads have cleaned up.
-Once stopping has begun, no new run starts (:func:`check`).
+Once stopping has begun, no new run starts (:func:`check`). A command that ends on
+an error while runs are in flight in other threads stops them the same way
+(:func:`stop_left`): they are never left to die with the interpreter.
 """
 
 from __future__ import annotations
@@ -87,14 +89,26 @@ def check() -> None:
         raise KeyboardInterrupt()
 
 
-def stop_all(exc: KeyboardInterrupt, timeout: float = 30.0) -> None:
-    """Stop every registered run with ``exc``'s reason and wait (at most
-    ``timeout`` s) until each has recorded how it ended."""
+def stop_all(exc: KeyboardInterrupt, timeout: float = 30.0, why: str | None = None) -> None:
+    """Stop every registered run with ``why`` (default: ``exc``'s reason) and wait (at
+    most ``timeout`` s) until each has recorded how it ended."""
     global _stopping
     with _cond:
         _stopping = exc
         stoppers = list(_stoppers.values())
     for stop in stoppers:
-        stop(reason(exc))
+        stop(why or reason(exc))
     with _cond:
         _cond.wait_for(lambda: not _stoppers, timeout=timeout)
+
+
+def stop_left(why: str, timeout: float = 30.0) -> bool:
+    """Stop the runs still registered as a command ends (an error in the main thread
+    while other threads wait for runs) as :func:`stop_all` does; whether there were any.
+    A daemon thread left in a run would be cut off mid-call by the interpreter's end,
+    its scratch folder kept and its file's status unwritten."""
+    with _cond:
+        if not _stoppers or _stopping is not None:  # none, or stop_all has had its wait
+            return False
+    stop_all(KeyboardInterrupt(), timeout, why)
+    return True

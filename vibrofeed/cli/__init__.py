@@ -159,3 +159,8 @@ def main(argv: list[str] | None = None) -> int:
             print(f"vibrofeed: the {partial[1]} frames written before the failure are kept in "
                   f"{partial[0]} (status: failed)", file=sys.stderr)
         return code
+    finally:
+        try:
+            interrupt.stop_left("stopped: the command ended on an error")
+        except KeyboardInterrupt:  # a signal while waiting for them: leave now
+            pass

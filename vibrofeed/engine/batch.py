@@ -110,8 +110,9 @@ def run_local(items: Iterable, workers: int, work: Callable, started: Callable =
     """``work(item)`` for ``items`` in their order, ``workers`` at a time, each in a
     daemon thread. ``started(item)`` is called as an item starts and
     ``finished(item, answer)`` with what ``work`` returned as it ends, both in the
-    calling thread. An exception ``work`` raises is raised here (the others'
-    threads are left to end with the process)."""
+    calling thread. An exception ``work`` raises is raised here; the runs still in
+    the others' threads are stopped by the command line as it ends on the error
+    (:func:`vibrofeed.interrupt.stop_left`), as after Ctrl-C."""
     source = _Source(items)
     done: queue.Queue = queue.Queue()
     running = 0

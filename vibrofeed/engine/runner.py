@@ -406,7 +406,8 @@ class _Run:
                 lines.put(line)
             lines.put(None)
 
-        threading.Thread(target=read, args=(self.proc.stdout,), daemon=True).start()
+        reader = threading.Thread(target=read, args=(self.proc.stdout,), daemon=True)
+        reader.start()
         watch = Watchdog(time.monotonic())
         while True:
             try:
@@ -430,6 +431,9 @@ class _Run:
                     if self.on_event is not None:
                         self.on_event(event)
         self.rc = self.proc.wait()
+        # After a hung worker is stopped its pipe ends too; a process that escaped the
+        # group could hold it open, so the reader is waited for a while only.
+        reader.join(timeout=5)
 
     def stop(self, why: str) -> None:
         """Stop the worker from another thread; the run's own thread records the end."""

@@ -89,8 +89,9 @@ class Heartbeat:
         self._counter = None  # the engine's step counter, while there is an engine
         self._lock = threading.Lock()
         self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._beat, daemon=True)
         if report.rank == 0:
-            threading.Thread(target=self._beat, daemon=True).start()
+            self._thread.start()
 
     def watch(self, counter) -> None:
         """Report the step read from ``counter`` (None: stop reading it, before the engine closes)."""
@@ -104,7 +105,11 @@ class Heartbeat:
             self.report("alive", step=step, at=time.monotonic())
 
     def stop(self) -> None:
+        """End the beats and wait for the last one: the worker leaves with ``os._exit``,
+        which would cut a message short mid-write."""
         self._stop.set()
+        if self._thread.is_alive():
+            self._thread.join()
 
 
 class OnTerminate:

@@ -545,3 +545,38 @@ def test_paths_are_shown_relative_to_the_working_directory(tmp_path, monkeypatch
     assert _display(tmp_path / "a" / "d.liggghts") == os.path.join("a", "d.liggghts")
     assert _display(Path("/elsewhere/d.liggghts")) == "/elsewhere/d.liggghts"
 
+
+
+# -- a hung worker: stopped, and its output's reader waited for ----------------------------------
+def test_a_hung_worker_is_stopped_and_its_output_reader_joined(monkeypatch):
+    """The reader is a daemon thread: left reading the pipe as the interpreter ends, it
+    could be cut off holding the pipe's lock."""
+    import subprocess
+    import threading
+
+    joined = []
+
+    class Recorded(threading.Thread):
+        def join(self, timeout=None):
+            super().join(timeout)
+            joined.append(self.is_alive())
+
+    class Stalled:
+        def __init__(self, now, floor=None):
+            pass
+
+        def saw(self, event, now):
+            pass
+
+        def stalled(self, now):
+            return "no heartbeat for 30 s"
+
+    monkeypatch.setattr(runner.threading, "Thread", Recorded)
+    monkeypatch.setattr(runner, "Watchdog", Stalled)
+    run = object.__new__(runner._Run)
+    run.events, run.on_event, run.hung = [], None, None
+    run.proc = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"],
+                                stdout=subprocess.PIPE, text=True, start_new_session=True)
+    run.follow()
+    assert run.hung == "no heartbeat for 30 s" and run.rc == -signal.SIGTERM
+    assert joined == [False]  # joined, and ended: nothing left reading

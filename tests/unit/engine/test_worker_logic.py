@@ -6,6 +6,8 @@ checked and what the file says about it, the end-of-run warnings and a full disk
 import dataclasses
 import errno
 import math
+import threading
+import time
 import types
 
 import numpy as np
@@ -263,3 +265,40 @@ def test_bulk_warnings_add_the_events_timed_at_their_frame():
 def test_a_full_disk_is_told_by_errno_or_text(exc, full):
     assert errno.ENOSPC == 28
     assert no_space(exc) is full
+
+
+# -- the heartbeat ends before the worker does ----------------------------------------------------
+class SlowReport:
+    """A rank's reporter whose messages take a while to write, recording when each ends."""
+
+    def __init__(self, rank: int):
+        self.rank, self.ended, self.started = rank, [], threading.Event()
+
+    def __call__(self, event: str, **data) -> None:
+        self.started.set()
+        time.sleep(0.3)
+        self.ended.append((event, data["step"]))
+
+
+def test_stopping_the_heartbeat_waits_for_the_message_being_written(monkeypatch):
+    """The worker leaves with os._exit right after: a beat cut off mid-write would reach
+    the parent as half a line."""
+    monkeypatch.setattr(worker, "HEARTBEAT_SECONDS", 0.01)
+    report = SlowReport(rank=0)
+    beat = worker.Heartbeat(report)
+    beat.watch(np.array([42]))
+    assert report.started.wait(5), "no beat within 5 s"
+    beat.stop()
+    assert report.ended and report.ended[0] == ("alive", 42)
+    written = len(report.ended)
+    time.sleep(0.1)
+    assert len(report.ended) == written  # and no beat after stop
+
+
+def test_other_ranks_have_no_heartbeat_to_stop(monkeypatch):
+    monkeypatch.setattr(worker, "HEARTBEAT_SECONDS", 0.01)
+    report = SlowReport(rank=1)
+    beat = worker.Heartbeat(report)
+    time.sleep(0.05)
+    beat.stop()
+    assert not report.started.is_set()
