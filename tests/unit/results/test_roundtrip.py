@@ -677,3 +677,45 @@ def test_a_run_that_wrote_no_frame_reads_as_no_parts(tmp_path):
         assert list(r.iter_frames()) == []
         with pytest.raises(KeyError, match="does not appear"):
             r.track(1)
+
+
+# -- layout: the box, section names and the versions FORMAT.md documents ---------------------------
+def test_the_open_box_has_zero_edges_at_every_frame_sampled_with_the_positions(tmp_path):
+    """FORMAT.md: box edges are placeholders (0), hard-linked to the positions' step and time."""
+    with h5py.File(three_frames(tmp_path), "r") as f:
+        box = f[f"{L.PARTS}/box"]
+        assert [b.decode() for b in box.attrs["boundary"]] == ["none"] * 3
+        edges = box["edges/value"]
+        assert edges.shape == (3, 3) and edges.attrs["unit"] == "m"
+        assert not edges[()].any()
+        assert box["edges/step"] == f[f"{L.PARTS}/position/step"]
+        assert box["edges/time"] == f[f"{L.PARTS}/position/time"]
+
+
+def test_section_1_keeps_the_single_tracks_names_and_further_ones_take_their_number():
+    # section 1 is what every deck defines (DECK_CONTRACT); section k the s<k>_ names
+    assert L.surface_variables(1) == (("surface_x", "surface_y", "surface_z"),
+                                      ("surface_vx", "surface_vy", "surface_vz"))
+    assert set(sum(L.surface_variables(1), ())) <= set(L.DECK_CONTRACT)
+    for k in (2, 3):
+        assert L.surface_variables(k) == (tuple(f"s{k}_surface_{c}" for c in "xyz"),
+                                          tuple(f"s{k}_surface_v{c}" for c in "xyz"))
+        assert L.surface_path(k) == f"{L.SURFACE}_s{k}"
+    assert L.surface_path(1) == L.SURFACE
+    with pytest.raises(ValueError, match="count from 1"):
+        L.surface_path(0)
+
+
+def test_the_rotation_and_sections_arrive_in_the_formats_format_md_names():
+    import re
+
+    from helpers import REPO
+
+    text = (REPO / "FORMAT.md").read_text()
+
+    def since(what):
+        return tuple(int(v) for v in re.search(rf"Format (\d+)\.(\d+) records {what}", text).groups())
+
+    assert L.ROTATION_SINCE == since("a rotating surface's rotation")
+    assert L.SECTIONS_SINCE == since("a feeder line's section 2 motion")
+    assert L.SECTIONS_SINCE < L.ROTATION_SINCE <= L.FORMAT_VERSION

@@ -247,3 +247,156 @@ def test_no_events_make_no_outlet_table_and_orientation_has_no_unit(tmp_path):
         assert L.OUTLET not in f                     # a sphere deck's file keeps its layout
         assert "unit" not in f[f"{L.PARTS}/orientation/value"].attrs   # a quaternion has none
         assert f[f"{L.PARTS}/radius/value"].attrs["unit"] == "m"
+
+
+# -- feeder lines (further sections, track sections, line counts) and rotating surfaces ------
+def test_a_line_records_each_further_sections_motion_under_its_own_observable(tmp_path):
+    """Three sections, each with its own motion, all frames in one batch: section k's
+    (position, velocity) read back from surface_path(k), none swapped or shifted."""
+    path = tmp_path / "line.h5"
+    w = new_writer(path, max_delay=60.0, sections=3,
+                   variables={"sections": ("3", "", "sections", "1")})
+
+    def motion(k, j):  # section k at frame j: values no other (section, frame) shares
+        return [k, j, 1e-6 * (10 * k + j)], [-k, -j, -1e-3 * (10 * k + j)]
+
+    for j in range(3):
+        w.write_frame(j, 0.1 * j, parts([1], [[0, 0, 0]]), *motion(1, j),
+                      section_surfaces=[motion(2, j), motion(3, j)])
+    w.finish()
+    with Result(path) as r:
+        assert r.n_sections == 3
+        for k in (1, 2, 3):
+            pos, vel = r.section_surface(k)
+            assert pos.tolist() == [motion(k, j)[0] for j in range(3)], k
+            assert vel.tolist() == [motion(k, j)[1] for j in range(3)], k
+    with h5py.File(path, "r") as f:
+        step = f[f"{L.PARTS}/position/step"]
+        for k in (2, 3):   # H5MD time series of their own, sampled with the parts
+            for name, (_, _, unit) in L.SURFACE_ELEMENTS.items():
+                assert f[f"{L.surface_path(k)}/{name}/step"] == step
+                assert f[f"{L.surface_path(k)}/{name}/value"].attrs["unit"] == unit
+        assert f"{L.SURFACE}_s4" not in f
+
+
+@pytest.mark.parametrize("given", [0, 1, 3])
+def test_a_frame_with_the_wrong_number_of_further_sections_is_refused_whole(tmp_path, given):
+    w = new_writer(tmp_path / "n.h5", sections=3)
+    further = [([0, 0, 0], [0, 0, 0])] * given
+    with pytest.raises(ValueError, match=rf"records 3 section\(s\): give the motion of 2 further "
+                                         rf"section\(s\), got {given}$"):
+        w.write_frame(0, 0.0, parts([1], [[0, 0, 0]]), [0, 0, 0], [0, 0, 0], section_surfaces=further)
+    assert w.frames == 0 and w.slots.capacity == 0   # nothing of the frame was taken
+    w.close()
+
+
+def test_a_further_sections_motion_must_be_three_components(tmp_path):
+    w = new_writer(tmp_path / "c.h5", sections=2)
+    for p, v in (([0, 0], [0, 0, 0]), ([0, 0, 0], [0, 0, 0, 0])):
+        with pytest.raises(ValueError):
+            w.write_frame(0, 0.0, parts([1], [[0, 0, 0]]), [0, 0, 0], [0, 0, 0],
+                          section_surfaces=[(p, v)])
+    assert w.frames == 0
+    w.close()
+
+
+# a track of 4 vertices and 2 triangles: a vertex count the triangle count cannot stand in for
+_VERTICES = np.array([[0, -1e-3, 0], [0.01, -1e-3, 0], [0.01, 1e-3, 0], [0, 1e-3, 0.0]])
+_TRIANGLES = np.array([[0, 1, 2], [0, 2, 3]], dtype=np.int32)
+
+
+def test_track_sections_from_1_to_the_last_recorded_section_are_stored(tmp_path):
+    w = new_writer(tmp_path / "s.h5", sections=2, track=(_VERTICES, _TRIANGLES),
+                   track_sections=np.array([1, 1, 2, 2]))   # both ends of 1..sections
+    w.finish()
+    with Result(tmp_path / "s.h5") as r:
+        assert r.track_sections.tolist() == [1, 1, 2, 2]
+    with h5py.File(tmp_path / "s.h5", "r") as f:
+        assert f[L.TRACK_SECTION].dtype == np.int32
+
+
+@pytest.mark.parametrize("sections, match", [
+    ([0, 1, 2, 2], r"lie in 1\.\.2"),            # below the first section
+    ([1, 1, 2, 3], r"lie in 1\.\.2"),            # one past the last recorded section
+    ([1, 2], r"must be \(4,\) integers"),        # one per triangle, not per vertex
+    ([1, 1, 2, 2, 2], r"must be \(4,\) integers"),
+    ([1.0, 1.0, 2.0, 2.0], r"must be \(4,\) integers"),
+])
+def test_track_sections_outside_the_recorded_sections_or_not_one_per_vertex_are_refused(
+        tmp_path, sections, match):
+    with pytest.raises(ValueError, match=match):
+        new_writer(tmp_path / "s.h5", sections=2, track=(_VERTICES, _TRIANGLES),
+                   track_sections=np.array(sections))
+
+
+def test_track_sections_need_a_track(tmp_path):
+    with pytest.raises(ValueError, match="without a track"):
+        new_writer(tmp_path / "s.h5", sections=2, track_sections=np.array([1, 2]))
+
+
+@pytest.mark.parametrize("returns", [False, True])
+def test_a_line_counts_its_rejects_and_a_recirculating_one_its_returns(tmp_path, returns):
+    names = L.RETURN_COUNTS if returns else L.LINE_COUNTS
+    counts = {name: 10 + j for j, name in enumerate(names)}   # one value per name, told apart
+    w = new_writer(tmp_path / "l.h5", line=True, sections=2, returns=returns)
+    w.write_frame(0, 0.0, parts([1], [[0, 0, 0]]), [0, 0, 0], [0, 0, 0], counts=counts,
+                  section_surfaces=[([0, 0, 0], [0, 0, 0])])
+    w.finish()
+    with Result(tmp_path / "l.h5") as r:
+        assert {k: v.tolist() for k, v in r.mass_balance.items()} == {k: [v] for k, v in counts.items()}
+    with h5py.File(tmp_path / "l.h5", "r") as f:
+        assert L.REJECTS in f and set(f[L.MASS_BALANCE]) == set(names)
+
+
+def test_a_line_without_returns_does_not_ask_for_them_and_one_with_them_does(tmp_path):
+    line_counts = {name: 0 for name in L.LINE_COUNTS}   # no "returned"
+    w = new_writer(tmp_path / "a.h5", line=True, sections=2)
+    w.write_frame(0, 0.0, parts([1], [[0, 0, 0]]), [0, 0, 0], [0, 0, 0], counts=line_counts,
+                  section_surfaces=[([0, 0, 0], [0, 0, 0])])
+    assert w.frames == 1
+    w.close()
+    w = new_writer(tmp_path / "b.h5", line=True, sections=2, returns=True)
+    with pytest.raises(ValueError, match="counts lacks returned"):
+        w.write_frame(0, 0.0, parts([1], [[0, 0, 0]]), [0, 0, 0], [0, 0, 0], counts=line_counts,
+                      section_surfaces=[([0, 0, 0], [0, 0, 0])])
+    w.close()
+    with pytest.raises(ValueError, match="returns without a line"):
+        new_writer(tmp_path / "c.h5", returns=True)
+
+
+def test_a_rotating_surface_records_its_angle_and_rate_in_section_1(tmp_path):
+    """Batched frames: each frame's angle and angular velocity land in SURFACE's angle and
+    angular_velocity, not swapped (the rate differs from the angle at every frame)."""
+    path = tmp_path / "bowl.h5"
+    w = new_writer(path, max_delay=60.0, rotating=True)
+    angles = [[0, 0, 0.25 * j] for j in range(3)]
+    rates = [[0, 0, 2.0 + j] for j in range(3)]
+    for j in range(3):
+        w.write_frame(j, 0.1 * j, parts([1], [[0, 0, 0]]), [0, 0, 1e-6 * j], [0, 0, 1e-3 * j],
+                      surface_rotation=(angles[j], rates[j]))
+    w.finish()
+    with Result(path) as r:
+        assert r.read("surface_angle").tolist() == angles
+        assert r.read("surface_angular_velocity").tolist() == rates
+        assert r.read("surface_position")[:, 2].tolist() == [1e-6 * j for j in range(3)]
+    with h5py.File(path, "r") as f:
+        step = f[f"{L.PARTS}/position/step"]
+        for name, (_, _, unit) in L.ROTATION_ELEMENTS.items():  # FORMAT.md: value[frames][3]
+            ds = f[f"{L.SURFACE}/{name}/value"]
+            assert ds.shape == (3, 3) and ds.attrs["unit"] == unit, name
+            assert f[f"{L.SURFACE}/{name}/step"] == step
+
+
+def test_a_rotating_surface_needs_its_rotation_at_every_frame_and_no_other_takes_one(tmp_path):
+    w = new_writer(tmp_path / "r.h5", rotating=True)
+    with pytest.raises(ValueError, match="needs surface_rotation"):
+        w.write_frame(0, 0.0, parts([1], [[0, 0, 0]]), [0, 0, 0], [0, 0, 0])
+    w.close()
+    w = new_writer(tmp_path / "s.h5")
+    with pytest.raises(ValueError, match="does not rotate"):
+        w.write_frame(0, 0.0, parts([1], [[0, 0, 0]]), [0, 0, 0], [0, 0, 0],
+                      surface_rotation=([0, 0, 0], [0, 0, 0]))
+    assert w.frames == 0
+    w.finish()
+    with h5py.File(tmp_path / "s.h5", "r") as f:   # a surface that does not turn has no rotation
+        assert not set(L.ROTATION_ELEMENTS) & set(f[L.SURFACE])
