@@ -783,3 +783,16 @@ def test_a_run_whose_frames_hold_no_part_passes(tmp_path):
         assert f[f"{L.PARTS}/id/value"].shape == (3, 0)
     report = check_file(path)
     assert report.problems == [] and (report.frames, report.parts) == (3, 0)
+
+
+def test_a_part_far_outside_is_named_with_its_frame_in_a_later_block(tmp_path, monkeypatch):
+    """Blocks of 2 frames (two slots): part 2 appears 50 mm along x at frame 3, the second
+    frame of the second block, beyond the floor's 20 mm and a margin of its 20 mm size;
+    part 1 stays on the floor. The error names part 2, frame 3 and its time."""
+    monkeypatch.setattr(check_module, "_BLOCK_VALUES", 12)
+    ids = [[1], [1], [1], [1, 2]]
+    x = [[[0.01, 0, 0]]] * 3 + [[[0.01, 0, 0], [0.05, 0, 0]]]
+    found = errors(sequence(tmp_path / "far.h5", frames_of(ids, x), track=FLOOR))
+    assert len(found) == 1, found
+    assert found[0].startswith(f"error: /{L.PARTS}/position/value: part 2 is at ") and \
+        "at frame 3 (t = 0.003 s), far outside the track" in found[0], found
