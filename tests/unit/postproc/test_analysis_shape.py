@@ -197,6 +197,8 @@ def test_results_are_a_dict_with_attributes():
         res["items"] = 3  # would hide the dict method
     del res.a
     assert list(res) == ["b"]
+    with pytest.raises(AttributeError):   # as for an object: not the dict's KeyError
+        del res.a
     back = pickle.loads(pickle.dumps(res))
     assert isinstance(back, Results) and np.array_equal(back.b, res.b, equal_nan=True)
 

@@ -257,6 +257,7 @@ def test_falls_are_parts_that_leave_the_track_for_the_bowl_counted_once_each_tim
             monkeypatch.setattr(pp, "BLOCK_VALUES", 4 * r.n_slots * per_block)
         times, ids, where = falls(r, np.arange(5))
         analysis = FeedRate(r, start=0.0, end=0.02, model=False).run()
+        later = FeedRate(r, start=0.005, end=0.02, model=False).run().results   # 15 ms
     fr, summary = analysis.results, analysis.summary()
     assert {k: summary[k] for k in ("fell", "fell_per_s")} == {"fell": 1, "fell_per_s": fr.fell_per_s}
     assert ids.tolist() == [1] and times == pytest.approx([0.015], rel=0, abs=1e-12)
@@ -265,6 +266,9 @@ def test_falls_are_parts_that_leave_the_track_for_the_bowl_counted_once_each_tim
     assert fr.fell == 1
     assert fr.fell_per_s == pytest.approx(1 / 0.02, rel=1e-12, abs=0)  # [1/s]
     assert fr.fell_per_s_err == pytest.approx(1 / 0.02, rel=1e-12, abs=0)  # sqrt(1) / 0.02 s
+    # per second of the window, not of the time from 0
+    assert later.fell == 1 and later.fell_per_s == pytest.approx(1 / 0.015, rel=1e-12, abs=0)
+    assert later.fell_per_s_err == pytest.approx(1 / 0.015, rel=1e-12, abs=0)
 
 
 def test_a_bowls_sections_are_its_helix_and_its_chute(tmp_path):

@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from bulk_synthetic import OUTLET_X, feeder, poisson_times
+from bulk_synthetic import OUTLET_X, bed, feeder, poisson_times
 from helpers import parts, write_result
 from vibrofeed.errors import InputError
 from vibrofeed.postproc import FeedRate
@@ -123,6 +123,83 @@ def test_mass_balance_is_read_at_the_last_frame_analysed(tmp_path):
     assert half.inserted == in_at(0.5)
 
 
+def filling(path, leave_early=0):
+    """A fed track (inlet_rate > 0), a frame every period for 1 s: a stream enters at x = 0
+    every 10 ms (5 ms past each frame) at 0.1 m/s and exits 0.2 s later, steadily from 0.205 s;
+    from 0.205 s on, 20 more parts come to rest on the track, one every 10 ms. At frame n the
+    hold-up is min(n, 40): full at 0.4 s, after the exits are steady. ``leave_early`` of the
+    resting parts leave at 0.995 s: the last frame's hold-up is that much lower."""
+    stream, resting = 0.005 + 0.01 * np.arange(100), 0.205 + 0.01 * np.arange(20)
+    rest_x = 1e-3 + 9e-4 * np.arange(20)
+    leave = np.r_[stream + OUTLET_X / 0.1, np.full(20, np.inf)]
+    leave[100:100 + leave_early] = 0.995
+    return bed(path, FRAMES, lambda t: np.r_[0.1 * (t - stream), rest_x], np.r_[stream, resting], leave,
+               variables={"inlet_rate": ("100.0", "1/s", "inlet", "0")},
+               lanes=np.r_[np.zeros(100), np.full(20, 1e-3)])
+
+
+def held_in_bins(last=40.0):
+    """The hold-up min(n, 40) at frames n = 0..100 averaged in bins of 5 periods (5 frames;
+    the frame at 1 s alone in the last bin), the last frame's value ``last``."""
+    held = np.minimum(np.arange(101), 40.0)
+    held[-1] = last
+    return np.r_[held[:100].reshape(20, 5).mean(axis=1), held[100]]
+
+
+def test_a_fed_track_is_measured_from_when_its_bed_is_full(tmp_path):
+    with Result(filling(tmp_path / "fill.h5")) as r:
+        fr = FeedRate(r, model=False).run().results
+    # the exits alone are steady from 0.2 s (bins of 10 periods: 0, 0, then 10 each)
+    assert steady_window(fr.event_times, 0.0, 1.0, FREQ, fed=True)[0] == pytest.approx(0.2, abs=1e-12)
+    # the hold-up in 5-period bins: 2, 7, ..., 37, then 40 from bin 8 (0.4 s) on: MSER (no end
+    # cut) drops the filling bins exactly, and the bed is steady after
+    assert mser(held_in_bins(), cut_end=False) == (8, 0)
+    assert fr.steady_from == pytest.approx(0.4, abs=1e-12) and fr.steady_to == 1.0   # [s]
+    assert fr.unsteady is None and fr.reason is None
+    assert fr.parts_per_s == pytest.approx(100.0, rel=1e-9)    # 60 exits in 0.6 s
+
+
+def test_the_filling_of_a_fed_track_is_judged_without_an_end_cut(tmp_path):
+    # 10 parts leave at 0.995 s: the last bin's hold-up is 30. Kept (a fed run's end is not a
+    # transient), it makes the 37 of bin 7 worth keeping: SSD / m^2 = 96.9 / 14^2 = 0.49 from
+    # bin 7, 92.3 / 13^2 = 0.55 from bin 8, 143.6 / 15^2 = 0.64 from bin 6; an end cut would
+    # drop the dip and start at bin 8
+    held = held_in_bins(last=30.0)
+    assert mser(held, cut_end=False)[0] == 7 and mser(held)[0] == 8
+    with Result(filling(tmp_path / "dip.h5", leave_early=10)) as r:
+        fr = FeedRate(r, model=False).run().results
+    assert fr.steady_from == pytest.approx(0.35, abs=1e-12) and fr.unsteady is None   # [s]
+
+
+def test_a_drifting_bed_moves_the_start_later_by_sixths_while_enough_exits_remain(tmp_path):
+    # a stream at 0.1 m/s exits at 0.025 + 0.05 k s: 2 exits in every 0.1 s bin, the exits alone
+    # are steady over the whole run (and the stream's share of every batch's speeds the same).
+    # But 5 parts in another lane speed up all along (v = 0.01 t m/s): the bed's speed drifts
+    # over any window, so the start moves later by sixths of [0, 1], three times: to 0.5 s,
+    # where exactly 10 exits (need 10) remain
+    exits = 0.025 + 0.05 * np.arange(24)          # (the last 4 after the run: still conveyed)
+    x0 = 2e-3 + 1e-3 * np.arange(5)
+    with Result(bed(tmp_path / "drift.h5", FRAMES,
+                    lambda t: np.r_[OUTLET_X - 0.1 * (exits - t), x0 + 0.005 * t ** 2],
+                    np.r_[exits - 0.2, np.full(5, -np.inf)], np.r_[exits, np.full(5, np.inf)],
+                    lanes=np.r_[np.zeros(24), np.full(5, 1e-3)])) as r:
+        fr = FeedRate(r, model=False).run().results
+    assert steady_window(fr.event_times, 0.0, 1.0, FREQ)[:2] == (0.0, 1.0)
+    assert fr.steady_from == pytest.approx(3 / 6, abs=1e-12) and fr.steady_to == 1.0   # [s]
+    assert ((fr.event_times >= fr.steady_from) & (fr.event_times < 1.0)).sum() == 10
+    assert "conveying speed on section 1 rises" in fr.unsteady
+
+
+def test_too_few_exits_counts_those_before_the_window_end_not_at_it(tmp_path):
+    exits = 0.1 + 0.05 * np.arange(12)
+    with open_feeder(tmp_path, exits) as r:
+        # exits 1..9 inside [exits[1], exits[10]); the one at the end is not: 9 < 10
+        short = FeedRate(r, start=exits[1], end=exits[10], model=False).run().results
+        enough = FeedRate(r, start=exits[0], end=exits[10], model=False).run().results
+    assert short.reason == "too few exits to measure (9 in the window; need ≥ 10)"
+    assert enough.reason is None and enough.unsteady is None      # exactly 10: enough
+
+
 # -- conveying velocity ----------------------------------------------------------------
 @pytest.mark.parametrize("spacing, lag", [(0.01, 1), (0.005, 2), (0.013, 10)])
 def test_mean_velocity_over_whole_periods_whatever_the_frame_spacing(tmp_path, spacing, lag):
@@ -224,6 +301,7 @@ def test_the_dilute_limit_is_the_single_part_model_of_the_decks_vibration(tmp_pa
     assert fr.model_velocity == pytest.approx(want, rel=1e-12) and want > 0
     assert fr.model_note == ""
     assert fr.velocity_ratio == pytest.approx(fr.mean_velocity / want, rel=1e-12)
+    assert fr.shape == 0      # a result without `shape` is of spheres (results before chips)
     assert fr.mean_velocity == pytest.approx(0.01, rel=1e-9)
     assert not {"model_velocity", "model_note", "velocity_ratio"} & set(without.results)
     assert list(without.summary())[-2:] == ["profile_count", "reason"]

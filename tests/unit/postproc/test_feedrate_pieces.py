@@ -3,6 +3,7 @@ series (bins, batch means, lags), and results that lack what the usual path read
 edge, the part at the frame after its exit, arrivals, frames in the window)."""
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -145,6 +146,7 @@ def test_feed_rate_summary_holds_the_contract_keys_json_ready(tmp_path):
         assert repr(fa).endswith("not run>")
         fa.run()
         assert repr(fa).endswith(f"{len(FRAMES)} frames>")
+        assert len(fa.results.profile_count) == 20      # the profile's bins by default
         with pytest.raises(InputError, match="bins must be at least 1"):
             FeedRate(r, bins=0)
         one = FeedRate(r, bins=1).run().results   # the whole track in one bin
@@ -162,7 +164,9 @@ def test_feed_rate_summary_holds_the_contract_keys_json_ready(tmp_path):
 def test_a_window_of_one_frame_has_no_speed(tmp_path):
     exits = 0.1 + np.arange(40) / 50.0
     with Result(feeder(tmp_path / "w.h5", FRAMES, exits, freq=FREQ, speed=0.05)) as r:
-        x, v, k, (m, alias) = period_velocities(r, [20])
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")   # no spacing of a single frame is asked for
+            x, v, k, (m, alias) = period_velocities(r, [20])
         assert (len(x), len(v), len(k), m) == (0, 0, 0, 1) and math.isnan(alias)
         fr = FeedRate(r, start=0.511, end=0.525).run().results   # holds frame 52 only
     assert math.isnan(fr.mean_velocity) and math.isnan(fr.mean_velocity_err)
@@ -203,6 +207,8 @@ def test_singulation_between_two_frames_samples_clusters_from_all_frames(tmp_pat
         sg = Singulation(r, start=0.503, end=0.507, cluster_frames=4).run()
         with pytest.raises(InputError, match="two frames"):
             Singulation(r).run(stop=1)
+        two = Singulation(r, start=0.5, end=0.53).run(frames=[50, 53]).results   # two are enough
+    assert two.n_arrivals == 1 and two.arrival_times == pytest.approx([0.52], abs=1e-12)   # s
     assert sg.results.cluster_frames == 4               # the window holds no frame
     summary = sg.summary()
     assert list(summary) == [k for k in SINGULATION_KEYS if k in sg.results]
@@ -278,6 +284,7 @@ def test_outlet_events_are_those_after_the_first_time_up_to_the_last():
 
     ev = outlet_events(Fake(), 0.1, 0.3)
     assert ev["time"].tolist() == [0.2, 0.3] and ev["id"].tolist() == [2, 3]   # sorted by time
+    assert outlet_events(Fake())["id"].tolist() == [1, 2, 3, 4]   # by default, all of them
 
 
 def test_mser_may_cut_half_the_series_at_its_end():
@@ -318,3 +325,128 @@ def test_a_fed_run_keeps_its_end_a_draining_one_may_lose_it():
     assert t_b < 0.85
     t_a, t_b, _, _ = steady_window(times, 0.0, 1.0, 100.0, fed=True)
     assert t_b == pytest.approx(1.0, abs=1e-12) and t_a == pytest.approx(0.2, abs=0.05)
+
+
+def test_a_whole_period_speeds_mid_point_is_halfway_between_its_two_frames(tmp_path):
+    # one part at 0.05 m/s, on the track from 0.105 s, over the edge at 0.505 s: at frame k
+    # (0.01 k s) it is at x = 0.02 - 0.05 (0.505 - 0.01 k); frames 11 .. 50 see it on the track
+    with Result(feeder(tmp_path / "mid.h5", FRAMES, [0.505], freq=FREQ, speed=0.05)) as r:
+        x_mid, v, k, (m, _) = period_velocities(r, np.arange(len(FRAMES)), 0, 0.02)
+    assert m == 1 and k.tolist() == list(range(11, 50))
+    assert x_mid == pytest.approx(0.02 - 0.05 * (0.5 - 0.01 * k), abs=1e-15)   # m
+    assert v == pytest.approx(np.full(len(k), 0.05), rel=1e-9)
+
+
+def test_without_an_edge_or_any_speed_the_profile_spans_a_nominal_metre(tmp_path):
+    pos = [[0.0, 0, RADIUS], [0.01, 0, RADIUS]]
+    frames = [(k, 0.01 * k, parts([1, 2], pos, radius=RADIUS)) for k in range(6)]
+    with hand_made(tmp_path / "n.h5", frames, events_of([], []), outlet={"method": "m"}) as r:
+        fr = FeedRate(r, start=0.015, end=0.025, bins=4, model=False).run().results  # frame 2 only
+    assert fr.profile_count.sum() == 0
+    assert fr.profile_edges == pytest.approx([0.0, 0.25, 0.5, 0.75, 1.0], abs=1e-15)  # m
+    assert fr.profile_x == pytest.approx([0.125, 0.375, 0.625, 0.875], abs=1e-15)
+
+
+def test_section_1_takes_the_parts_upstream_of_x_0_too(tmp_path):
+    # a part behind x = 0 (from -4 mm at 1 mm/s) and one on the track (from 5 mm at 3 mm/s),
+    # both there all the run: the bed's speed over section 1 is their mean in every batch
+    with Result(feeder(tmp_path / "up.h5", FRAMES, [24.0, 5.0], freq=FREQ, speed=[0.001, 0.003],
+                       insert_x=-0.01)) as r:
+        fr = FeedRate(r, start=0.0, end=1.0, model=False).run().results
+    assert fr.bed["speed"][0] == pytest.approx(np.full(10, 0.002), rel=1e-9)   # m/s
+    assert fr.mean_velocity == pytest.approx(0.002, rel=1e-9)
+
+
+def test_a_line_without_an_outlet_edge_has_a_second_section_of_no_length_and_no_density(tmp_path):
+    # the edge falls back on track_length, the joint: section 2 is 6 .. 6 mm
+    variables = {"freq": ("100", "Hz", "f", "100"), "track_length": ("0.006", "m", "l", "0.02"),
+                 "sections": ("2", "-", "s", "1"), "s2_length": ("0.005", "m", "l2", "0.01")}
+    frames = [(k, 0.01 * k, parts([1, 2], [[0.002 + 0.001 * k, 0, RADIUS], [0.003, 1e-3, RADIUS]]))
+              for k in range(6)]
+    with hand_made(tmp_path / "l.h5", frames, events_of([], []), outlet={"method": "m"},
+                   variables=variables) as r:
+        fr = FeedRate(r, start=0.0, end=0.03, model=False).run().results
+    one, two = fr.sections
+    assert (two["x_from"], two["x_to"]) == (0.006, 0.006) and math.isnan(two["line_density"])
+    # over frames 0..3 of the window section 1 holds both parts (part 1 reaches the joint at
+    # frame 4, after it): 2 parts over 6 mm
+    assert one["hold_up"] == 2.0 and one["line_density"] == pytest.approx(2 / 0.006, rel=1e-12)  # 1/m
+
+
+def test_the_longest_lag_searched_is_a_thousand_frames():
+    # frames 1.001 periods apart: lag k is 0.001 k off whole periods, until 1000 frames span
+    # 1001 periods exactly
+    assert period_lag(np.arange(1001) * 0.01001, FREQ) == (1000, 0.0)
+    # 1 + 1/1001 periods apart: only 1001 frames span whole periods, beyond the search; within
+    # it the least alias per period is lag 1000's, 1 - 1000/1001 of a period
+    m, alias = period_lag(np.arange(1002) * (1 + 1 / 1001) / FREQ, FREQ)
+    assert m == 1000 and alias == pytest.approx(1 / 1001, abs=1e-9)   # periods (rounding of 1001 periods)
+
+
+def test_a_given_end_finds_the_start_from_the_bins_before_it():
+    from vibrofeed.postproc.feedrate import steady_window
+
+    # 97 exits: 10 bins of 0.1 s; per bin 0, 0, 10, 11, 10, 11, then a burst of 40 after the end
+    per_bin = [0, 0, 10, 11, 10, 11, 40, 5, 5, 5]
+    times = np.concatenate([0.1 * (b + (np.arange(c) + 0.5) / c) for b, c in enumerate(per_bin)])
+    t_a, t_b, width, counts = steady_window(times, 0.0, 1.0, FREQ, end=0.6)
+    assert width == pytest.approx(0.1, rel=1e-12) and counts.tolist() == per_bin
+    # over bins 0..5: SSD / m^2 = 1 / 4^2 from bin 2, (2/3) / 3^2 from bin 3 (at most half cut);
+    # with the burst's bin it would be best to cut nothing
+    assert t_a == pytest.approx(0.2, abs=1e-12) and t_b == 0.6
+
+
+def test_a_reject_at_the_window_start_is_in_the_window(tmp_path):
+    from bulk_synthetic import line_feeder
+    from vibrofeed.postproc.line import drift
+
+    # a line's parts cross the joint (6 mm) every 20 ms from 0.3 s, two of them fall off
+    # section 2 at 8 mm, 50 ms after crossing; the window starts at the first fall
+    tj = 0.3 + 0.02 * np.arange(20)
+    reject_at = np.where(np.isin(np.arange(20), [2, 5]), 0.008, np.nan)
+    with Result(line_feeder(tmp_path / "rej.h5", FRAMES, tj, reject_at=reject_at, freq=FREQ)) as r:
+        first = float(r.rejects["time"].min())
+        fr = FeedRate(r, start=first, end=1.0, model=False).run().results
+    assert first == pytest.approx(tj[2] + 0.05, abs=1e-12)
+    assert [s["rejects_in_window"] for s in fr.sections] == [0, 2]
+    assert fr.rejects_by_tooling["other"]["in_window"] == 2
+    # the hold-up judged is section 2's (section 1, no inlet, is a store), from its own batches
+    held = [t for t in fr.bed_trends if t["quantity"] == "hold-up"]
+    assert [t["section"] for t in held] == [2]
+    own, first = drift(fr.bed["hold_up"][1])[:2], drift(fr.bed["hold_up"][0])[:2]
+    assert (held[0]["first"], held[0]["last"]) == own != first
+
+
+def test_mser_of_an_even_series_warns_nothing():
+    # d = e = n/2 keeps nothing: that cell is out of bounds, never a division by zero. Kept
+    # 5, 6, 5, 6: SSD / m^2 = 1 / 16, below the 0.67 / 9 of 5, 6, 5 or 6, 5, 6
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert mser([0.0, 5.0, 6.0, 5.0, 6.0, 0.0]) == (1, 1)
+
+
+def test_a_slow_vibration_has_whole_periods_too():
+    # 0.5 Hz, a frame a second: two frames span a period
+    assert period_lag(np.arange(10.0), 0.5) == (2, 0.0)
+
+
+def test_the_frame_spacing_is_the_usual_one_not_the_mean():
+    # frames every half period and an uneven last one (7.2 ms, a run whose end is not a whole
+    # number of intervals): two frames span a period; the mean spacing (4.87 ms) would not
+    assert period_lag(np.r_[np.arange(21) * 0.005, 0.1022], FREQ) == (2, 0.0)
+
+
+def test_a_reject_at_the_last_frame_is_in_the_run(tmp_path):
+    from bulk_synthetic import JOINT, line_feeder
+
+    # two parts fall off section 2 at 8 mm, 50 ms after crossing the joint; the run's last frame
+    # is the second fall's time
+    tj = 0.3 + 0.02 * np.arange(20)
+    reject_at = np.where(np.isin(np.arange(20), [2, 5]), 0.008, np.nan)
+    last = tj[5] + (0.008 - JOINT) / 0.04          # as line_feeder times it
+    frames = np.r_[FRAMES[FRAMES < last - 1e-6], last]
+    with Result(line_feeder(tmp_path / "last.h5", frames, tj, reject_at=reject_at, freq=FREQ)) as r:
+        assert r.rejects["time"].max() == last == r.time[-1]
+        fr = FeedRate(r, start=0.3, end=last, model=False).run().results
+    other = fr.rejects_by_tooling["other"]
+    assert other["total"] == 2 and other["in_window"] == 1     # the window is [0.3, last)

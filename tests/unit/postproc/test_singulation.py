@@ -308,10 +308,58 @@ def test_a_chip_past_the_edge_at_the_frame_before_its_exit_is_read_a_frame_earli
     assert sg.orientation_yield == 0.5                   # chip 1 (5 degrees), not chip 2 (20)
 
 
+def test_a_chip_never_over_the_track_before_its_exit_keeps_the_events_orientation(tmp_path):
+    # chip 1 is seen only past the edge (tipped) before it crosses at 25 ms, and over the track
+    # again, flat, at the last frame (the same id, later): only frames up to its crossing are
+    # searched, down to the first; the event's orientation (tipped 60 degrees) stands
+    from helpers import parts, write_bulk_result
+
+    shift = 5e-4
+    tipped = q_mul(q_axis([0, 1, 0], np.pi / 3), yaw_quat(5))
+    chip1 = [None, None, (0.0203, tipped), None, (0.0100, yaw_quat(30))]
+    frames = []
+    for k, s in enumerate(chip1):
+        rows = [] if s is None else [s]
+        p = parts([1] * len(rows), np.array([[x + shift, 0.0, RADIUS] for x, _ in rows]).reshape(-1, 3),
+                  radius=RADIUS)
+        p["orientation"] = np.array([q for _, q in rows]).reshape(-1, 4)
+        frames.append((k, 0.01 * k, p))
+    events = {"time": np.array([0.025]), "id": np.array([1]), "position": np.zeros((1, 3)),
+              "velocity": np.zeros((1, 3)), "orientation": tipped[None, :]}
+    path = write_bulk_result(tmp_path / "never.h5", frames, events=events, body_template=CHIP,
+                             surface=[([shift, 0, 0], [0, 0, 0])] * 5,
+                             outlet={"outlet_x": 0.02, "catch_z": -3e-4, "method": "synthetic"})
+    with Result(path) as r:
+        sg = Singulation(r, start=0.0, end=0.04).run().results
+    assert sg.cos_tilt == pytest.approx([0.5], abs=1e-12)     # cos 60 degrees
+    assert sg.face_up_fraction == 0.0 and sg.on_edge_fraction == 1.0
+
+
 def test_one_chip_arriving_has_a_face(tmp_path):
     with tipping_chips(tmp_path / "one.h5", 1) as r:
         sg = Singulation(r, start=0.0, end=0.04).run().results
     assert sg.n_arrivals == 1 and sg.face_up_fraction == 1.0 and sg.yaw_deg == pytest.approx([5.0], abs=1e-9)
+
+
+def test_a_chip_is_face_up_within_forty_five_degrees(tmp_path):
+    # two chips over the track, tilted 44.5 and 45.5 degrees about y, cross the catch plane
+    # after frame 1: one face up, one on edge
+    from helpers import parts, write_bulk_result
+
+    tilts = [q_axis([0, 1, 0], np.radians(a)) for a in (44.5, 45.5)]
+    frames = []
+    for k in range(3):
+        p = parts([1, 2], [[0.015, 0.0, RADIUS], [0.010, 2e-3, RADIUS]], radius=RADIUS)
+        p["orientation"] = np.array(tilts)
+        frames.append((k, 0.01 * k, p))
+    events = {"time": np.array([0.015, 0.016]), "id": np.array([1, 2]), "position": np.zeros((2, 3)),
+              "velocity": np.zeros((2, 3)), "orientation": np.tile([1.0, 0, 0, 0], (2, 1))}
+    path = write_bulk_result(tmp_path / "face.h5", frames, events=events, body_template=CHIP,
+                             outlet={"outlet_x": 0.02, "catch_z": -3e-4, "method": "synthetic"})
+    with Result(path) as r:
+        sg = Singulation(r, start=0.0, end=0.02).run().results
+    assert sg.cos_tilt == pytest.approx(np.cos(np.radians([44.5, 45.5])), abs=1e-12)
+    assert sg.face_up_fraction == 0.5 and sg.on_edge_fraction == 0.5 and sg.face_down_fraction == 0.0
 
 
 def test_aligned_means_within_ten_degrees():
@@ -332,6 +380,16 @@ def test_a_template_thin_along_x_measures_its_yaw_in_its_yz_face():
 
 def test_the_thin_axis_does_not_depend_on_where_the_template_sits():
     assert thin_axis(CHIP + [1e-3, -2e-3, 5e-4, 0]) == pytest.approx([0, 0, 1], abs=1e-12)
+
+
+def test_the_thin_axis_is_the_least_spread_about_the_spheres_mean():
+    # four spheres at (+-a, +-a, 0) and a bump 2.1 a above their centre: about the mean (z = 0.42 a)
+    # the spread along z is 0.8 (2.1 a)^2 = 3.5 a^2 < 4 a^2 along x or y: thin along z (about
+    # the median, z = 0, it would be 4.4 a^2)
+    a = 1e-4
+    bump = np.array([[a, a, 0, R_S], [-a, a, 0, R_S], [a, -a, 0, R_S], [-a, -a, 0, R_S],
+                     [0, 0, 2.1 * a, R_S]])
+    assert thin_axis(bump) == pytest.approx([0, 0, 1], abs=1e-12)
 
 
 def test_the_cv_of_a_few_intervals_uses_the_sample_deviation(tmp_path):
