@@ -55,6 +55,12 @@ def _pm(value, error, scale: float = 1.0) -> str:
     return f"{fmt(value, scale)} ± {fmt(error, scale, '.2g')}"
 
 
+def _columns(cells, widths) -> str:
+    """Cells padded to their column's width, and at least one space after each: a cell as
+    wide as its column (sections at 12.5 .. 30.4 mm) never runs into the next."""
+    return "".join(c.ljust(w - 1) + " " for c, w in zip(cells, widths))
+
+
 def section_name(section: dict) -> str:
     """A section's name in the tables: its number, or a bowl's helix and chute."""
     return str(section.get("name", section["section"]))
@@ -73,7 +79,7 @@ def section_table(s: dict) -> list[str]:
     head = ("path [mm]" if bowl else "x [mm]", "out [parts/s]", "speed [mm/s]", "hold-up [parts]",
             "density [/mm]")
     rejects_head = "fell back [/s]" if bowl else "rejects [/s]"
-    lines = ["sections       " + "".join(h.ljust(w) for h, w in zip(head, widths)) + rejects_head]
+    lines = ["sections       " + _columns(head, widths) + rejects_head]
     for k, sec in enumerate(sections):
         out = "outlet" if k == len(sections) - 1 else "joint"
         cells = (f"{section_name(sec)}: {fmt(sec['x_from'], 1e3, '.3g')} .. {fmt(sec['x_to'], 1e3, '.3g')}",
@@ -82,7 +88,7 @@ def section_table(s: dict) -> list[str]:
                  _pm(sec["hold_up"], sec["hold_up_error"]),
                  fmt(sec["line_density"], 1e-3))
         rejects = _pm(sec["reject_rate"], sec["reject_rate_error"]) if measured else "n/a"
-        lines.append("  " + " " * 13 + "".join(c.ljust(w) for c, w in zip(cells, widths)) + rejects)
+        lines.append("  " + " " * 13 + _columns(cells, widths) + rejects)
     told = []
     for name, tool in (s.get("rejects_by_tooling") or {}).items():
         label = TOOLING_NAMES.get(name, name)
