@@ -796,3 +796,11 @@ def test_a_part_far_outside_is_named_with_its_frame_in_a_later_block(tmp_path, m
     assert len(found) == 1, found
     assert found[0].startswith(f"error: /{L.PARTS}/position/value: part 2 is at ") and \
         "at frame 3 (t = 0.003 s), far outside the track" in found[0], found
+
+
+def test_the_part_named_is_one_beyond_the_speed_limit_not_one_at_it(tmp_path):
+    """Frame 1: part 1 moves at exactly the 1 m/s limit (allowed), part 2 at 1.5 m/s."""
+    frames = [(k * 1e-3, [1, 2], [[0, 0, 0], [1e-3, 0, 0]],
+               [[1.0, 0, 0], [1.5, 0, 0]] if k == 1 else [[0, 0, 0], [0, 0, 0]]) for k in range(3)]
+    found = errors(sequence(tmp_path / "at.h5", frames))
+    assert len(found) == 1 and "part 2 moves at 1.5 m/s at frame 1" in found[0], found
