@@ -13,7 +13,7 @@ from vibrofeed.models.inplane import (
     optimal_stick_slip_waveform,
     sliding_limit_speed,
 )
-from vibrofeed.models.surface import CallableSurface, sine_drive
+from vibrofeed.models.surface import CallableSurface, PiecewiseConstantAccel, sine_drive
 from vibrofeed.models.vertical import Contact, periodic_transport, simulate
 
 M = 0.009
@@ -101,3 +101,36 @@ def test_a_two_level_drive_that_never_breaks_the_part_loose_moves_nothing():
     assert (got.displacement_per_period, got.net_speed, got.stuck_fraction, got.catch_delay) == \
         (0.0, 0.0, 1.0, 0.0)
     assert got.t_down == pytest.approx(1e-3, rel=1e-12) and got.period == pytest.approx(6e-3, rel=1e-12)  # s
+
+
+def test_feasibility_needs_a_normal_force_strictly_above_mg_over_mu_s():
+    from vibrofeed.models.vertical import check_feasible
+
+    f_min = M * G / 0.72                         # the grip that just balances gravity
+    with pytest.raises(ValueError, match="normal force too small"):
+        check_feasible(M, f_min, 0.72, a_max=100 * G)          # at the bound: "must exceed"
+    margins = check_feasible(M, f_min * (1 + 1e-9), 0.72, a_max=100 * G)   # just past it
+    assert margins["normal_force_margin"] == pytest.approx(f_min * 1e-9, rel=1e-6)
+
+
+def sliding_waveform(a_n):
+    # x: +2 for 0.5 s then -2 for 0.5 s (velocity a triangle from -0.5 to 0.5 m/s, zero mean);
+    # z: +a_n, -a_n, 0 on [0, 0.25], [0.25, 0.5], [0.5, 1] s
+    return PiecewiseConstantAccel([0.25, 0.25, 0.5], [2.0, 2.0, -2.0], [a_n, -a_n, 0.0])
+
+
+def test_sliding_limit_refuses_a_normal_load_that_reaches_zero():
+    # g = 10: the normal load g + a_z is 0 on the second piece when a_n = g (at the bound), -0.5
+    # just past it; either way the part would leave the track
+    for a_n in (10.0, 10.5):
+        with pytest.raises(ValueError, match="lose contact"):
+            sliding_limit_speed(sliding_waveform(a_n), g=10.0, n=4000)
+
+
+def test_sliding_limit_weights_the_friction_by_the_normal_load():
+    # a_n = 9, g = 10: load 19, 1, 10 on the three pieces. For -0.5 < V < 0 the surface is
+    # faster than V for -V/2 s of piece 1 (v_s = -0.5 + 2 t) and slower for (V + 0.5)/2 s; always
+    # faster on piece 2; on piece 3 faster (0.5 - V)/2 s, slower (0.5 + V)/2 s. Balance:
+    # 19 (-V - 0.25) + 0.25 - 10 V = 0, so V = -4.5 / 29
+    V = sliding_limit_speed(sliding_waveform(9.0), g=10.0, n=40_000)
+    assert V == pytest.approx(-4.5 / 29, abs=1e-4)             # ~ max|a_x| T / n

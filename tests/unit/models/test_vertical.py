@@ -1,5 +1,6 @@
 """Vertical stick/slip transport model (vibrofeed/models/vertical.py) against closed forms."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -151,6 +152,7 @@ def test_two_level_model_matches_closed_form(a_up, t_up, a_down, fn_mg, mu_k):
     got = periodic_transport(two_level_drive(a_up, t_up, a_down), c, n_periods=5)
     assert got.net_speed == pytest.approx(exact.net_speed, rel=1e-6)
     assert got.stuck_fraction == pytest.approx(exact.stuck_fraction, rel=1e-6)
+    assert got.displacement_per_period == pytest.approx(exact.displacement_per_period, rel=1e-6)
 
 
 def test_two_level_catch_time_is_exact():
@@ -285,3 +287,109 @@ def test_first_descent_of_a_function_already_at_or_below_zero_is_its_start():
     assert first_descent(lambda t: -t, 0.0, 1.0, [0.5], 1e-12) == 0.0
     assert first_descent(lambda t: 0.5 - t, 0.0, 1.0, [], 1e-12) == pytest.approx(0.5, abs=1e-12)
     assert first_descent(lambda t: t, 0.0, 1.0, [], 1e-12) is None
+
+
+def test_periodic_transport_is_an_immutable_value():
+    got = periodic_transport(two_level_drive(0.5 * G, 0.02, 15 * G), contact(5.0), n_periods=2)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        got.net_speed = 0.0
+
+
+# Exact binary numbers for the edge cases below: m = 1 kg, F_n = 16 N, mu_s = 0.75, mu_k = 0.5,
+# g = 8 m/s^2, so the stick band is [-20, 4] m/s^2 and the part slips at 0 (up) or -16 (down).
+EXACT = dict(mass=1.0, normal_force=16.0, mu_s=0.75, mu_k=0.5, g=8.0)
+
+
+def jump_surface():
+    """a_s = 8 (above the band) until 0.25 s, then 2 (inside it); v_s(0) = 0, x_s(0) = 0."""
+    def x(t):
+        t = np.asarray(t, dtype=float)
+        return np.where(t < 0.25, 4 * t * t, 0.25 + 2 * (t - 0.25) + (t - 0.25) ** 2)
+
+    def v(t):
+        t = np.asarray(t, dtype=float)
+        return np.where(t < 0.25, 8 * t, 2 + 2 * (t - 0.25))
+
+    def a(t):
+        return np.where(np.asarray(t, dtype=float) < 0.25, 8.0, 2.0)
+
+    return CallableSurface(x, v, a, breakpoints=[0.25], turning_points=[])
+
+
+def test_a_slip_ending_exactly_at_a_jump_decides_with_the_acceleration_after_it():
+    # The part starts 6 m/s faster than the surface: it slips down (a_p = -16) while
+    # w = v_s - v_p = -6 + 24 t returns to 0 exactly at the jump, t = 0.25 s, z_p = 1 m. The
+    # surface then accelerates at 2 m/s^2, inside the band: the part sticks and rides along
+    # (before the jump, at 8 m/s^2, it could not have).
+    c = Contact(**EXACT)
+    traj = simulate(jump_surface(), c, t_end=0.5, z0=0.0, v0=6.0, t_eval=[0.25, 0.5])
+    assert [(p.stuck, p.t0, p.t1) for p in traj.phases] == [(False, 0.0, 0.25), (True, 0.25, 0.5)]
+    assert traj.z[0] == 6 * 0.25 - 8 * 0.25 ** 2 == 1.0
+    # stuck: z_p - z_s stays 1 - 0.25; z_s(0.5) = 0.25 + 2 * 0.25 + 0.25^2
+    assert traj.z[1] == pytest.approx(0.75 + 0.8125, abs=1e-15)
+    assert traj.v[1] == pytest.approx(2.5, abs=1e-15) and traj.stuck[1]
+
+
+def test_a_slip_ending_exactly_at_the_end_of_the_run_is_one_phase():
+    # same start, run stopped at the instant the slip ends (also the last piece's end)
+    traj = simulate(jump_surface(), Contact(**EXACT), t_end=0.25, z0=0.0, v0=6.0, t_eval=[0.25])
+    assert [(p.stuck, p.t0, p.t1) for p in traj.phases] == [(False, 0.0, 0.25)]
+    assert traj.z[0] == 1.0 and traj.v[0] == 2.0
+
+
+def test_a_part_starting_inside_the_band_rides_until_the_acceleration_reaches_its_edge():
+    # a_s = 3.5 + 2 t: 0.5 m/s^2 inside the upper edge 4 at the start, reaching it at 0.25 s;
+    # then the part slips up at a_p = 0, keeping v_s(0.25) = 3.5 * 0.25 + 0.25^2 = 0.9375
+    c = Contact(**EXACT)
+    rising = CallableSurface(lambda t: 1.75 * np.asarray(t) ** 2 + np.asarray(t) ** 3 / 3,
+                             lambda t: 3.5 * np.asarray(t) + np.asarray(t) ** 2,
+                             lambda t: 3.5 + 2 * np.asarray(t), turning_points=[])
+    traj = simulate(rising, c, t_end=0.5, t_eval=[0.5])
+    assert [p.stuck for p in traj.phases] == [True, False]
+    assert traj.phases[0].t1 == pytest.approx(0.25, abs=1e-13)
+    z_catch = 1.75 * 0.25 ** 2 + 0.25 ** 3 / 3
+    assert traj.z[0] == pytest.approx(z_catch + 0.9375 * 0.25, abs=1e-13)
+    assert traj.v[0] == pytest.approx(0.9375, abs=1e-13)
+
+
+@pytest.mark.parametrize("ratio", [1.3, 1.68])
+def test_equal_friction_coefficients_without_gravity_leave_the_band_cleanly(ratio):
+    """mu_k = mu_s: at a stick exit the part's slip acceleration equals a_s, so the relative
+    velocity starts flat and the event time's rounding decides its first sign; the trend of
+    a_s must decide instead (no chattering), for every exit of a long run."""
+    f, amp = 100.0, 1e-3
+    A = amp * (2 * math.pi * f) ** 2 / ratio      # mu_s F_n / m, the band half-width (g = 0)
+    c = Contact(mass=M, normal_force=A * M / 0.6, mu_s=0.6, mu_k=0.6, g=0.0)
+    up = sine_drive(amp, f, 0.3)
+    t = np.linspace(0, 20 / f, 201)
+    a = simulate(up, c, t_end=20 / f, t_eval=t)
+    b = simulate(sine_drive(amp, f, 0.3 + math.pi), c, t_end=20 / f, t_eval=t)
+    exits = [p.t1 for p in a.phases[:-1] if p.stuck]
+    assert len(exits) >= 38                          # two stick phases a period
+    # every stick phase ends where |a_s| reaches the band edge A
+    assert np.allclose(np.abs(up.acceleration(np.array(exits))[0]), A, rtol=0, atol=1e-9 * A)
+    # every slip phase ends where the part's velocity meets the surface's
+    slips = [p for p in a.phases[:-1] if not p.stuck]
+    v_end = np.array([p.v0 + p.accel * (p.t1 - p.t0) for p in slips])
+    assert np.allclose(v_end, up.velocity(np.array([p.t1 for p in slips]))[0], rtol=0,
+                       atol=1e-9 * amp * 2 * math.pi * f)
+    assert np.allclose(a.z, -b.z, rtol=0, atol=1e-15)       # mirror symmetry (g = 0)
+    assert abs(a.net_speed(1 / f, skip_periods=10)) < 1e-12
+
+
+@pytest.mark.parametrize("mu_k", [0.6, 0.5])
+@pytest.mark.parametrize("twelfths", [5, 11])
+def test_a_start_on_a_band_edge_with_the_acceleration_turning_inward_sticks(twelfths, mu_k):
+    """a_s = -A_pk sin(w t + phase) starts on a band edge (+-A_pk / 2 with A = A_pk / 2, g = 0)
+    and moves into the band: the part sticks from t = 0 until a_s reaches the other edge, at
+    w t = pi / 3. The computed a_s(0) may lie a rounding error outside the band; that must
+    neither make the part slip nor chatter (mu_k = mu_s)."""
+    f, amp = 60.0, 1e-3
+    A = 0.5 * amp * (2 * math.pi * f) ** 2
+    c = Contact(mass=M, normal_force=A * M / 0.6, mu_s=0.6, mu_k=mu_k, g=0.0)
+    drive = sine_drive(amp, f, twelfths * (2 * math.pi / 12))   # 5 pi / 6 or 11 pi / 6
+    traj = simulate(drive, c, t_end=0.5 / f, t_eval=[0.0])
+    first = traj.phases[0]
+    assert first.stuck and first.t0 == 0.0
+    assert first.t1 == pytest.approx(1 / (6 * f), abs=1e-13)   # s
+    assert not traj.phases[1].stuck

@@ -180,3 +180,19 @@ def test_prediction_with_measured_forces_is_the_harder_figure(real_preps):
     assert loo.mean_mae_mm < np.mean(list(null.values()))
     for name in ("trial_1", "trial_2"):
         assert loo.mae_mm[name] < 0.5 * null[name]
+
+
+@pytest.mark.parametrize("twelfths", [5, 11])
+def test_speed_dependent_variant_sticks_from_a_band_edge_turning_inward(twelfths):
+    """As vertical.simulate: a_s = -A_pk sin(w t + phase) starts on a band edge (A = A_pk / 2,
+    g = 0) and moves into the band; the part sticks until w t = pi / 3, though the computed
+    a_s(0) may lie a rounding error outside the band."""
+    from vibrofeed.models.surface import sine_drive
+
+    f, amp, m = 60.0, 1e-3, 0.009
+    A = 0.5 * amp * (2 * np.pi * f) ** 2
+    c = Contact(mass=m, normal_force=A * m / 0.6, mu_s=0.6, mu_k=0.5, g=0.0)
+    drive = sine_drive(amp, f, twelfths * (2 * np.pi / 12))
+    _, _, segments = simulate_speed_dependent(drive, c, 0.5, 0.05, 0.5 / f, 0.0, None, [0.0])
+    assert segments[0].kind == "stick" and segments[0].t0 == 0.0
+    assert segments[0].t1 == pytest.approx(1 / (6 * f), abs=1e-13)  # s
