@@ -174,6 +174,10 @@ def sampled_pieces(position: Callable, velocity: Callable, acceleration: Callabl
     near = np.zeros(len(edges), dtype=bool)
     if breaks.size:
         idx = np.searchsorted(edges, breaks).clip(0, len(edges) - 1)
+        # The merge of near-duplicates may have kept an edge a few ulps before the break
+        # (a sample) instead of the break: the jump is at whichever neighbour is nearer.
+        prev = np.maximum(idx - 1, 0)
+        idx = np.where(np.abs(edges[prev] - breaks) < np.abs(edges[idx] - breaks), prev, idx)
         near[idx[np.isclose(edges[idx], breaks, rtol=0, atol=1e-12 * max(1.0, t1))]] = True
     length = np.diff(edges)
     eps = np.maximum(1e-9 * length, 4 * np.spacing(np.maximum(abs(edges[1:]), 1.0)))
@@ -704,7 +708,7 @@ class PolynomialSurface(SurfaceMotion):
             if not math.isclose(x[-1] - x[0], period, rel_tol=1e-12, abs_tol=0.0):
                 raise ValueError(
                     f"a periodic polynomial must span one period: spans "
-                    f"{x[-1] - x[0]!r}, period {period!r}")
+                    f"{float(x[-1] - x[0])!r} s, period {float(period)!r} s")
         self.period = None if period is None else float(period)
         self._x = x
         self._derivs = [pp, pp.derivative(1), pp.derivative(2)]

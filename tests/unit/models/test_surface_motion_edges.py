@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from scipy.interpolate import PPoly, make_interp_spline
+from scipy.interpolate import BSpline, PPoly, make_interp_spline
 
 from vibrofeed.models.surface import (
     CallableSurface,
@@ -256,3 +256,190 @@ def test_generic_roots_resolve_a_close_pair_straddling_the_middle_sample():
                         lambda t: np.zeros_like(np.asarray(t, dtype=float)),
                         lambda t: (np.asarray(t) - 0.4995) * (np.asarray(t) - 0.5005))
     assert s.accel_roots(1.0, 0.0, 0.0, 0.0, 1.0) == pytest.approx([0.4995, 0.5005], abs=1e-12)
+
+
+def test_the_merge_tolerance_scales_with_the_largest_time_of_the_window():
+    # 8 eps max(1, |t0|, |t1|): on [0, 4] it is 2**-47, so a gap of 2**-48 (8 ulps at 2) is merged
+    assert _unique_sorted(np.array([2.0, 2.0 + 2.0 ** -48]), 0.0, 4.0).tolist() == [0.0, 2.0, 4.0]
+    assert _unique_sorted(np.array([2.0, 2.0 + 2.0 ** -46]), 0.0, 4.0).tolist() == [
+        0.0, 2.0, 2.0 + 2.0 ** -46, 4.0]
+
+
+def test_an_edge_exactly_eight_ulps_before_the_end_is_merged_into_it():
+    tol = 8 * np.finfo(float).eps                     # = 2**-49 on [0, 1]: 1 - tol is exact
+    assert _unique_sorted(np.array([1.0 - tol]), 0.0, 1.0).tolist() == [0.0, 1.0]
+    assert _unique_sorted(np.array([1.0 - 2 * tol]), 0.0, 1.0).tolist() == [0.0, 1.0 - 2 * tol, 1.0]
+
+
+def test_the_default_step_of_a_window_is_a_4096th_of_its_length_not_of_its_end():
+    assert sine_callables().pieces(1.0, 1.05).n == 4096
+    assert sine_callables().pieces(-2.0, -1.5).n == 4096
+
+
+def _sawtooth(K, T):
+    """a_x = K (f - 1/2), f = frac(t / T): a jump from K/2 down to -K/2 at every k T."""
+    def frac(t):
+        return np.mod(np.asarray(t, dtype=float) / T, 1.0)
+
+    return CallableSurface(lambda t: K * T * T * (frac(t) ** 3 / 6 - frac(t) ** 2 / 4 + frac(t) / 12),
+                           lambda t: K * T * (frac(t) ** 2 / 2 - frac(t) / 2 + 1 / 12),
+                           lambda t: K * (frac(t) - 0.5), breakpoints=[0.0], period=T)
+
+
+def test_one_sided_accelerations_at_a_jump_are_taken_a_hair_inside_the_piece():
+    # sampled every T/256 with no turning points; the values either side of the jump at T
+    # are the limits -K/2 (after) and +K/2 (before), to far better than 1e-6 K
+    K, T = 100.0, 1 / F
+    p = _sawtooth(K, T).pieces(0.0, 2 * T)
+    j = int(np.argmin(np.abs(p.edges - T)))
+    assert p.edges[j] == pytest.approx(T, abs=1e-15)
+    assert p.a_start[j] == pytest.approx(-K / 2, abs=1e-6 * K)
+    assert p.a_end[j - 1] == pytest.approx(K / 2, abs=1e-6 * K)
+    assert p.local(j, T, 2) == pytest.approx(-K / 2, abs=1e-6 * K)
+
+
+def test_frequency_is_the_inverse_period():
+    assert SineWaveform(F, A, A).freq == pytest.approx(F, rel=1e-12)
+    assert StickSlipWaveform(25.0, 3.0, 9.0).freq == pytest.approx(25.0, rel=1e-12)
+    with pytest.raises(ValueError, match="not periodic"):
+        _ = PolynomialSurface(_rise_fall()).freq
+
+
+def _linear_knots(*knots):
+    """x_s = t on each interval between the given knots (non-periodic, continuous)."""
+    x = np.asarray(knots, dtype=float)
+    c = np.vstack([np.ones(x.size - 1), x[:-1]])
+    return PolynomialSurface(PPoly(c, x, extrapolate=False))
+
+
+def test_non_periodic_breakpoints_exclude_only_1e_12_of_the_window_at_each_end():
+    s = _linear_knots(0.0, 50.0, 100.0)
+    # 1e-11 s after t0 is 1e-11 of this 1 s window: well inside, whatever the absolute times
+    assert s.breakpoints(50.0 - 1e-11, 51.0).tolist() == [50.0]
+    assert s.breakpoints(49.0, 50.0 + 1e-11).tolist() == [50.0]
+    # a knot exactly at t1 - 1e-12 (t1 - t0), or t0 + 1e-12 (t1 - t0), is left out
+    c = 1.0 - 1e-12 * (1.0 - 0.0)
+    assert _linear_knots(0.0, c, 2.0).breakpoints(0.0, 1.0).size == 0
+    assert _linear_knots(-1.0, 1e-12, 1.0).breakpoints(0.0, 1.0).size == 0
+
+
+def test_breakpoints_of_a_motion_with_a_period_longer_than_a_second():
+    wf = PiecewiseConstantAccel([2.0, 2.0], [1.0, -1.0])          # T = 4 s, edges at 0 and 2
+    assert wf.breakpoints(9.0, 15.0) == pytest.approx([10.0, 12.0, 14.0], abs=1e-12)
+
+
+def test_the_next_breakpoint_is_strictly_more_than_1e_12_periods_after_t():
+    # t = tb - 1e-12 T: the breakpoint tb is then only exactly 1e-12 T after t (in floats,
+    # checked), so it is passed over, and the next one (T/4 or 3T/4 later) is returned
+    wf = StickSlipWaveform(10.0, 2.0, 6.0)                  # T = 0.1, edges at 0 and 0.075
+    T = wf.period
+    for k in range(10):
+        for e, gap in ((0.0, 0.075), (wf.starts[1], 0.025)):
+            tb = k * T + e
+            t = tb - 1e-12 * T
+            assert t + 1e-12 * T == tb
+            got = wf.next_breakpoint(t)
+            assert got > t + 1e-12 * T
+            assert got == pytest.approx(tb + gap, abs=1e-12)
+
+
+def test_a_b_spline_with_a_double_interior_knot_lists_that_breakpoint_once():
+    knots = np.array([0, 0, 0, 0, 0.5, 0.5, 1, 1, 1, 1], dtype=float)
+    spl = BSpline(knots, np.array([0.0, 1.0, 2.0, -1.0, 0.0, 1.0]), 3)
+    s = PolynomialSurface(spl)
+    assert s.breakpoints(0.0, 1.0).tolist() == [0.5]
+    assert s.breakpoints(-0.5, 1.5).tolist() == [0.0, 0.5, 1.0]
+    t = np.linspace(0.0, 1.0, 11)
+    assert s.position(t)[0] == pytest.approx(spl(t), abs=1e-12)
+
+
+def test_a_periodic_polynomial_of_the_wrong_span_is_refused_saying_its_span():
+    with pytest.raises(ValueError, match=r"spans 1\.0 s, period 0\.5 s"):
+        PolynomialSurface(_rise_fall(), period=0.5)
+    with pytest.raises(ValueError, match=r"spans 1\.0 s, period 2\.0 s"):
+        PolynomialSurface(_rise_fall(), period=2.0)
+
+
+def test_a_non_periodic_polynomial_accepts_times_up_to_1e_12_past_its_domain():
+    s = _linear_knots(0.0, 0.5, 1.0)
+    # the slack is 1e-12 max(1, |x0|, |x1|) = 1e-12 here: exactly at it the end value is used
+    assert s.position(1.0 + 1e-12)[0] == 1.0 and s.position(-1e-12)[0] == 0.0
+    for t in (1.0 + 2e-12, -2e-12):
+        with pytest.raises(ValueError, match="outside"):
+            s.position(t)
+
+
+def test_generic_roots_on_a_window_much_shorter_than_a_period_use_at_least_eight_intervals():
+    # 400 per period would be 4 intervals on this 1/100-period window; eight put a sample at
+    # 0.5, between the two roots, so both are bracketed
+    s = CallableSurface(lambda t: np.zeros_like(np.asarray(t, dtype=float)),
+                        lambda t: np.zeros_like(np.asarray(t, dtype=float)),
+                        lambda t: (np.asarray(t) - 0.4995) * (np.asarray(t) - 0.5005), period=100.0)
+    assert s.accel_roots(1.0, 0.0, 0.0, 0.0, 1.0) == pytest.approx([0.4995, 0.5005], abs=1e-12)
+
+
+def test_from_gamma_without_a_tangential_gamma_has_no_tangential_motion():
+    wf = SineWaveform.from_gamma(30.0, 2.0)
+    assert wf.amp_t == 0.0 and wf.max_abs_acceleration()[0] == 0.0
+    assert wf.gamma() == pytest.approx(2.0, rel=1e-14)
+
+
+def test_the_net_velocity_check_is_relative_to_the_waveform_scale():
+    # an imbalance of 1e-4 of a_1 d_1 is refused whether the waveform is tiny or large
+    for a, d in ((1e-3, 1e-3), (1.0, 1e-2), (1e3, 1.0)):
+        with pytest.raises(ValueError, match="net velocity"):
+            PiecewiseConstantAccel([d, d], [a, -a * (1 + 1e-4)])
+        PiecewiseConstantAccel([d, d], [a, -a])
+
+
+def test_scalar_and_vectorised_paths_agree_within_1e_12_periods_before_an_edge():
+    # such a time counts as the edge itself: position and velocity are those at the edge
+    wf = PiecewiseConstantAccel([0.5, 0.5], [1.0, -1.0], [2.0, -2.0])       # T = 1
+    t = 0.5 - 1e-13
+    for f in (wf.position, wf.velocity):
+        at_edge = f(0.5)
+        assert f(t) == at_edge
+        assert [float(c[0]) for c in f(np.array([t]))] == list(at_edge)
+
+
+def test_coulomb_pump_refuses_a_non_positive_acceleration_as_such():
+    for accel in (0.0, -0.5):
+        with pytest.raises(ValueError, match="peak_speed and accel must be positive"):
+            CoulombPumpWaveform(F, 0.01, accel)
+
+
+def test_coulomb_pump_allows_a_relative_1e_12_rounding_past_the_bound():
+    accel, T = 40.0, 1.0 / F
+    wf = CoulombPumpWaveform(F, accel * T / 4 * (1 + 1e-12), accel)
+    assert wf.forward_fraction == 0.0
+
+
+def test_sine_drive_is_the_stated_harmonic_cut_at_its_acceleration_extrema():
+    amp, f, phase = 2e-4, 40.0, 0.3
+    w, T = 2 * math.pi * f, 1 / f
+    d = sine_drive(amp, f, phase)
+    t = np.linspace(0.0, T, 13)
+    np.testing.assert_allclose(d.position(t)[0], amp * np.sin(w * t + phase), rtol=0, atol=1e-12 * amp)
+    np.testing.assert_allclose(d.velocity(t)[0], amp * w * np.cos(w * t + phase), rtol=0,
+                               atol=1e-12 * amp * w)
+    np.testing.assert_allclose(d.acceleration(t)[0], -amp * w * w * np.sin(w * t + phase), rtol=0,
+                               atol=1e-12 * amp * w * w)
+    # a_x extrema where w t + phase = pi/2 (minimum) and 3 pi/2 (maximum)
+    t_min, t_max = (math.pi / 2 - phase) / w, (3 * math.pi / 2 - phase) / w
+    p = d.pieces(0.0, T)
+    assert p.edges == pytest.approx([0.0, t_min, t_max, T], abs=1e-12 * T)
+    assert p.a_end[0] == pytest.approx(-amp * w * w, rel=1e-12)
+    assert p.a_end[1] == pytest.approx(amp * w * w, rel=1e-12)
+
+
+def test_a_jump_merged_with_a_sample_just_before_it_is_still_taken_one_sided():
+    # on [T/2, 3T/2] the 129th of the T/256 samples falls an ulp before the jump at T and the
+    # merge of near-duplicates keeps it instead of T: that edge is still the jump, so the piece
+    # after it starts at the limit -K/2, not at the callable's value an ulp before (+K/2)
+    K, T = 100.0, 1 / F
+    p = _sawtooth(K, T).pieces(0.5 * T, 1.5 * T)
+    j = int(np.argmin(np.abs(p.edges - T)))
+    assert p.edges[j] < T and p.edges[j] == pytest.approx(T, abs=1e-15)   # the merged edge
+    assert p.a_start[j] == pytest.approx(-K / 2, abs=1e-6 * K)
+    assert p.a_end[j - 1] == pytest.approx(K / 2, abs=1e-6 * K)
+    assert p.local(j, p.edges[j], 2) == pytest.approx(-K / 2, abs=1e-6 * K)
