@@ -285,7 +285,9 @@ def run_flights(gamma: float, e: float = 0.0, n_periods: int = 200, n_transient:
     n_transient periods; state : optional start state from a previous run
     (dict t, z, vz; for sweeps in Gamma, as the report discusses: the
     amplitude is raised through the lower values). Returns (flights, state,
-    (t_start, t_end)) with the recorded window in dimensionless time.
+    (t_start, t_end)) with the recorded window in dimensionless time: the
+    flights that start in the window, the last one followed to its landing,
+    so that a periodic motion over whole cycles yields each flight once.
     """
     m = _model(gamma, e)
     if state is None:
@@ -295,9 +297,12 @@ def run_flights(gamma: float, e: float = 0.0, n_periods: int = 200, n_transient:
     t_rec = m.t + n_transient * TWO_PI
     m.run(t_rec)
     n0 = len(m.events)
-    m.run(t_rec + n_periods * TWO_PI)
+    t_end = t_rec + n_periods * TWO_PI
+    m.run(t_end)
+    if m.mode == "flight":      # started in the window (or before it: then skipped below)
+        m.run(t_end + 400.0 * TWO_PI, stop_on=("impact",))
     fl = _flights(m, n0)        # a flight already under way at t_rec has no start event: skipped
-    return fl, dict(t=m.t, z=m.z, vz=m.vz), (t_rec, m.t)
+    return fl, dict(t=m.t, z=m.z, vz=m.vz), (t_rec, t_end)
 
 
 def stroboscopic_period(gamma: float, e: float = 0.0, n_transient: int = 400, max_period: int = 8,

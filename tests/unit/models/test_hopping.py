@@ -4,9 +4,29 @@ import math
 
 import numpy as np
 import pytest
+from scipy.optimize import brentq
 
 from vibrofeed.models import hopping as H
-from vibrofeed.models.subhopping import normalised_speed
+from vibrofeed.models.part_on_surface import PartOnSurface, PartParams
+from vibrofeed.models.subhopping import FIGURE8, normalised_speed
+from vibrofeed.models.surface import SineWaveform
+
+
+def _flight_duration(th0, gamma):
+    """Independent closed-form flight: leaving the surface sin(theta) at th0 with its velocity
+    (e = 0), gravity 1/Gamma; first s > 0 with sin th0 + s cos th0 - s^2 / (2 Gamma) = sin(th0 + s)."""
+    def gap(s):
+        return np.sin(th0) + s * np.cos(th0) - s * s / (2 * gamma) - np.sin(th0 + s)
+
+    s = np.arange(1e-3, 8 * math.pi, 1e-3)
+    k = np.nonzero(gap(s) < 0)[0][0]
+    assert k > 0                                     # the part did leave (Gamma sin th0 > 1)
+    return brentq(gap, s[k - 1], s[k], xtol=1e-15)
+
+
+def _gain(th0, tau, phase_rad):
+    """Relative tangential displacement of one flight (ideal_speed's idealisation)."""
+    return np.cos(th0 - phase_rad) * tau - (np.sin(th0 + tau - phase_rad) - np.sin(th0 - phase_rad))
 
 
 def test_period_one_limits_closed_form_values():
@@ -100,3 +120,123 @@ def test_full_model_tends_to_ideal_speed_at_large_friction(gamma, gamma_t):
     ideal = H.ideal_speed(gamma, 0.0, 15.0)
     v = normalised_speed(gamma_t, gamma, 15.0, 100.0, max_blocks=6)
     assert v == pytest.approx(ideal, rel=5e-3)
+
+
+# ------------------------------------------------------ survivors of the models-contact target
+def test_figure8_is_the_reports_subhopping_case():
+    # report Fig. 8: A = 1.6 in its units (g = 2) for both amplitudes, delta = 0, mu = 0.75
+    assert 2 * FIGURE8["gamma_t"] == pytest.approx(1.6, abs=1e-12)
+    assert 2 * FIGURE8["gamma_n"] == pytest.approx(1.6, abs=1e-12)
+    assert FIGURE8["phase"] == 0.0 and FIGURE8["mu"] == 0.75
+    # sub-hopping: Gamma_n < 1, the part never leaves the surface
+    wf = SineWaveform.from_gamma(50.0, FIGURE8["gamma_n"], FIGURE8["gamma_t"], FIGURE8["phase"])
+    m = PartOnSurface(wf, PartParams(FIGURE8["mu"], FIGURE8["mu"]), record=False)
+    m.start(0.0).run(5 * wf.period)
+    kinds = {ev.kind for ev in m.events}
+    assert "slip" in kinds and "launch" not in kinds and "impact" not in kinds
+
+
+def test_period_one_limit_defaults_to_one_period():
+    assert H.period_one_limit() == pytest.approx(math.sqrt(1 + math.pi ** 2), abs=1e-12)
+
+
+@pytest.mark.parametrize("n", [2, 3])
+def test_rebound_window_for_longer_flights(n):
+    """Upper end: Gamma cos th_l = ((2n+1) pi - 2 th_l) / 2, inside (Gamma_n, Gamma_{n+1})."""
+    lo, hi = H.rebound_window(n)
+    assert lo == pytest.approx(math.sqrt(1 + (n * math.pi) ** 2), abs=1e-12)
+    assert lo < hi < math.sqrt(1 + ((n + 1) * math.pi) ** 2)
+    th = math.asin(1 / hi)
+    assert hi * math.cos(th) == pytest.approx(((2 * n + 1) * math.pi - 2 * th) / 2, abs=1e-11)
+    # the model's flight lands there with the surface's velocity (triple root: ~eps^(1/3))
+    fl = H.first_flight(hi)
+    assert fl.duration == pytest.approx((2 * n + 1) * math.pi - 2 * th, abs=1e-4)
+    assert abs(fl.w_land) < 1e-6
+
+
+@pytest.mark.parametrize("e", [0.0, 0.3])
+def test_period_two_single_impact_orbit(e):
+    """n = 2: flight of two periods; cos th* = 2 pi (1-e) / ((1+e) Gamma), w* = -2 pi / Gamma - cos th*."""
+    g = 0.97 * H.period_doubling_closed_form(e, 2)
+    th, w, J = H.period_one_orbit(g, e, 2)
+    c = 2 * math.pi * (1 - e) / ((1 + e) * g)
+    assert math.cos(th) == pytest.approx(c, abs=1e-9) and math.sin(th) > 0
+    assert w == pytest.approx(-2 * math.pi / g - c, abs=1e-9)
+    assert np.linalg.det(J) == pytest.approx(e * e, abs=1e-6)
+
+
+def test_period_doubling_of_a_seven_period_orbit():
+    # the orbit exists only above 7 pi (1-e)/(1+e) = 21.55: the scan must start there, not at 1
+    e = 0.01
+    assert H.period_doubling_onset(e, 7) == pytest.approx(H.period_doubling_closed_form(e, 7), abs=1e-6)
+
+
+def test_period_one_orbit_refuses_a_false_convergence(monkeypatch):
+    """The orbit is checked on the model's map, not taken on the solver's word."""
+    real = H.fsolve
+
+    def lying(F, x0, **kw):
+        sol, info, _, _ = real(F, x0, **kw)
+        return sol + np.array([1e-5, 0.0]), info, 1, "converged"   # 1e-5 rad off the fixed point
+
+    monkeypatch.setattr(H, "fsolve", lying)
+    with pytest.raises(RuntimeError, match="not found"):
+        H.period_one_orbit(2.0, 0.3)
+
+
+def test_locked_limit_when_the_first_probe_is_already_unlocked():
+    # step = 1: the first probe, Gamma = 2, is unlocked at e = 0.3, so the bisection starts
+    # from the bracket (1, 2]
+    assert not H.is_locked(2.0, 0.3)
+    assert H.locked_limit(0.3, step=1.0) == pytest.approx(H.locked_limit(0.3), abs=1e-8)
+
+
+def test_stroboscopic_period_up_to_max_period():
+    # locked orbit (Gamma < sqrt(1 + pi^2), e = 0): period one at once, whatever max_period
+    for max_period in (1, 3):
+        assert H.stroboscopic_period(2.5, 0.0, n_transient=5, max_period=max_period)[0] == 1
+    # period-two attractor (sqrt(4 + pi^2) < 3.8): not period one, found with max_period >= 2
+    assert H.stroboscopic_period(3.8, 0.0, n_transient=100, max_period=1)[0] == 0
+    assert H.stroboscopic_period(3.8, 0.0, n_transient=100, max_period=2)[0] == 2
+
+
+@pytest.mark.parametrize("gamma", [2.0, 3.2])
+def test_ideal_speed_of_the_locked_hop_is_its_gain_per_period(gamma):
+    """Locked orbit (e = 0): one flight per period from theta_l; mean speed = gain / 2 pi, at the
+    default phase 0. At 3.2 each flight lands after the next theta = 0 mod 2 pi, i.e. the one
+    under way at the end of the averaging window started inside it and counts."""
+    th = math.asin(1 / gamma)
+    tau = _flight_duration(th, gamma)
+    assert (th + tau > 2 * math.pi) == (gamma > 3.0)
+    assert H.ideal_speed(gamma) == pytest.approx(_gain(th, tau, 0.0) / (2 * math.pi), rel=1e-9)
+
+
+def test_ideal_speed_of_the_period_two_hop_is_its_cycle_mean():
+    """Gamma = 3.8, e = 0: long and short jumps, each relaunched at once (Gamma sin > 1), summing to
+    two periods. The default window (whole cycles) averages to the cycle's mean gain / 4 pi."""
+    g = 3.8
+
+    def two_jumps(th):
+        tau1 = _flight_duration(th, g)
+        return tau1 + _flight_duration(th + tau1, g) - 4 * math.pi
+
+    # the 2-cycle's launch phase lies between theta_l and the period-one fixed point acos(pi / g)
+    tha = brentq(two_jumps, math.asin(1 / g) + 1e-3, math.acos(math.pi / g) - 1e-2, xtol=1e-15)
+    ta = _flight_duration(tha, g)
+    tb = _flight_duration(tha + ta, g)
+    assert abs(ta - tb) > 0.5                        # a genuine long/short pair
+    ph = np.radians([0.0, 30.0])
+    expected = (_gain(tha, ta, ph) + _gain(tha + ta, tb, ph)) / (4 * math.pi)
+    np.testing.assert_allclose(H.ideal_speed(g, 0.0, np.array([0.0, 30.0])), expected, rtol=1e-8)
+
+
+def test_optimal_phase_wraps_into_minus_180_to_180(monkeypatch):
+    """A single flight of one period from th0 gains in proportion to cos(th0 - phase): optimum th0.
+    At th0 = 179.8 deg the grid's best point is -180 and the bounded search ends below it."""
+    th0 = math.radians(179.8)
+
+    def one_flight(gamma, e, n_periods):
+        return [H.Flight(th0, 2 * math.pi, 0.0, "launch")], {}, (0.0, 2 * math.pi)
+
+    monkeypatch.setattr(H, "run_flights", one_flight)
+    assert H.optimal_phase(2.0) == pytest.approx(179.8, abs=1e-4)
