@@ -9,7 +9,7 @@ from scipy.optimize import brentq
 from vibrofeed.models.constants import G
 from vibrofeed.models.part_on_surface import PartOnSurface, PartParams, mean_velocity, simulate
 from vibrofeed.models.subhopping import FIGURE8, normalised_speed, square_wave_speed
-from vibrofeed.models.surface import SineWaveform, SquareWaveAccel
+from vibrofeed.models.surface import SineWaveform, SquareWaveAccel, StickSlipWaveform
 
 F = 50.0
 W = 2 * math.pi * F
@@ -195,3 +195,188 @@ def test_subhopping_figure8_phase_and_incline():
     # without normal vibration the sine is symmetric: no transport; speed grows as Gamma_n -> 1
     v_gn = [normalised_speed(gt, g_n, 0.0, mu) for g_n in (0.0, 0.3, 0.6, 0.9, 0.99)]
     assert abs(v_gn[0]) < 1e-9 and np.all(np.diff(v_gn) > 0)
+
+
+# ------------------------------------------------------- parameters and defaults
+def test_part_params_accept_their_closed_bounds_and_refuse_beyond():
+    # 0 <= mu_k <= mu_s, 0 <= e < 1, mass > 0: each limit itself is allowed
+    assert PartParams(0.5, 0.0).mu_k == 0.0            # frictionless sliding, static friction kept
+    assert PartParams(0.0, 0.0).mu_s == 0.0
+    assert PartParams(0.5, 0.5, e=0.0).e == 0.0
+    assert PartParams(0.5, 0.4).mass == 1.0            # default: 1 kg
+    for kw in (dict(mu_s=0.5, mu_k=-1e-12), dict(mu_s=0.5, mu_k=0.5 + 1e-12),
+               dict(mu_s=0.5, mu_k=0.4, e=1.0), dict(mu_s=0.5, mu_k=0.4, e=-1e-12),
+               dict(mu_s=0.5, mu_k=0.4, mass=0.0)):
+        with pytest.raises(ValueError):
+            PartParams(**kw)
+
+
+def test_simulate_defaults_to_ten_periods_of_a_hundred_samples():
+    wf = SineWaveform(F, 0.0, 0.0)
+    tr = simulate(wf, PartParams(0.5, 0.5))
+    assert tr.t[0] == 0.0 and tr.t[-1] == pytest.approx(10 / F, rel=1e-15)
+    assert len(tr.t) == 1001                            # the start's stick event is a grid time
+
+
+def test_mean_velocity_stops_at_two_blocks_equal_within_a_zero_tolerance():
+    """Convergence is change <= tol: on a still surface two blocks are exactly 0 m/s, so even
+    tol = 0 (rtol = atol = 0) is met after the second block."""
+    ss = mean_velocity(SineWaveform(F, 0.0, 0.0), PartParams(0.5, 0.5), rtol=0.0, atol=0.0)
+    assert ss.block_velocities == [0.0, 0.0]
+    assert ss.converged and ss.change == 0.0 and ss.velocity == 0.0
+    assert ss.n_periods == 20 + 2 * 24                  # default transient and block length
+
+
+def test_mean_velocity_gives_up_after_twenty_blocks_of_an_accelerating_part():
+    """A part sliding down an incline steeper than its friction angle on a still surface never
+    converges: x = -a t^2 / 2, a = g (sin b - mu_k cos b), so the mean over the block
+    [t_a, t_b] is -a (t_a + t_b) / 2 and consecutive blocks differ by a * 24 T."""
+    beta, mu = 20.0, 0.3                                 # tan(20 deg) = 0.36 > mu
+    a = G * (math.sin(math.radians(beta)) - mu * math.cos(math.radians(beta)))
+    T = 1 / F
+    ss = mean_velocity(SineWaveform(F, 0.0, 0.0), PartParams(mu, mu), incline=beta)
+    assert not ss.converged
+    assert len(ss.block_velocities) == 20 and ss.n_periods == 20 + 20 * 24
+    t_a = (20 + 24 * np.arange(20)) * T
+    np.testing.assert_allclose(ss.block_velocities, -0.5 * a * (2 * t_a + 24 * T), rtol=1e-10)
+    assert ss.change == pytest.approx(a * 24 * T, rel=1e-8)
+    assert ss.velocity == pytest.approx(-0.5 * a * (t_a[-1] + t_a[-2] + 24 * T), rel=1e-10)
+
+
+# ------------------------------------------------------------ stick -> slip
+@pytest.mark.parametrize("incline, direction", [(11.5, -1), (-11.5, +1)])
+def test_first_slip_on_an_incline_leaves_the_cone_on_the_side_gravity_shifts_it_to(incline, direction):
+    """a_x = -A sin(w t) with A = 0.6 g, mu_s = 0.5, |beta| = 11.5 deg: mu_s g cos b - g |sin b|
+    = 0.291 g < A < mu_s g cos b + g |sin b| = 0.689 g, so only one edge of the cone
+    -mu_s n <= a_x + g sin b <= mu_s n is reached. Uphill the part lags once
+    a_x = mu_s g cos b - g sin b (w t = pi + asin(...)); downhill it leads once
+    a_x = -mu_s g cos b - g sin b (w t = asin(...))."""
+    A, mu_s = 0.6, 0.5                                  # in g
+    b = math.radians(incline)
+    wf = SineWaveform.from_gamma(F, 0.0, A, 0.0, G)
+    m = PartOnSurface(wf, PartParams(mu_s, 0.4), incline=incline).start(0.0)
+    m.run(1 / F, stop_on=("slip",))
+    slip = [ev for ev in m.events if ev.kind == "slip"][0]
+    k = (mu_s * math.cos(b) - abs(math.sin(b))) / A
+    wt = math.pi + math.asin(k) if direction < 0 else math.asin(k)
+    assert slip.info["direction"] == direction
+    assert W * slip.t == pytest.approx(wt, abs=1e-10)
+
+
+# ------------------------------------------------------------------- impacts
+def test_impact_reports_the_normal_impulse_times_the_mass():
+    wf = SineWaveform(F, 0.0, 0.0)
+    h0, e = 1e-3, 0.4
+    v1 = math.sqrt(2 * G * h0)
+    for part, mass in ((PartParams(0.3, 0.3, e=e), 1.0), (PartParams(0.3, 0.3, e=e, mass=2.5), 2.5)):
+        m = PartOnSurface(wf, part).start(0.0, z=h0)
+        m.run(1.0, stop_on=("impact",))
+        imp = [ev for ev in m.events if ev.kind == "impact"][0]
+        assert imp.info["impulse_n"] == pytest.approx((1 + e) * v1 * mass, rel=1e-12)
+
+
+def test_unresolvable_last_bounce_is_a_plain_landing():
+    """Without summation (chatter_tol = 0) the bounces go on until a flight is shorter than the
+    merge gap (1e-10 T): that last 'impact' finds the part a rounding-level bit above and
+    rising, and lands it without a rebound. No impact reports a separating normal velocity
+    (w > 0) or a pulling impulse; the part rests where the geometric series ends."""
+    wf = SineWaveform(10.0, 0.0, 0.0)
+    h0, e = 0.01, 0.5
+    m = PartOnSurface(wf, PartParams(0.5, 0.5, e=e), chatter_tol=0.0).start(0.0, z=h0)
+    m.run(0.3)
+    impacts = [ev for ev in m.events if ev.kind == "impact"]
+    assert not any(ev.kind == "rest" for ev in m.events)
+    assert len(impacts) > 20
+    assert all(ev.info["w"] <= 0.0 and ev.info["impulse_n"] >= 0.0 for ev in impacts)
+    assert not impacts[-1].info["rebound"]
+    t1 = math.sqrt(2 * h0 / G)
+    assert impacts[-1].t == pytest.approx(t1 + 2 * e * t1 / (1 - e), abs=1e-9 * wf.period)
+    assert m.mode == "stick" and m.z == 0.0
+
+
+@pytest.mark.parametrize("chatter_tol", [1.0, 1e-6])
+def test_chattering_friction_takes_the_whole_geometric_series_of_impulses(chatter_tol):
+    """Drop at vx0 on a still surface: the impacts' normal impulses per unit mass are
+    (1 + e) v1 e^k, in all (1 + e) v1 / (1 - e); each takes mu_k times its impulse off the
+    sliding speed. chatter_tol = 1 period sums the series from the first impact on
+    (2 e v1 / (g (1 - e)) = 0.09 s < 0.1 s), 1e-6 after explicit bounces: the same result."""
+    wf = SineWaveform(10.0, 0.0, 0.0)
+    h0, e, mu, mass = 0.01, 0.5, 0.3, 2.0
+    v1 = math.sqrt(2 * G * h0)
+    loss = mu * (1 + e) * v1 / (1 - e)                  # 0.40 m/s
+    for vx0 in (0.6, 0.3):                              # slides on / stopped by the summed tail
+        m = PartOnSurface(wf, PartParams(mu, mu, e=e, mass=mass), chatter_tol=chatter_tol)
+        m.start(0.0, z=h0, vx=vx0)
+        m.run(0.5, stop_on=("rest",))
+        rest = [ev for ev in m.events if ev.kind == "rest"][0]
+        assert rest.vx == pytest.approx(max(vx0 - loss, 0.0), rel=1e-12, abs=1e-15)
+        if chatter_tol == 1.0:                          # summed from the first impact
+            assert sum(ev.kind == "impact" for ev in m.events) == 1
+            w_in = e * v1
+            assert rest.info["summed_impulse_n"] == pytest.approx(
+                (1 + e) * w_in / (1 - e) * mass, rel=1e-12)
+        if vx0 < loss:                                  # stopped: rests and sticks in place
+            m.run(1.0)
+            assert m.events[-1].kind == "stick" and m.events[-1].t == rest.t
+            assert m.x == rest.x and m.vx == 0.0
+
+
+@pytest.mark.parametrize("before", [1.5e-12, 0.027])
+def test_chatter_summation_never_spans_a_breakpoint(before):
+    """Drop on a stick-slip (in-plane) waveform of period 1 s whose stroke reverses at t_b,
+    before the rest time t_r = t1 + 2 e t1 / (1 - e) of the bounce series. The series is only
+    summed from an impact after t_b, also when t_b is 1.5e-12 periods before t_r (beyond the
+    1e-12-period tolerance by which breakpoints are told apart from the end), or 0.027 s
+    before it (between the 2nd and 3rd impacts, 0.045 and 0.023 s before t_r)."""
+    h0, e = 0.01, 0.5
+    t1 = math.sqrt(2 * h0 / G)
+    t_r = t1 + 2 * e * t1 / (1 - e)
+    t_b = t_r - before
+    a_f = 1.0
+    wf = StickSlipWaveform(1.0, a_f, a_f * t_b / (1.0 - t_b))   # forward stroke lasts t_b
+    assert wf.breakpoints(0.0, 0.9) == pytest.approx([t_b], abs=1e-15)
+    m = PartOnSurface(wf, PartParams(0.5, 0.3, e=e), chatter_tol=1.0).start(0.0, z=h0)
+    m.run(0.9)
+    for ev in m.events:
+        if ev.kind == "rest":
+            assert not ev.t - ev.info["summed_time"] < t_b < ev.t
+    assert sum(ev.kind == "impact" for ev in m.events) >= 3
+    assert m.events[-1].t == pytest.approx(t_r, abs=1e-9)
+    assert m.mode in ("stick", "slip") and m.z == wf.position(m.t)[1]
+
+
+def test_chatter_summation_ignores_tangential_accelerations():
+    """Only a loss of contact (n = 0) or a breakpoint stops the summation. Without normal
+    motion n = g throughout, so the series is summed exactly at the first impact it fits
+    in chatter_tol, even while the tangential acceleration A sin(w t), A = 2 g, passes -g
+    inside it (at t = 13 T / 12). Dropped to land at t1 = 0.9 T with e = 1/7: the series
+    lasts 2 e t1 / (1 - e) = 0.3 T <= chatter_tol = 0.5 T."""
+    T = 1 / F
+    wf = SineWaveform.from_gamma(F, 0.0, 2.0, 0.0, G)
+    t1, e = 0.9 * T, 1 / 7
+    m = PartOnSurface(wf, PartParams(0.5, 0.5, e=e), chatter_tol=0.5).start(0.0, z=0.5 * G * t1 ** 2)
+    m.run(2 * T, stop_on=("rest",))
+    impacts = [ev for ev in m.events if ev.kind == "impact"]
+    rest = [ev for ev in m.events if ev.kind == "rest"]
+    assert len(impacts) == 1 and impacts[0].t == pytest.approx(t1, abs=1e-12 * T)
+    assert len(rest) == 1 and rest[0].t == pytest.approx(1.2 * T, abs=1e-12 * T)
+
+
+@pytest.mark.parametrize("before_jump", [0.0, 5e-13])
+def test_slip_ending_where_the_surface_drops_away_launches_with_the_surface_speed(before_jump):
+    """Square wave, normal acceleration -1.5 g on (0, T/2), +1.5 g on (T/2, T): the surface
+    drops away at T. A part slipping forward (u > 0) from 0.6 T, decelerated relative to the
+    surface at mu_k n + a_t = mu_k 2.5 g + 0.5 g, is given u0 such that u reaches 0 at the jump
+    (or 5e-13 T before it, inside the 1e-12 T by which the motion counts as past its jump).
+    It leaves with zero relative velocity: vx = the surface's tangential speed v_t(T)."""
+    T = 1 / F
+    acc_t, acc_n, mu = 0.5 * G, 1.5 * G, 0.4
+    wf = SquareWaveAccel(F, acc_t, acc_n, 0.0)
+    t0, t_stop = 0.6 * T, T * (1 - before_jump)
+    vx0 = wf.velocity(t0)[0] + (mu * (G + acc_n) + acc_t) * (t_stop - t0)
+    m = PartOnSurface(wf, PartParams(mu, mu)).start(t0, vx=vx0)
+    m.run(1.5 * T, stop_on=("launch",))
+    launch = m.events[-1]
+    assert launch.kind == "launch" and launch.t == pytest.approx(T, abs=1e-12 * T)
+    vt, vn = acc_t * T / 4, acc_n * T / 4            # triangle speeds peak at the period start
+    assert launch.vx == pytest.approx(vt, rel=1e-9) and launch.vz == pytest.approx(vn, rel=1e-9)

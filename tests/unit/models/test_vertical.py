@@ -393,3 +393,46 @@ def test_a_start_on_a_band_edge_with_the_acceleration_turning_inward_sticks(twel
     assert first.stuck and first.t0 == 0.0
     assert first.t1 == pytest.approx(1 / (6 * f), abs=1e-13)   # s
     assert not traj.phases[1].stuck
+
+
+def test_a_part_at_rest_on_a_surface_accelerating_beyond_the_band_slips_from_the_start():
+    # jump_surface accelerates at 8 m/s^2 > 4 (the band's top) from v_s = 0: the part cannot
+    # follow and slips up at a_p = 0, i.e. stays at rest, while the surface runs away
+    # (a_s = 2 > a_p after the jump too: w = v_s - v_p never returns to 0).
+    traj = simulate(jump_surface(), Contact(**EXACT), t_end=0.5, t_eval=[0.25, 0.5])
+    assert [(p.stuck, p.t0, p.t1) for p in traj.phases] == [(False, 0.0, 0.5)]
+    assert list(traj.z) == [0.0, 0.0] and list(traj.v) == [0.0, 0.0]
+
+
+def test_a_slip_caught_by_a_surface_decelerating_gently_ends_at_the_closed_form_time():
+    # a_s = -0.5 m/s^2, within 1 m/s^2 of the part's a_p = 0 (slipping up, EXACT): from
+    # v_s = 1 and v_p = 0.5, w = 0.5 - 0.5 t reaches 0 at t = 1 s, z_p = 0.5 m; a_s is inside
+    # the band, so the part then rides along: z_p(2) = z_p(1) + z_s(2) - z_s(1) = 0.75 m.
+    gentle = CallableSurface(lambda t: np.asarray(t) - 0.25 * np.asarray(t) ** 2,
+                             lambda t: 1.0 - 0.5 * np.asarray(t),
+                             lambda t: -0.5 + 0 * np.asarray(t), turning_points=[])
+    traj = simulate(gentle, Contact(**EXACT), t_end=2.0, z0=0.0, v0=0.5, t_eval=[1.0, 2.0])
+    assert [p.stuck for p in traj.phases] == [False, True]
+    assert traj.phases[0].t1 == pytest.approx(1.0, abs=1e-13)
+    assert traj.z == pytest.approx([0.5, 0.75], abs=1e-13)
+    assert traj.v == pytest.approx([0.5, 0.0], abs=1e-13)
+
+
+@pytest.mark.filterwarnings("error")
+def test_a_slip_caught_on_a_piece_whose_acceleration_ends_at_the_part_s():
+    # a_s = -2 |t - 1| (v_s = -(t-1)|t-1|, x_s = 1/3 - (t-1)^2 |t-1| / 3) turns at t = 1, where
+    # it equals the part's a_p = 0 (slipping up, EXACT) exactly. From v_p = 1/4 the relative
+    # velocity w = (1 - t)^2 - 1/4 returns to 0 at t = 1/2, z_p = 1/8; a_s = -1 is inside the
+    # band: the part sticks to the end, where x_s(3/2) = x_s(1/2), so z_p(3/2) = 1/8 again.
+    # The boundary case (w' = 0 at the piece end) is computed cleanly, without numeric warnings.
+    def s(t):
+        return np.asarray(t, dtype=float) - 1.0
+
+    drive = CallableSurface(lambda t: 1 / 3 - s(t) ** 2 * np.abs(s(t)) / 3,
+                            lambda t: -s(t) * np.abs(s(t)), lambda t: -2.0 * np.abs(s(t)),
+                            turning_points=[1.0])
+    traj = simulate(drive, Contact(**EXACT), t_end=1.5, z0=0.0, v0=0.25, t_eval=[0.5, 1.5])
+    assert [p.stuck for p in traj.phases] == [False, True]
+    assert traj.phases[0].t1 == pytest.approx(0.5, abs=1e-13)
+    assert traj.z == pytest.approx([0.125, 0.125], abs=1e-13)
+    assert traj.v == pytest.approx([0.25, -0.25], abs=1e-13)
