@@ -15,6 +15,7 @@ from vibrofeed.models.surface import (
     PolynomialSurface,
     SampledWaveform,
     SineWaveform,
+    SquareWaveAccel,
     StickSlipWaveform,
     _unique_sorted,
     sampled_pieces,
@@ -443,3 +444,141 @@ def test_a_jump_merged_with_a_sample_just_before_it_is_still_taken_one_sided():
     assert p.a_start[j] == pytest.approx(-K / 2, abs=1e-6 * K)
     assert p.a_end[j - 1] == pytest.approx(K / 2, abs=1e-6 * K)
     assert p.local(j, p.edges[j], 2) == pytest.approx(-K / 2, abs=1e-6 * K)
+
+
+def test_pieces_of_a_periodic_polynomial_not_starting_at_zero_use_each_piece_own_formula():
+    # a_x = +1 on [0.25, 0.75) + k, -1 on [0.75, 1.25) + k; v = -1/4 at 0.25 + k, +1/4 at 0.75 + k
+    s = PolynomialSurface(_rise_fall(0.25), period=1.0)
+    p = s.pieces(0.0, 2.0)
+    assert p.edges == pytest.approx([0.0, 0.25, 0.75, 1.25, 1.75, 2.0], abs=1e-15)
+    assert p.a_start.tolist() == [-1.0, 1.0, -1.0, 1.0, -1.0]
+    assert p.a_end.tolist() == [-1.0, 1.0, -1.0, 1.0, -1.0]
+    assert p.v == pytest.approx([0.0, -0.25, 0.25, -0.25, 0.25, 0.0], abs=1e-15)
+    for i in range(p.n):
+        t = 0.5 * (p.edges[i] + p.edges[i + 1])
+        for nu, f in enumerate((s.position, s.velocity, s.acceleration)):
+            assert p.local(i, t, nu) == pytest.approx(float(f(t)[0]), abs=1e-15)
+
+
+def test_a_non_periodic_next_breakpoint_skips_only_1e_12_of_the_time_itself_past_one_second():
+    s = _linear_knots(0.0, 50.0, 100.0)
+    # at t ~ 50 s the margin is 1e-12 * 50 = 5e-11 s: a knot 1e-11 s after t is passed over
+    assert s.next_breakpoint(50.0 - 1e-11) == 100.0
+    assert s.next_breakpoint(50.0 - 1e-10) == 50.0
+
+
+def test_generic_roots_use_400_intervals_of_a_non_periodic_window_whatever_its_length():
+    # window [0, 2]: samples every 0.005 s, one at 0.015 between the roots 0.0145 and 0.0155
+    s = CallableSurface(lambda t: np.zeros_like(np.asarray(t, dtype=float)),
+                        lambda t: np.zeros_like(np.asarray(t, dtype=float)),
+                        lambda t: (np.asarray(t) - 0.0145) * (np.asarray(t) - 0.0155))
+    assert s.accel_roots(1.0, 0.0, 0.0, 0.0, 2.0) == pytest.approx([0.0145, 0.0155], abs=1e-12)
+
+
+def test_generic_roots_in_the_last_sampling_interval_and_at_t1_are_found():
+    s = CallableSurface(lambda t: np.zeros_like(np.asarray(t, dtype=float)),
+                        lambda t: np.zeros_like(np.asarray(t, dtype=float)),
+                        lambda t: np.asarray(t) - 0.999)
+    # 0.999 lies in the last of the 400 intervals of [0, 1]
+    assert s.accel_roots(1.0, 0.0, 0.0, 0.0, 1.0) == pytest.approx([0.999], abs=1e-12)
+    # a level met exactly at t1 (a_x(1) as computed, so f(t1) == 0) is reported as t1
+    at_t1 = float(s.acceleration(1.0)[0])
+    assert s.accel_roots(1.0, 0.0, at_t1, 0.0, 1.0).tolist() == [1.0]
+
+
+def test_generic_roots_are_refined_relative_to_the_period_of_a_fast_drive():
+    # 100 kHz: -A w^2 sin(w t) = -A w^2 / 2 at T/12 and 5T/12, to far better than 1e-12 T
+    f = 1e5
+    w, T = 2 * math.pi * f, 1 / f
+    s = CallableSurface(lambda t: A * np.sin(w * np.asarray(t)),
+                        lambda t: A * w * np.cos(w * np.asarray(t)),
+                        lambda t: -A * w * w * np.sin(w * np.asarray(t)), period=T)
+    roots = s.accel_roots(1.0, 0.0, -0.5 * A * w * w, 0.0, T / 2)
+    assert roots == pytest.approx([T / 12, 5 * T / 12], abs=1e-12 * T)
+
+
+def test_two_level_drive_refuses_a_rise_that_is_not_positive_as_such():
+    for a_up in (0.0, -0.5):
+        with pytest.raises(ValueError, match="two-level drive needs"):
+            two_level_drive(a_up, 1e-3, 0.5)
+
+
+def test_generic_pieces_cut_the_along_track_motion():
+    # the sine's pieces carry x (not z): the normal motion here is larger and phase-shifted
+    wf = SineWaveform(F, A, 3 * A, 40.0)
+    T = wf.period
+    p = wf.pieces(0.1 * T, 1.1 * T)
+    t = 0.5 * (p.edges[:-1] + p.edges[1:])
+    for i in range(0, p.n, 17):
+        assert p.local(i, t[i], 0) == pytest.approx(A * math.sin(W * t[i]), abs=1e-12 * A)
+        assert p.local(i, t[i], 1) == pytest.approx(A * W * math.cos(W * t[i]), abs=1e-12 * A * W)
+        assert p.local(i, t[i], 2) == pytest.approx(-A * W * W * math.sin(W * t[i]),
+                                                    abs=1e-12 * A * W * W)
+
+
+def test_max_speed_samples_one_period_finely():
+    # v = -1/4 + (t - x0) on the rise: |v| peaks at 1/4 at x0 and x0 + 1/2 (cusps, |a| = 1).
+    # Sampled over the period, the nearest sample is within half a step T/1024 of a peak.
+    x0 = 3.0 / 1024
+    s = PolynomialSurface(_rise_fall(x0), period=1.0)
+    assert 0.25 - 1.0 / 2048 <= s.max_speed() <= 0.25
+
+
+def test_from_gamma_has_no_phase_lead_by_default():
+    wf = SineWaveform.from_gamma(30.0, 2.0, 0.5)
+    assert wf.phase == 0.0
+    # both axes peak together at T/4
+    T = wf.period
+    x, z = wf.position(T / 4)
+    assert x == pytest.approx(wf.amp_t, rel=1e-12) and z == pytest.approx(wf.amp_n, rel=1e-12)
+
+
+def test_sine_level_crossings_from_one_crossing_to_a_later_one():
+    # Windows between crossings the method returned: every later one up to t1 is found
+    # again (t1 included, whatever the rounding of k), the first (t0) is not.
+    wf = SineWaveform(F, A, 0.0)
+    T = 1 / F
+    for level in (0.0, 0.5 * A * W * W, -0.5 * A * W * W):
+        r = wf.accel_roots(1.0, 0.0, level, 0.0, 30 * T)
+        assert r.size == 60
+        for j in range(0, 30):
+            for m in (1, 2, 4, 6):
+                got = wf.accel_roots(1.0, 0.0, level, r[j], r[j + 2 * m])
+                assert got.tolist() == r[j + 1:j + 2 * m + 1].tolist()
+
+
+def test_piecewise_constant_accel_refuses_a_negative_duration():
+    # dropping the negative piece would leave a balanced waveform: it must be refused anyway
+    with pytest.raises(ValueError, match="non-negative"):
+        PiecewiseConstantAccel([0.01, -0.005, 0.01], [1.0, 5.0, -1.0])
+
+
+def test_piecewise_constant_accel_has_no_level_crossing_inside_a_piece():
+    wf = SquareWaveAccel(F, 5.0, 3.0)
+    T = wf.period
+    for level in (-6.0, -4.0, 0.0, 4.0, 6.0):
+        assert wf.accel_roots(1.0, 0.0, level, 0.1 * T, 0.4 * T).size == 0
+        assert wf.accel_roots(0.0, 1.0, level, 0.6 * T, 0.9 * T).size == 0
+
+
+def test_max_abs_acceleration_of_piecewise_constant_motions_is_per_axis():
+    assert SquareWaveAccel(F, 5.0, 3.0, 30.0).max_abs_acceleration() == (5.0, 3.0)
+    assert StickSlipWaveform(F, 2.0, 6.0).max_abs_acceleration() == (6.0, 0.0)
+
+
+def test_sampled_waveform_reports_no_crossing_of_a_level_it_never_meets():
+    # all samples zero: a_x = 0 throughout; the level -1 gives cx a_x - level = 1 at both ends
+    wf = SampledWaveform(1.0, [0.0, 0.0, 0.0, 0.0])
+    assert wf.accel_roots(1.0, 0.0, -1.0, 0.0, 0.25).size == 0
+    assert wf.accel_roots(1.0, 0.0, 1.0, 0.0, 0.25).size == 0
+    # met at t1 (and all along): t1 is reported, as for a crossing exactly at t1
+    assert wf.accel_roots(1.0, 0.0, 0.0, 0.0, 0.25).tolist() == [0.25]
+
+
+def test_a_polynomial_is_cut_at_the_extrema_of_its_acceleration_not_its_zeros():
+    # x = t^4/12 - t^3/6 + 0.12 t^2: a = t^2 - t + 0.24 = (t - 0.4)(t - 0.6), minimum -0.01 at 0.5
+    c = np.array([[1 / 12], [-1 / 6], [0.12], [0.0], [0.0]])
+    p = PolynomialSurface(PPoly(c, [0.0, 1.0], extrapolate=False)).pieces(0.0, 1.0)
+    assert p.edges == pytest.approx([0.0, 0.5, 1.0], abs=1e-15)
+    assert p.a_start == pytest.approx([0.24, -0.01], abs=1e-15)
+    assert p.a_end == pytest.approx([-0.01, 0.24], abs=1e-15)
