@@ -32,6 +32,7 @@ def test_a_run_that_wrote_no_frame_leaves_empty_series(tmp_path):
         assert f[f"{L.PARTS}/position/step"].shape == (0,) and f[f"{L.PARTS}/position/time"].shape == (0,)
         for name in L.SURFACE_ELEMENTS:
             assert f[f"{L.SURFACE}/{name}/value"].shape == (0, 3), name
+        assert f[f"{L.PARTS}/box/edges/value"].shape == (0, 3)  # the box's edges: one row per frame
     report = check_file(tmp_path / "empty.h5")  # the failed status is its error, not the series
     assert not [str(p) for p in report.problems if L.PARTS in p.where]
     assert report.frames == 0
@@ -400,3 +401,9 @@ def test_a_rotating_surface_needs_its_rotation_at_every_frame_and_no_other_takes
     w.finish()
     with h5py.File(tmp_path / "s.h5", "r") as f:   # a surface that does not turn has no rotation
         assert not set(L.ROTATION_ELEMENTS) & set(f[L.SURFACE])
+
+
+@pytest.mark.parametrize("sections", [0, -1])
+def test_a_writer_of_fewer_than_one_section_is_refused(tmp_path, sections):
+    with pytest.raises(ValueError, match=f"sections must be >= 1, got {sections}"):
+        new_writer(tmp_path / "s.h5", sections=sections)
