@@ -240,3 +240,49 @@ def test_optimal_phase_wraps_into_minus_180_to_180(monkeypatch):
 
     monkeypatch.setattr(H, "run_flights", one_flight)
     assert H.optimal_phase(2.0) == pytest.approx(179.8, abs=1e-4)
+
+
+class Strobed:
+    """A stand-in for the model seen once per period: its relative state at the k-th sample
+    is ``offset(k)`` (exactly periodic where offset is, drifting where it drifts)."""
+
+    def __init__(self, offset):
+        self.offset, self.t, self.z, self.vz = offset, 0.0, 0.0, 1.0
+
+    def start(self, t, z=None, vz=None):
+        self.t = t
+
+    def run(self, t_end):
+        self.t = t_end
+        k = round(t_end / (2 * math.pi))
+        self.z, self.vz = math.sin(t_end) + self.offset(k), math.cos(t_end)
+
+
+def test_the_attractor_repeats_to_a_tenth_of_a_micro_unit_by_default(monkeypatch):
+    """A state still drifting by 5e-7 a period has no period at the default tolerance 1e-7;
+    at 1e-6 it would pass for period one."""
+    monkeypatch.setattr(H, "_model", lambda gamma, e: Strobed(lambda k: 5e-7 * k))
+    assert H.stroboscopic_period(2.5, 0.0, n_transient=0)[0] == 0
+    assert H.stroboscopic_period(2.5, 0.0, n_transient=0, tol=1e-6)[0] == 1
+
+
+def test_periods_up_to_eight_are_found_by_default(monkeypatch):
+    monkeypatch.setattr(H, "_model", lambda gamma, e: Strobed(lambda k: 0.1 * (k % 8)))
+    assert H.stroboscopic_period(2.5, 0.0, n_transient=0)[0] == 8
+    assert H.stroboscopic_period(2.5, 0.0, n_transient=0, max_period=7)[0] == 0
+
+
+def test_the_bifurcation_diagram_keeps_jumps_of_min_jump_and_sweeps_up_by_default(monkeypatch):
+    """Flights of exactly min_jump periods are kept, shorter ones dropped; each Gamma starts
+    from the state the previous one ended in (the amplitude raised through the lower values)."""
+    given = []
+
+    def flights(gamma, e, n_periods, n_transient, state):
+        given.append(state)
+        durations = (0.5 * 2 * math.pi, 0.25 * 2 * math.pi)  # 0.5 and 0.25 periods, exactly
+        return [H.Flight(0.0, d, 0.0, "launch") for d in durations], {"after": gamma}, (0.0, 1.0)
+
+    monkeypatch.setattr(H, "run_flights", flights)
+    out = H.bifurcation_diagram([2.0, 3.0], 0.0, min_jump=0.5)
+    assert [d.tolist() for d in out] == [[0.5], [0.5]]
+    assert given == [None, {"after": 2.0}]
