@@ -407,3 +407,17 @@ def test_a_rotating_surface_needs_its_rotation_at_every_frame_and_no_other_takes
 def test_a_writer_of_fewer_than_one_section_is_refused(tmp_path, sections):
     with pytest.raises(ValueError, match=f"sections must be >= 1, got {sections}"):
         new_writer(tmp_path / "s.h5", sections=sections)
+
+
+def test_a_lines_rejects_record_one_section_number_per_event(tmp_path):
+    """FORMAT.md: the reject table is the outlet's plus ``section`` (E,), int32."""
+    w = new_writer(tmp_path / "r.h5", line=True, sections=2)
+    w.write_events({"time": [0.1, 0.2], "id": [7, 9], "position": np.zeros((2, 3)),
+                    "velocity": np.zeros((2, 3)), "section": [2, 1]}, L.REJECTS)
+    w.write_frame(0, 0.0, parts([1], [[0, 0, 0]]), [0, 0, 0], [0, 0, 0],
+                  counts={name: 0 for name in L.LINE_COUNTS}, section_surfaces=[([0, 0, 0], [0, 0, 0])])
+    w.finish()
+    with h5py.File(tmp_path / "r.h5", "r") as f:
+        section = f[L.REJECTS]["section"]
+        assert section.shape == (2,) and section.dtype == np.int32 and section[()].tolist() == [2, 1]
+        assert f[L.REJECTS]["id"][()].tolist() == [7, 9]
