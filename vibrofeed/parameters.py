@@ -555,7 +555,7 @@ def _check_contact_step(p: Mapping[str, float]) -> None:
     problem = step_beyond_contact(p)
     if problem and p.get("dt_unchecked", 0):
         warnings.warn(f"{problem}, run as dt_unchecked=1 asks: vibrofeed check will fail the result",
-                      ParameterWarning, stacklevel=3)
+                      ParameterWarning, stacklevel=4)
     elif problem:
         raise ParameterError(
             f"{problem}: contacts would last a few steps and parts gain energy; lower dt or set "

@@ -226,3 +226,150 @@ def test_a_deck_with_part_of_the_vocabulary_is_checked_on_what_it_declares(tmp_p
     assert resolve(gate, {"fill_to": "0.7"})["fill_to"] == "0.7"
     with pytest.raises(ParameterError, match=r"fill_to=0.71 reaches into the gate \(gate_at=0.7\)"):
         resolve(gate, {"fill_to": "0.71"})
+
+
+# Contact times, written out independently of vibrofeed.parameters:
+# Hertz contact time t = 2.87 (m*^2 / (R* E*^2 v))^(1/5) (Johnson, Contact Mechanics, 11.2);
+# E* = 1 / ((1 - nu1^2)/E1 + (1 - nu2^2)/E2); Rayleigh time
+# T_R = pi R sqrt(rho / G) / (0.1631 nu + 0.8766), G = E / (2 (1 + nu)).
+def hertz_time(m_star, r_star, e_star, speed):
+    return 2.87 * (m_star ** 2 / (r_star * e_star ** 2 * speed)) ** 0.2
+
+
+def e_star(e1, nu1, e2, nu2):
+    return 1 / ((1 - nu1 ** 2) / e1 + (1 - nu2 ** 2) / e2)
+
+
+def rayleigh_time(r, rho, youngs, nu):
+    return math.pi * r * math.sqrt(rho / (youngs / (2 * (1 + nu)))) / (0.1631 * nu + 0.8766)
+
+
+SILICON = {"density": 2330.0, "youngs": 1.3e11, "poisson": 0.28}
+DRIVE = {"freq": 100.0, "amp_t": 3e-5, "amp_n": 4e-5}  # peak speed 2 pi 100 5e-5 = 0.0314 m/s
+V_DRIVE = 2 * math.pi * 100 * 5e-5
+
+
+def test_single_part_contact_times_are_a_sphere_on_a_plate_of_its_material():
+    from vibrofeed.parameters import contact_times
+
+    r = 5e-4
+    m = 4 / 3 * math.pi * r ** 3 * 2330  # the plate does not move: m* = m, R* = r
+    times = contact_times({**SILICON, **DRIVE, "radius": r})
+    e = e_star(1.3e11, 0.28, 1.3e11, 0.28)
+    assert times["hertz"] == pytest.approx(hertz_time(m, r, e, V_DRIVE), rel=1e-12)
+    assert times["rayleigh"] == pytest.approx(rayleigh_time(r, 2330, 1.3e11, 0.28), rel=1e-12)
+
+
+def test_bulk_contact_time_of_the_smallest_sphere_part_against_part():
+    from vibrofeed.parameters import contact_times
+
+    r = 2e-4 * (1 - 0.2)  # the smallest sphere of a 20 % spread
+    m = 4 / 3 * math.pi * r ** 3 * 2330
+    times = contact_times({**SILICON, **DRIVE, "part_size": 4e-4, "shape": 0, "size_spread": 0.2})
+    # the track defaults to aluminium softened as the parts (E 70/130): part-part is shorter
+    pp = hertz_time(m / 2, r / 2, e_star(1.3e11, 0.28, 1.3e11, 0.28), V_DRIVE)
+    pw = hertz_time(m, r, e_star(1.3e11, 0.28, 7e10, 0.28), V_DRIVE)
+    assert pp < pw
+    assert times["hertz"] == pytest.approx(pp, rel=1e-12)
+    assert times["rayleigh"] == pytest.approx(rayleigh_time(r, 2330, 1.3e11, 0.28), rel=1e-12)
+    # a sphere is one sphere: part_thickness (of chips and discs) does not split its mass
+    thin = contact_times({**SILICON, **DRIVE, "part_size": 4e-4, "shape": 0, "size_spread": 0.2,
+                          "part_thickness": 1e-4})
+    assert thin["hertz"] == pytest.approx(pp, rel=1e-12)
+
+
+def test_bulk_contact_time_part_against_a_track_of_nearly_incompressible_poisson():
+    from vibrofeed.parameters import contact_times
+
+    # poisson_track -0.99 makes the track nearly rigid in E*: part-track is then the shorter
+    r, size = 1.5e-4, 3e-4
+    m = 4 / 3 * math.pi * r ** 3 * 2330
+    p = {**SILICON, **DRIVE, "part_size": size, "poisson_track": -0.99}  # (no youngs_track: E 70/130)
+    pp = hertz_time(m / 2, r / 2, e_star(1.3e11, 0.28, 1.3e11, 0.28), V_DRIVE)
+    pw = hertz_time(m, r, e_star(1.3e11, 0.28, 1.3e11 * 70 / 130, -0.99), V_DRIVE)
+    assert pw < pp
+    assert contact_times(p)["hertz"] == pytest.approx(pw, rel=1e-12)
+    # a track given its own modulus; 0 means the default
+    pw_own = hertz_time(m, r, e_star(1.3e11, 0.28, 2e12, -0.99), V_DRIVE)
+    assert contact_times({**p, "youngs_track": 2e12})["hertz"] == pytest.approx(pw_own, rel=1e-12)
+    assert contact_times({**p, "youngs_track": 0.0})["hertz"] == pytest.approx(pw, rel=1e-12)
+
+
+@pytest.mark.parametrize("shape, template", [(1, chip_template), (2, disc_template)])
+def test_a_clumps_spheres_share_its_mass(shape, template):
+    from vibrofeed.parameters import contact_times
+
+    size, thick = 4e-4, 1e-4
+    volume = size ** 2 * thick if shape == 1 else math.pi / 4 * size ** 2 * thick
+    m = volume * 2330 / len(template(size, thick))  # one sphere's share
+    r = thick / 2
+    times = contact_times({**SILICON, **DRIVE, "part_size": size, "part_thickness": thick, "shape": shape})
+    pp = hertz_time(m / 2, r / 2, e_star(1.3e11, 0.28, 1.3e11, 0.28), V_DRIVE)
+    assert times["hertz"] == pytest.approx(pp, rel=1e-12)
+
+
+def test_pulloff_contacts_are_timed_at_1_cm_per_s():
+    from vibrofeed.parameters import contact_times
+
+    r = 1.5e-4
+    m = 4 / 3 * math.pi * r ** 3 * 2330
+    pp = hertz_time(m / 2, r / 2, e_star(1.3e11, 0.28, 1.3e11, 0.28), 0.01)
+    # "pair" marks the pulloff deck: nothing vibrates, whatever a drive says
+    times = contact_times({**SILICON, **DRIVE, "part_size": 3e-4, "pair": 0})
+    assert times["hertz"] == pytest.approx(pp, rel=1e-12)
+    # without a drive the bulk deck also takes 1 cm/s
+    assert contact_times({**SILICON, "part_size": 3e-4})["hertz"] == pytest.approx(pp, rel=1e-12)
+    still = contact_times({**SILICON, "part_size": 3e-4, "freq": 100.0})
+    assert still["hertz"] == pytest.approx(pp, rel=1e-12)
+
+
+def test_without_a_part_there_is_no_contact_time():
+    from vibrofeed.parameters import contact_times
+
+    assert contact_times(SILICON) is None
+    assert contact_times({"density": 2330.0, "youngs": 1.3e11, "radius": 1e-4}) is None
+
+
+def test_a_fixed_dt_is_held_to_a_tenth_of_the_hertz_and_a_fifth_of_the_rayleigh_time():
+    from vibrofeed.parameters import contact_times, step_beyond_contact
+
+    p = {**SILICON, "youngs": 5e7, "part_size": 3e-4, "pair": 0}  # the decks' softened silicon
+    r = 1.5e-4
+    m = 4 / 3 * math.pi * r ** 3 * 2330
+    hertz = hertz_time(m / 2, r / 2, e_star(5e7, 0.28, 5e7, 0.28), 0.01)
+    rayleigh = rayleigh_time(r, 2330, 5e7, 0.28)
+    # 0.2 T_R lies between the automatic dt (t_H / 50) and 0.1 t_H
+    assert hertz / 50 < 0.2 * rayleigh < 0.1 * hertz
+    assert step_beyond_contact({**p, "dt": 0.0}) is None  # automatic
+    assert step_beyond_contact({**p, "dt": hertz / 50 * 0.999}) is None  # shorter than automatic
+    assert step_beyond_contact({**p, "dt": 0.2 * rayleigh * 0.999}) is None
+    past_rayleigh = step_beyond_contact({**p, "dt": 0.2 * rayleigh * 1.001})
+    assert "of the Rayleigh time (limit 20%)" in past_rayleigh and "Hertz" not in past_rayleigh
+    both = step_beyond_contact({**p, "dt": 0.1 * hertz * 1.001})
+    assert "of the Hertz time (limit 10%)" in both and "of the Rayleigh time (limit 20%)" in both
+    assert "Hertz" not in step_beyond_contact({**p, "dt": 0.1 * hertz * 0.999})
+    # exactly at a limit is allowed (the limits are "beyond"): the times as the check takes them
+    times = contact_times(p)
+    assert times["hertz"] == pytest.approx(hertz, rel=1e-12)
+    assert step_beyond_contact({**p, "dt": 0.2 * times["rayleigh"]}) is None
+    assert "Hertz" not in step_beyond_contact({**p, "dt": 0.1 * times["hertz"]})
+
+
+@pytest.mark.parametrize("value, hinted", [
+    ("0.5", True), ("9999.5", True),  # under 1e4 Pa: a modulus in GPa
+    ("1e4", False), ("-0.5", False),  # the hint's bounds are open: 0 < x < 1e4
+])
+def test_a_track_modulus_in_gpa_is_named_as_a_likely_slip(value, hinted):
+    with pytest.raises(ParameterError, match=f"youngs_track={value} Pa must be 0") as info:
+        resolve(DECK, {"youngs_track": value})
+    assert ("a modulus in GPa? (moduli are in Pa: aluminium 7e10)" in str(info.value)) == hinted
+
+
+def test_without_a_pre_fill_its_place_is_not_checked():
+    # n_parts=0: only the inlet feeds, fill_from/fill_to place nothing (a word, no refusal)
+    resolve(DECK, {"n_parts": "0", "inlet_rate": "200", "gate_width": "8e-4", "fill_to": "0.9"})
+    resolve(DECK, {"n_parts": "0", "inlet_rate": "200", "fill_from": "0.5", "fill_to": "0.5"})
+    with pytest.raises(ParameterError, match="fill_to=0.9 reaches into the gate"):
+        resolve(DECK, {"n_parts": "1", "inlet_rate": "200", "gate_width": "8e-4", "fill_to": "0.9"})
+    with pytest.raises(ParameterError, match="fill_from=0.5 must be below fill_to=0.5"):
+        resolve(DECK, {"n_parts": "1", "fill_from": "0.5", "fill_to": "0.5"})

@@ -137,3 +137,34 @@ def test_section_2_takes_the_limits_of_its_section_1_twin(twin, value):
 
     twin_2 = "s2_" + ({"track_length": "length", "track_width": "width"}.get(twin, twin))
     assert RULES[twin_2](float(value)) == RULES[twin](float(value)) is not None
+
+
+def _warnings_of(deck, given):
+    import warnings
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        resolve(deck, given)
+    return caught
+
+
+def test_an_idle_parameter_left_at_its_default_is_not_worth_a_word(deck):
+    # dt_unchecked has no effect with the automatic dt (dt=0, the default): said only when moved
+    assert _warnings_of(deck, {"dt_unchecked": "0"}) == []
+    moved = _warnings_of(deck, {"dt_unchecked": "1"})
+    assert [str(w.message) for w in moved] == [
+        "parameter dt_unchecked has no effect: it allows a fixed dt beyond the contact's limits: "
+        "dt=0 is automatic"]
+
+
+def test_warnings_point_at_the_caller_of_resolve(deck):
+    import warnings
+
+    # both the plausibility advice and the insisted-on contact step name the line that called
+    # resolve (here, not a helper's or pytest's frame): resolve is called right in this body
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        resolve(deck, {"dt_unchecked": "1"})
+        resolve(deck, {"dt": "1e-4", "dt_unchecked": "1"})
+    assert "run as dt_unchecked=1 asks" in str(caught[-1].message)
+    assert [w.filename for w in caught] == [__file__] * 2

@@ -208,3 +208,17 @@ def test_a_deck_without_some_force_parameters_reports_them_as_zero(tmp_path):
     with pytest.raises(ParameterError) as err:
         resolve(own_deck(tmp_path, **part, air_viscosity=MU), {})
     assert f"hamaker=0 J, air_viscosity={MU:g} Pa s with roughness=0 m need" in str(err.value)
+
+
+@pytest.mark.parametrize("force", [{"air_viscosity": repr(MU)}, {"hamaker": "1e-19"}])
+def test_a_tilted_floor_refuses_either_surface_force(force):
+    with pytest.raises(ParameterError, match=r"cross_tilt: the surface forces .* act on a level floor"):
+        resolve(Deck.find("bulk_feeder"), {"cross_tilt": "5", **force})
+    resolve(Deck.find("bulk_feeder"), {"cross_tilt": "0", **force})
+
+
+def test_a_tilted_bowl_without_surface_forces_resolves():
+    # the bowl declares neither hamaker nor air_viscosity: an absent force is off
+    bowl = Deck.find("bowl_feeder")
+    assert "hamaker" not in bowl.tunables and "air_viscosity" not in bowl.tunables
+    assert resolve(bowl, {"cross_tilt": "3"})["cross_tilt"] == "3"
