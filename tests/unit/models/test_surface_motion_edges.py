@@ -221,6 +221,13 @@ def test_sine_level_crossings_do_not_depend_on_how_small_the_amplitude_is():
     assert SineWaveform(F, 0.0, 0.0).accel_roots(1.0, 0.0, 0.0, 0.0, T).size == 0
 
 
+def _accel_only(accel, period=None):
+    """A surface at rest but for the along-track acceleration ``accel(t)``: only its roots matter."""
+    def still(t):
+        return np.zeros_like(np.asarray(t, dtype=float))
+    return CallableSurface(still, still, accel, period=period)
+
+
 def _four_sample_spline():
     # periodic cubic spline of 0, 1, 0, -1 (h = 1/4): moments M solve
     # M[i-1] + 4 M[i] + M[i+1] = 96 (y[i-1] - 2 y[i] + y[i+1]) -> M = 0, -48, 0, 48
@@ -253,9 +260,7 @@ def test_sampled_waveform_roots_do_not_depend_on_the_scale_of_the_combination():
 def test_generic_roots_resolve_a_close_pair_straddling_the_middle_sample():
     # a_x = (t - 0.4995)(t - 0.5005) on the window [0, 1]: 400 intervals put a sample at 0.5,
     # between the two roots, so both are bracketed
-    s = CallableSurface(lambda t: np.zeros_like(np.asarray(t, dtype=float)),
-                        lambda t: np.zeros_like(np.asarray(t, dtype=float)),
-                        lambda t: (np.asarray(t) - 0.4995) * (np.asarray(t) - 0.5005))
+    s = _accel_only(lambda t: (np.asarray(t) - 0.4995) * (np.asarray(t) - 0.5005))
     assert s.accel_roots(1.0, 0.0, 0.0, 0.0, 1.0) == pytest.approx([0.4995, 0.5005], abs=1e-12)
 
 
@@ -373,9 +378,7 @@ def test_a_non_periodic_polynomial_accepts_times_up_to_1e_12_past_its_domain():
 def test_generic_roots_on_a_window_much_shorter_than_a_period_use_at_least_eight_intervals():
     # 400 per period would be 4 intervals on this 1/100-period window; eight put a sample at
     # 0.5, between the two roots, so both are bracketed
-    s = CallableSurface(lambda t: np.zeros_like(np.asarray(t, dtype=float)),
-                        lambda t: np.zeros_like(np.asarray(t, dtype=float)),
-                        lambda t: (np.asarray(t) - 0.4995) * (np.asarray(t) - 0.5005), period=100.0)
+    s = _accel_only(lambda t: (np.asarray(t) - 0.4995) * (np.asarray(t) - 0.5005), period=100.0)
     assert s.accel_roots(1.0, 0.0, 0.0, 0.0, 1.0) == pytest.approx([0.4995, 0.5005], abs=1e-12)
 
 
@@ -469,16 +472,12 @@ def test_a_non_periodic_next_breakpoint_skips_only_1e_12_of_the_time_itself_past
 
 def test_generic_roots_use_400_intervals_of_a_non_periodic_window_whatever_its_length():
     # window [0, 2]: samples every 0.005 s, one at 0.015 between the roots 0.0145 and 0.0155
-    s = CallableSurface(lambda t: np.zeros_like(np.asarray(t, dtype=float)),
-                        lambda t: np.zeros_like(np.asarray(t, dtype=float)),
-                        lambda t: (np.asarray(t) - 0.0145) * (np.asarray(t) - 0.0155))
+    s = _accel_only(lambda t: (np.asarray(t) - 0.0145) * (np.asarray(t) - 0.0155))
     assert s.accel_roots(1.0, 0.0, 0.0, 0.0, 2.0) == pytest.approx([0.0145, 0.0155], abs=1e-12)
 
 
 def test_generic_roots_in_the_last_sampling_interval_and_at_t1_are_found():
-    s = CallableSurface(lambda t: np.zeros_like(np.asarray(t, dtype=float)),
-                        lambda t: np.zeros_like(np.asarray(t, dtype=float)),
-                        lambda t: np.asarray(t) - 0.999)
+    s = _accel_only(lambda t: np.asarray(t) - 0.999)
     # 0.999 lies in the last of the 400 intervals of [0, 1]
     assert s.accel_roots(1.0, 0.0, 0.0, 0.0, 1.0) == pytest.approx([0.999], abs=1e-12)
     # a level met exactly at t1 (a_x(1) as computed, so f(t1) == 0) is reported as t1
