@@ -76,10 +76,7 @@ def simulate_speed_dependent(surface, contact: Contact, mu_k_fast: float, v_c: f
             w_hold = 0.0 if kind == "stick" else s * v_c
             band = (lo, hi) if kind == "stick" else tuple(sorted((a_slow[s], a_fast[s])))
             offset = z - P.local(i, t, 0)
-            if kind == "stick":  # stuck by the trend at a band edge, a_s may lie a rounding
-                a_now = P.local(i, t, 2)  # error outside: as vertical.simulate, widen it to a_s
-                band = (min(lo, a_now), max(hi, a_now))
-            hit = stick_exit(P, i, t, *band)
+            hit = stick_exit(P, i, t, *band, held=kind == "stick")
             t1, j, out = (t_end, P.n - 1, 0) if hit is None else hit
             segments.append(_Segment(t, t1, kind, z, v, 0.0, offset, w_hold))
             z = P.local(j, t1, 0) + offset - w_hold * (t1 - t)

@@ -158,13 +158,20 @@ def _accel_above(t: float, P: Pieces, j: int, level: float) -> float:
     return P.local(j, t, 2) - level
 
 
-def stick_exit(P: Pieces, i: int, t: float, lo: float, hi: float):
-    """First time >= t where the surface acceleration leaves [lo, hi]."""
+def stick_exit(P: Pieces, i: int, t: float, lo: float, hi: float, held: bool = False):
+    """First time >= t where the surface acceleration leaves [lo, hi].
+
+    ``held``: the part is stuck at t as :func:`stick_decision` found, which allows a_s(t)
+    a rounding error outside the band (a start on a band edge, a_s turning inward): the
+    band is widened to a_s(t), or the exit would be found at t at once."""
+    a_t = P.local(i, t, 2)
+    if held:
+        lo, hi = min(lo, a_t), max(hi, a_t)
     for j0, j1 in _chunks(i, P.n):
         a_s = P.a_start[j0:j1].copy()
         a_e = P.a_end[j0:j1]
         if j0 == i:
-            a_s[0] = P.local(i, t, 2)
+            a_s[0] = a_t
         bad = np.flatnonzero((a_s < lo) | (a_s > hi) | (a_e < lo) | (a_e > hi))
         if bad.size == 0:
             continue

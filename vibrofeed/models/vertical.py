@@ -274,10 +274,7 @@ def simulate(surface, contact: Contact, t_end: float, t_start: float = 0.0,
             raise RuntimeError(f"more than {max_phases} stick/slip phases")
         if mode == 0:
             offset = z - P.local(i, t, 0)
-            # Stuck by the trend at a band edge, a_s may lie a rounding error (<= tol)
-            # outside the band: widen it to a_s, or the exit would be found at t at once.
-            a_now = P.local(i, t, 2)
-            hit = stick_exit(P, i, t, min(lo, a_now), max(hi, a_now))
+            hit = stick_exit(P, i, t, lo, hi, held=True)
             t1, j, side = (t_end, P.n - 1, 0) if hit is None else hit
             phases.append(Phase(t, t1, True, z, v, 0.0, offset))
             z, v = P.local(j, t1, 0) + offset, P.local(j, t1, 1)
