@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from vibrofeed.models.roots import XTOL, all_roots, slip_end
+from vibrofeed.models.roots import XTOL, all_roots, slip_end, stick_exit
 from vibrofeed.models.surface import CallableSurface
 
 
@@ -39,3 +39,40 @@ def test_a_slip_from_zero_that_cannot_move_away_ends_at_once(s, slope):
     P = _linear_accel(a_p, slope).pieces(0.0, 1.0)
     assert P.n == 1
     assert slip_end(P, 0, 0.0, 1.0, s, a_p, 1e-12, from_zero=True) == (0.0, 0)
+
+
+@pytest.mark.parametrize("s", [1, -1])
+@pytest.mark.parametrize("w0", [0.1, 0.5])
+def test_a_slip_whose_relative_velocity_dips_ends_only_if_the_dip_reaches_zero(s, w0):
+    """a_s = a0 + slope t crosses a_p = 0 at t = 1/2 on one piece [0, 1] (a0 = -s, slope = 2 s):
+    from s w(0) = w0 > 0 (an initial condition, not an event) s w = w0 - t + t^2 falls to its
+    minimum w0 - 1/4 at t = 1/2 and rises again. For w0 = 0.1 the minimum is below zero and the
+    slip ends at the first root (1 - sqrt(1 - 4 w0)) / 2; for w0 = 0.5 it stays above: no end."""
+    P = _linear_accel(-s, 2.0 * s).pieces(0.0, 1.0)   # v_s = 1 - s t + s t^2
+    assert P.n == 1
+    v_p0 = 1.0 - s * w0
+    got = slip_end(P, 0, 0.0, v_p0, s, 0.0, 1e-12, from_zero=False)
+    if w0 < 0.25:
+        assert got[1] == 0
+        assert got[0] == pytest.approx((1 - np.sqrt(1 - 4 * w0)) / 2, abs=1e-13)   # s
+    else:
+        assert got is None
+
+
+def test_an_acceleration_touching_the_band_edge_and_turning_inward_does_not_leave_it():
+    """a_s = 4 - 4 |t - 1| rises to the band's top hi = 4 exactly at its turning point t = 1 and
+    falls back: the band [lo, hi] is closed, so it never leaves it, whether the search starts
+    before the touch (the second piece starts on the edge) or at it (held=False)."""
+    def s(t):
+        return np.asarray(t, dtype=float) - 1.0
+
+    touch = CallableSurface(lambda t: 2 / 3 + 2 * s(t) + 2 * s(t) ** 2 - 2 / 3 * s(t) ** 2 * np.abs(s(t)),
+                            lambda t: 2 + 4 * s(t) - 2 * s(t) * np.abs(s(t)),
+                            lambda t: 4 - 4 * np.abs(s(t)), turning_points=[1.0])
+    P = touch.pieces(0.0, 2.0)
+    assert P.n == 2 and P.a_start[1] == 4.0
+    assert stick_exit(P, 0, 0.0, -20.0, 4.0) is None
+    assert stick_exit(P, 1, 1.0, -20.0, 4.0) is None
+    # the same band lowered by 1 m/s^2 is left where a_s = 3, at t = 3/4, upward
+    t_x, j, side = stick_exit(P, 0, 0.0, -20.0, 3.0)
+    assert (j, side) == (0, 1) and t_x == pytest.approx(0.75, abs=1e-13)

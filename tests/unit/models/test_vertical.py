@@ -364,6 +364,13 @@ def test_equal_friction_coefficients_without_gravity_leave_the_band_cleanly(rati
     t = np.linspace(0, 20 / f, 201)
     a = simulate(up, c, t_end=20 / f, t_eval=t)
     b = simulate(sine_drive(amp, f, 0.3 + math.pi), c, t_end=20 / f, t_eval=t)
+    # each exit is one event: the slip it starts lasts (no zero-length phase decided again at
+    # once), and stick and slip phases alternate. A slip from a_s = A (phase angle p0 after
+    # a_s's zero, sin p0 = 1 / ratio) gains 2 sqrt(ratio^2 - 1) - pi + 2 p0 (in A / w units) of
+    # relative velocity while a_s > A and loses 2 p0 before a_s reaches -A: for ratio below
+    # sqrt(1 + pi^2 / 4) = 1.86 it ends with a_s inside the band, i.e. stuck (mirrored: down).
+    assert all(p.t1 > p.t0 for p in a.phases)
+    assert all(p.stuck != q.stuck for p, q in zip(a.phases, a.phases[1:]))
     exits = [p.t1 for p in a.phases[:-1] if p.stuck]
     assert len(exits) >= 38                          # two stick phases a period
     # every stick phase ends where |a_s| reaches the band edge A
@@ -436,3 +443,20 @@ def test_a_slip_caught_on_a_piece_whose_acceleration_ends_at_the_part_s():
     assert traj.phases[0].t1 == pytest.approx(0.5, abs=1e-13)
     assert traj.z == pytest.approx([0.125, 0.125], abs=1e-13)
     assert traj.v == pytest.approx([0.25, -0.25], abs=1e-13)
+
+
+def test_a_surface_acceleration_touching_the_band_top_keeps_the_part_stuck():
+    # a_s = 4 - 4 |t - 1| (v_s = 2 + 4 s - 2 s |s|, x_s = 2/3 + 2 s + 2 s^2 - 2/3 s^2 |s|,
+    # s = t - 1) reaches the band's top 4 (EXACT) only at its turning point t = 1: the part
+    # can follow it all along and rides from rest at x_s(0) = 0 to x_s(2) = 4 m, v_s(2) = 4 m/s
+    # (v_s(1) = 2 m/s, x_s(1) = 2/3 m).
+    def s(t):
+        return np.asarray(t, dtype=float) - 1.0
+
+    touch = CallableSurface(lambda t: 2 / 3 + 2 * s(t) + 2 * s(t) ** 2 - 2 / 3 * s(t) ** 2 * np.abs(s(t)),
+                            lambda t: 2 + 4 * s(t) - 2 * s(t) * np.abs(s(t)),
+                            lambda t: 4 - 4 * np.abs(s(t)), turning_points=[1.0])
+    traj = simulate(touch, Contact(**EXACT), t_end=2.0, t_eval=[1.0, 2.0])
+    assert [(p.stuck, p.t0, p.t1) for p in traj.phases] == [(True, 0.0, 2.0)]
+    assert traj.z == pytest.approx([2 / 3, 4.0], abs=1e-14)    # m
+    assert traj.v == pytest.approx([2.0, 4.0], abs=1e-14)      # m/s
