@@ -56,11 +56,8 @@ def os_error(exc: OSError) -> tuple[str, int]:
     target = exc.filename
     if target is None and exc.errno in _FULL and _destinations:
         target = _destinations[-1]
-    if exc.errno == errno.ENOSPC and target is not None:
-        folder = Path(target).absolute()
-        while not folder.exists() and folder != folder.parent:
-            folder = folder.parent
-        what = f"no space left on {mount_point(folder)}"
+    if exc.errno == errno.ENOSPC and target is not None:  # (target need not exist: mount_point)
+        what = f"no space left on {mount_point(target)}"
     if exc.filename is not None and exc.filename2 is not None:
         where = f"cannot move {exc.filename} to {exc.filename2}: "
     elif exc.filename is not None:
@@ -148,7 +145,7 @@ def _png(f, size: int) -> str | None:
     if f.read(8) != _PNG:
         return "it does not start as a PNG"
     pos = 8
-    while pos + 12 <= size:  # chunks: length, type, data, CRC
+    while pos + 8 <= size:  # chunks: length, type (8 bytes), then data and CRC
         f.seek(pos)
         length, kind = struct.unpack(">I4s", f.read(8))
         pos += 12 + length
@@ -179,9 +176,20 @@ def _iso_media(f, size: int) -> str | None:
     return None if b"moov" in kinds else "it has no index (moov box): the movie was not finished"
 
 
+_VTK_END = b"</VTKFile>"
+
+
 def _vtk_xml(f, size: int) -> str | None:
-    f.seek(max(0, size - 64))
-    return None if f.read().rstrip().endswith(b"</VTKFile>") else "it stops before </VTKFile>"
+    end = size  # past the closing tag: white space only, however much (read back in blocks)
+    while end > 0:
+        start = max(0, end - 4096)
+        f.seek(start)
+        kept = f.read(end - start).rstrip()
+        end = start + len(kept)
+        if kept:
+            break
+    f.seek(max(0, end - len(_VTK_END)))
+    return None if f.read(end - f.tell()) == _VTK_END else f"it stops before {_VTK_END.decode()}"
 
 
 def _hdf5(path: Path) -> str | None:
