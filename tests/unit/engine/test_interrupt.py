@@ -105,25 +105,85 @@ def test_a_new_run_is_refused_with_the_signal_that_stops_the_process(fresh):
     assert not interrupt._stoppers
 
 
+class Condition:
+    """threading.Condition, recording how long stop_all would wait."""
+
+    def __init__(self):
+        self.waits = []
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+    def wait_for(self, predicate, timeout=None):
+        self.waits.append((predicate(), timeout))
+        return predicate()
+
+
 def test_stop_all_waits_thirty_seconds_at_most(fresh, monkeypatch):
-    class Condition:
-        """threading.Condition, recording how long stop_all would wait."""
-
-        def __init__(self):
-            self.waits = []
-
-        def __enter__(self):
-            return self
-
-        def __exit__(self, *exc):
-            return False
-
-        def wait_for(self, predicate, timeout=None):
-            self.waits.append((predicate(), timeout))
-            return predicate()
-
     cond = Condition()
     monkeypatch.setattr(interrupt, "_cond", cond)
     monkeypatch.setitem(interrupt._stoppers, 1, lambda why: None)  # a run that never ends
     interrupt.stop_all(KeyboardInterrupt())
+    assert cond.waits == [(False, 30.0)]
+
+
+def test_stop_left_stops_the_runs_a_failed_command_left_and_waits_for_them(fresh):
+    """A command ending on an error stops the runs other threads still wait for, as
+    Ctrl-C does: each is told why, has recorded its end when stop_left returns, and
+    stop_left says there were some."""
+    told, ended = [], threading.Event()
+    registered = threading.Event()
+
+    def run():
+        stopped = threading.Event()
+        key = interrupt.register(lambda why: (told.append(why), stopped.set()))
+        registered.set()
+        stopped.wait(5)
+        time.sleep(0.05)  # recording the end takes a while
+        ended.set()
+        interrupt.unregister(key)
+
+    thread = threading.Thread(target=run, daemon=True)  # a failure must not hold the suite
+    thread.start()
+    assert registered.wait(5), "the run did not register"
+    assert interrupt.stop_left("stopped: the command ended on an error", timeout=5) is True
+    assert told == ["stopped: the command ended on an error"] and ended.is_set()
+    assert not interrupt._stoppers
+    with pytest.raises(KeyboardInterrupt):  # and no run starts after
+        interrupt.check()
+    thread.join(5)
+
+
+def test_stop_left_with_no_run_left_stops_nothing(fresh):
+    assert interrupt.stop_left("why") is False
+    assert interrupt._stopping is None
+    interrupt.check()  # later runs of this process may still start
+    interrupt.unregister(interrupt.register(lambda why: None))
+
+
+def test_stop_left_after_stop_all_neither_stops_nor_waits_again(fresh, monkeypatch):
+    """Ctrl-C's stop_all had its wait for a run that would not end: stop_left, in the
+    command's last step, neither calls that run's stopper again nor waits for it."""
+    told = []
+    interrupt.register(told.append)  # a run that never unregisters
+    interrupt.stop_all(KeyboardInterrupt(), timeout=0)
+    assert told == ["interrupted by the user"]
+    cond = Condition()
+    monkeypatch.setattr(interrupt, "_cond", cond)
+    assert interrupt.stop_left("stopped: the command ended on an error") is False
+    assert told == ["interrupted by the user"] and cond.waits == []
+
+
+def test_stop_left_waits_thirty_seconds_at_most(fresh, monkeypatch):
+    """As long as stop_all waits after Ctrl-C: the command line calls stop_left with
+    its default."""
+    cond = Condition()
+    monkeypatch.setattr(interrupt, "_cond", cond)
+    told = []
+    monkeypatch.setitem(interrupt._stoppers, 1, told.append)  # a run that never ends
+    assert interrupt.stop_left("stopped: the command ended on an error") is True
+    assert told == ["stopped: the command ended on an error"]
     assert cond.waits == [(False, 30.0)]
