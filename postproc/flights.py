@@ -116,7 +116,8 @@ class Flights(AnalysisBase):
         Gap [m] above which a frame counts as airborne when the result holds
         no force to tell contact from flight (nor does a clump's). Default:
         0.2 % of the part's radius (a clump's: of its spheres'), well above the
-        elastic overlap under the part's weight.
+        elastic overlap under the part's weight. A finite gap of 0 m or more
+        (else :class:`~vibrofeed.errors.InputError`).
 
     Results (after :meth:`run`): ``part_id``; ``time``, ``gap`` and
     ``contact_force`` (frames where the part exists; ``contact_force`` None
@@ -133,6 +134,9 @@ class Flights(AnalysisBase):
     """
 
     def __init__(self, result, part_id: int | None = None, contact_tolerance: float | None = None):
+        if contact_tolerance is not None and not (
+                math.isfinite(contact_tolerance) and contact_tolerance >= 0):
+            raise InputError(f"contact_tolerance must be a gap of 0 m or more, got {contact_tolerance!r}")
         super().__init__(result)
         self.part_id = part_id
         self.contact_tolerance = contact_tolerance

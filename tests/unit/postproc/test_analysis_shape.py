@@ -203,6 +203,17 @@ def test_results_are_a_dict_with_attributes():
     assert isinstance(back, Results) and np.array_equal(back.b, res.b, equal_nan=True)
 
 
+@pytest.mark.parametrize("key", ["mean velocity", "2nd", "", 3, ("a", "b")])
+def test_a_result_is_named_by_an_identifier(key):
+    """A result is read as an attribute: a key that is not an identifier (a string with a
+    space, a leading digit, empty, or no string at all) is refused as a dict method is."""
+    res = Results()
+    with pytest.raises(KeyError, match="cannot name a result"):
+        res[key] = 1.0
+    with pytest.raises(KeyError, match="cannot name a result"):
+        Results({key: 1.0})
+    assert res == {}
+
 def test_as_dict_is_json_ready(tmp_path):
     r, *_ = conveyor(tmp_path, n_frames=21)
     with r:

@@ -21,15 +21,27 @@ M = 1e-6
 DT = 1e-4
 
 
-def record(tmp_path, rows, variables=None, name="f.h5"):
-    """A one-part result from (t, bottom height, vz, contact force) rows on a still floor;
-    the recorded force is the total one (contact force minus the weight)."""
+def record(tmp_path, rows, variables=None, name="f.h5", plate=None):
+    """A one-part result from (t, bottom height, vz, contact force) rows on a still floor, or
+    on a plate whose height and velocity at t are ``plate(t)`` (the bottom height is then
+    absolute); the recorded force is the total one (contact force minus the weight)."""
     frames = [(k, float(t), parts([1], [[0.0, 0.0, z + R]], radius=R, mass=M, velocity=[[0, 0, v]],
                                   force=[[0, 0, fc - M * G]]))
               for k, (t, z, v, fc) in enumerate(rows)]
     if variables is None:
         variables = {"freq": ("50", "Hz", "f", "50"), "incline": ("0", "deg", "i", "0")}
-    return Result(write_result(tmp_path / name, frames, variables=variables))
+    surface = None if plate is None else [([0.0, 0.0, plate(t)[0]], [0.0, 0.0, plate(t)[1]])
+                                          for t, *_ in rows]
+    return Result(write_result(tmp_path / name, frames, surface=surface, variables=variables))
+
+
+def without_force(path):
+    """Remove the recorded force, as in an older file (contact is then a gap below the tolerance)."""
+    import h5py
+
+    with h5py.File(path, "r+") as f:
+        del f["particles/parts/force"]
+    return path
 
 
 def flight(t, t0, z0, v0):
@@ -332,3 +344,228 @@ def test_a_gap_equal_to_the_contact_tolerance_is_contact(tmp_path):
         rest = float(Flights(r).run().results.gap[0])
         fl = Flights(r, contact_tolerance=rest).run().results
     assert fl.takeoff_kinds == ["rebound"] and len(fl.takeoffs) == 1
+
+
+def bounces_with(es, v1, dt):
+    """Rows of a part dropped from rest onto a still floor, hitting it at v1 [m/s] and then
+    rebounding with the restitutions ``es`` in turn; and the impacts (time, speed in, e)."""
+    t1 = v1 / G
+    hits, t, v = [], t1, v1
+    for e in es:
+        hits.append((t, v, e))
+        t, v = t + 2 * e * v / G, e * v
+    rows = []
+    for tt in np.arange(0.0, hits[-1][0] + 5e-4, dt):
+        last = [h for h in hits if h[0] <= tt]
+        z, vz = flight(tt, 0.0, G * t1 ** 2 / 2, 0.0) if not last else \
+            flight(tt, last[-1][0], 0.0, last[-1][2] * last[-1][1])
+        rows.append((tt, z, vz, 0.0))
+    return rows, hits
+
+
+def test_the_realised_restitution_is_the_median_not_the_mean_of_the_fast_impacts(tmp_path):
+    # Four bounces, restitution 0.9, 0.8, 0.5, 0.1: in at v1, 0.9 v1, 0.72 v1 (all at least
+    # half the fastest) and 0.36 v1 (left out). The median of 0.9, 0.8, 0.5 is 0.8 (their
+    # mean 0.733, the median of all four 0.65).
+    es = (0.9, 0.8, 0.5, 0.1)
+    rows, hits = bounces_with(es, 0.05, 2e-4)
+    with record(tmp_path, rows) as r:
+        fl = Flights(r).run().results
+    assert fl.landings == pytest.approx([h[0] for h in hits], abs=1e-12)   # s
+    assert fl.impacts[:, 2] == pytest.approx(es, rel=1e-9)
+    assert fl.realised_restitution == pytest.approx(0.8, rel=1e-9)
+
+
+def test_a_touch_down_at_zero_speed_realises_no_restitution_not_nan(tmp_path):
+    # The record of the landing without a free-flight root, the part's velocity now exactly
+    # what gravity takes away over the last interval: carried to the first frame in contact it
+    # is 0, a touch-down without approach. It is an impact (as fast as the fastest, 0), which
+    # rebounds nothing: the realised restitution is 0; NaN is only for a record without impacts.
+    t = np.arange(7) * DT
+    v_hold = G * (t[3] - t[2])      # m/s: the same product the free flight subtracts
+    rows = [(t[k], 1e-6, v_hold, 0.0) if k < 3 else (t[k], 0.0, 0.0, M * G) for k in range(7)]
+    with record(tmp_path, rows) as r:
+        fl = Flights(r).run().results
+    assert fl.landings.tolist() == [t[3]]
+    assert fl.impacts.tolist() == [[t[3], 0.0, 0.0]]
+    assert fl.realised_restitution == 0.0
+
+
+def test_a_flight_slowed_by_air_drag_is_not_taken_for_an_impact(tmp_path):
+    # Falling under gravity and Stokes drag (tau = m / (6 pi mu r), 5.9 s in air): each frame
+    # it gains ~dt / tau = 2e-5 of its speed over free flight, far below an impact's jump. It
+    # lands 0.2 ns after frame 3, 21 pm above the floor then, where free flight from frame 2,
+    # without the drag, would already be 88 pm lower: below the floor. That is no impact: the
+    # only landing is the one after frame 3, the part resting from frame 4 on.
+    tau = M / (6 * math.pi * 1.81e-5 * R)
+    v0 = -0.1
+    t_land = 3 * DT + 2e-10
+
+    def fall(t):   # height above the floor (0 at t_land) and velocity
+        c = v0 + G * tau
+        return (-G * tau * (t - t_land) + tau * c * (math.exp(-t_land / tau) - math.exp(-t / tau)),
+                -G * tau + c * math.exp(-t / tau))
+
+    rows = [(k * DT, *fall(k * DT), 0.0) if k <= 3 else (k * DT, -1e-9, 0.0, M * G) for k in range(8)]
+    assert 0 < rows[3][1] < 3e-11                                      # m: just above at frame 3
+    z2, v2 = rows[2][1], rows[2][2]
+    assert z2 + v2 * DT - G / 2 * DT ** 2 < -5e-11                     # free flight: below
+    with record(tmp_path, rows) as r:
+        fl = Flights(r).run().results
+    assert fl.landings == pytest.approx([t_land], abs=1e-12)          # s
+    assert len(fl.takeoffs) == 0 and fl.n_hops == 0
+    assert fl.impacts[0, 1] == pytest.approx(fall(t_land)[1], rel=1e-9)
+
+
+def test_a_hop_shorter_than_two_frames_after_a_contact_lands(tmp_path):
+    # Hits at 2.6 frames, touching at frame 3 only, leaves at 3.3 frames with w = 1.2 g dt / 2:
+    # lands again 1.2 frames later, at 4.5 frames, frame 4 its only airborne frame; at rest after
+    t1, t_up = 2.6 * DT, 3.3 * DT
+    w = G * 1.2 * DT / 2
+    h = G * t1 ** 2 / 2
+    t2 = t_up + 2 * w / G
+    rows = []
+    for k in range(9):
+        t = k * DT
+        if t < t1:
+            rows.append((t, *flight(t, 0.0, h, 0.0), 0.0))
+        elif t < t_up:
+            rows.append((t, -1e-9, 0.0, 5 * M * G))
+        elif t < t2:
+            rows.append((t, *flight(t, t_up, 0.0, w), 0.0))
+        else:
+            rows.append((t, -1e-9, 0.0, M * G))
+    assert 4 * DT < t2 < 5 * DT and rows[4][1] > 0
+    with record(tmp_path, rows) as r:
+        fl = Flights(r).run().results
+    assert fl.landings == pytest.approx([t1, t2], abs=1e-12)
+    assert fl.takeoffs == pytest.approx([t_up], abs=1e-12) and fl.takeoff_kinds == ["rebound"]
+    assert fl.flights == pytest.approx(np.array([[t_up, t2]]), abs=1e-12) and fl.n_hops == 1
+
+
+def falling_plate(t):
+    """A plate falling away at 2 g (the top of a swing of Gamma = 2): height, velocity."""
+    return -G * t ** 2, -2 * G * t
+
+
+def test_a_gentle_landing_on_a_plate_falling_away_is_the_first_root(tmp_path):
+    # Relative to a plate accelerating down at 2 g the part's free flight curves up at g: in
+    # flight, its gap g / 2 (t - t1)(t - t2) would meet the plate at t1 = 2.2 and leave it at
+    # t2 = 2.7 frames. It lands at t1 (relative speed w1 = -g (t2 - t1) / 2) and rebounds with
+    # e = 0.5: the landing is the first root, the launch the same instant.
+    t1, t2, e = 2.2 * DT, 2.7 * DT, 0.5
+    w1 = -G * (t2 - t1) / 2
+    rows = []
+    for k in range(7):
+        t = k * DT
+        zs, vs = falling_plate(t)
+        if t < t1:
+            gap, rel = G / 2 * (t - t1) * (t - t2), G / 2 * (2 * t - t1 - t2)
+        else:
+            gap, rel = -e * w1 * (t - t1) + G / 2 * (t - t1) ** 2, -e * w1 + G * (t - t1)
+        rows.append((t, zs + gap, vs + rel, 0.0))
+    with record(tmp_path, rows, plate=falling_plate) as r:
+        fl = Flights(r).run().results
+    assert fl.landings == pytest.approx([t1], abs=1e-12)             # s
+    assert fl.takeoffs == pytest.approx([t1], abs=1e-12) and fl.takeoff_kinds == ["rebound"]
+    assert fl.impacts[0, 1] == pytest.approx(w1, rel=1e-6)           # m/s, -2.5e-4
+    assert fl.impacts[0, 2] == pytest.approx(e, rel=1e-6)
+
+
+def test_a_launch_from_a_plate_falling_away_is_the_last_root(tmp_path):
+    # Pressed on the plate falling at 2 g at frames 0 and 1 (a soft impact under way), the part
+    # leaves it at t_up = 1.6 frames with relative speed w: its flight traced back curves down
+    # relative to the plate and met it also at t_up - 2 w / g (1.29 frames), in the same
+    # interval; it left at the later one.
+    t_up, w = 1.6 * DT, 1.5e-4
+    assert DT < t_up - 2 * w / G
+    rows = []
+    for k in range(6):
+        t = k * DT
+        zs, vs = falling_plate(t)
+        if t < t_up:
+            rows.append((t, zs - 1e-9, vs, M * G))
+        else:
+            rows.append((t, zs + w * (t - t_up) + G / 2 * (t - t_up) ** 2, vs + w + G * (t - t_up), 0.0))
+    with record(tmp_path, rows, plate=falling_plate) as r:
+        fl = Flights(r).run().results
+    assert fl.takeoffs == pytest.approx([t_up], abs=1e-12) and fl.takeoff_kinds == ["rebound"]
+
+
+@pytest.mark.parametrize("stop", [None, 3])
+def test_without_force_a_slow_launch_is_traced_back_over_the_contact_to_its_first_frame(tmp_path, stop):
+    # Resting 0.5 um above the floor (contact by the 1 um tolerance) at frames 0 and 1, it leaves
+    # at 1.1 frames with w = 0.01 m/s: from that height its flight traced back meets the floor at
+    # t_up + s = 0.61 frames (s < 0 the root of g0 + w s - g s^2 / 2), in the contact's first
+    # interval; frame 2 is its first frame above the tolerance. The same when the record ends
+    # there (stop=3: the run stopped at its first frame in flight).
+    g0, w, t_up = 5e-7, 0.01, 1.1 * DT
+    rows = [(k * DT, g0, 0.0, 0.0) if k * DT < t_up else (k * DT, *flight(k * DT, t_up, g0, w), 0.0)
+            for k in range(6)]
+    record(tmp_path, rows).close()
+    s = (w - math.sqrt(w * w + 2 * G * g0)) / G
+    assert 0 < t_up + s < DT and rows[2][1] > 1e-6
+    with Result(without_force(tmp_path / "f.h5")) as r:
+        fl = Flights(r).run(stop=stop).results
+    assert fl.takeoffs == pytest.approx([t_up + s], abs=1e-12) and fl.takeoff_kinds == ["rebound"]
+
+
+def test_without_force_the_launch_is_the_last_time_the_flight_traced_back_meets_the_plate(tmp_path):
+    # A plate moving as a cubic over the record: the flight seen after the launch differs from
+    # it by k (t - t_e)(t - t_m)(t - t_up), t_e, t_m, t_up = 0.5, 1.5, 3.5 frames: traced back it
+    # meets the plate three times, and the part rests on the plate until t_up, the last.
+    # Frame 4 is in flight but within the 1 um tolerance (0.44 um up), frame 5 above it.
+    t_e, t_m, t_up, w = 0.5 * DT, 1.5 * DT, 3.5 * DT, 0.01
+    k = 1e-7 / DT ** 3
+
+    def path(t):   # the flight: height and velocity
+        return w * (t - t_up) - G / 2 * (t - t_up) ** 2, w - G * (t - t_up)
+
+    def plate(t):  # the flight minus the cubic
+        f = k * (t - t_e) * (t - t_m) * (t - t_up)
+        df = k * ((t - t_m) * (t - t_up) + (t - t_e) * (t - t_up) + (t - t_e) * (t - t_m))
+        return path(t)[0] - f, path(t)[1] - df
+
+    rows = [(k_ * DT, *(plate(k_ * DT) if k_ * DT <= t_up else path(k_ * DT)), 0.0) for k_ in range(7)]
+    record(tmp_path, rows, plate=plate).close()
+    with Result(without_force(tmp_path / "f.h5")) as r:
+        fl = Flights(r).run().results
+    assert fl.gap[4] == pytest.approx(4.375e-7, abs=1e-15) and fl.gap[5] > 1e-6   # m
+    assert fl.takeoffs == pytest.approx([t_up], abs=1e-12) and fl.takeoff_kinds == ["rebound"]
+
+
+@pytest.mark.parametrize("force, t_up, kind", [
+    # the force peaks at the middle frame (the landing's impact) and falls at the last: lift-off
+    # extrapolated from the last two, half a frame on, whatever came before
+    ({3: 0.5, 4: 3.0, 5: 1.0}, 5.5 * DT, "lift-off"),
+    # overlapping, yet no frame of the contact pushes (the force 0, then pulling): no force to
+    # extrapolate to zero; the launch is the root of the flight seen after it
+    ({3: 0.0, 4: 0.0, 5: -0.5}, 5.4 * DT, "rebound"),
+])
+def test_only_a_pushing_force_falling_at_the_end_of_a_sustained_contact_times_a_lift_off(
+        tmp_path, force, t_up, kind):
+    t1 = 2.5 * DT
+    h = G * t1 ** 2 / 2
+    rows = []
+    for k in range(10):
+        t = k * DT
+        if t < t1:
+            rows.append((t, *flight(t, 0.0, h, 0.0), 0.0))
+        elif k <= 5:
+            rows.append((t, -1e-9, 0.0, force[k] * M * G))
+        else:
+            rows.append((t, *flight(t, t_up, 0.0, 3e-3), 0.0))
+    with record(tmp_path, rows) as r:
+        fl = Flights(r).run().results
+    assert fl.landings[0] == pytest.approx(t1, abs=1e-12)
+    assert fl.takeoffs == pytest.approx([t_up], abs=1e-12) and fl.takeoff_kinds == [kind]
+
+
+@pytest.mark.parametrize("tol", [-1e-9, float("nan"), float("inf")])
+def test_a_contact_tolerance_that_is_not_a_gap_is_refused(tmp_path, tol):
+    """A gap tolerance below 0 would call a part resting in contact airborne (and one
+    NaN or infinite, nothing): refused before the result is read."""
+    from vibrofeed.errors import InputError
+
+    with pytest.raises(InputError, match=r"contact_tolerance must be a gap of 0 m or more, got "):
+        Flights(None, contact_tolerance=tol)

@@ -8,11 +8,14 @@ frames, so each shows up only as a velocity jump between two airborne frames.
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
 
-from helpers import parts, write_result
+from bulk_synthetic import enclosing_radius
+from helpers import parts, write_bulk_result, write_result
+from vibrofeed.errors import InputError
 from vibrofeed.postproc import Flights, Results
 from vibrofeed.postproc.flights import normal_contact_force
 from vibrofeed.results.reader import Result
@@ -124,3 +127,103 @@ def test_results_name_missing_answers_as_attributes():
     assert "a" not in res
     with pytest.raises(AttributeError):
         del res.a
+
+
+# -- chips: a body's lowest point is its lowest sphere's ------------------------------------
+R_S, PITCH = 7.5e-5, 1e-4
+# three spheres in an L (a corner and its two neighbours): their mean, the body's centre, is
+# not the middle sphere, nor the middle of any two
+CHIP_L = np.array([[0.0, 0.0, 0.0, R_S], [PITCH, 0.0, 0.0, R_S], [0.0, PITCH, 0.0, R_S]])
+
+
+@pytest.mark.parametrize("tilt_deg, depth", [
+    # turned by a about x, a sphere at y (from the centre, mean y = PITCH / 3) is y sin(a) up: at
+    # +30 degrees the two at y = -PITCH / 3 are lowest, at -30 the one at y = 2 PITCH / 3
+    (30.0, R_S + PITCH / 3 * 0.5),
+    (-30.0, R_S + 2 * PITCH / 3 * 0.5),
+])
+def test_an_l_shaped_chip_falls_onto_the_plate_from_its_lowest_sphere(tmp_path, tilt_deg, depth):
+    # Dropped from rest with its lowest point h0 = 10 um above a still plate, the chip lands at
+    # sqrt(2 h0 / g) and rests; its force is not recorded (a body), so contact is the gap.
+    h0 = 1e-5
+    t_land = math.sqrt(2 * h0 / G)
+    a = math.radians(tilt_deg) / 2
+    q = [math.cos(a), math.sin(a), 0.0, 0.0]
+    times = np.arange(20) * 1e-4
+    gaps = np.where(times < t_land, h0 - G / 2 * times ** 2, 0.0)
+    frames = []
+    for k, t in enumerate(times):
+        p = parts([1], [[0.0, 0.0, depth + gaps[k]]], radius=enclosing_radius(CHIP_L), mass=M,
+                  velocity=[[0, 0, -G * t if t < t_land else 0.0]])
+        p["force"] = np.full((1, 3), np.nan)
+        p["orientation"] = np.array([q])
+        frames.append((k, float(t), p))
+    variables = {"freq": ("100", "Hz", "f", "100"), "incline": ("0", "deg", "i", "0")}
+    with Result(write_bulk_result(tmp_path / "l.h5", frames, variables=variables, body_template=CHIP_L)) as r:
+        res = Flights(r).run().results
+    assert res.gap == pytest.approx(gaps, abs=1e-12)               # m
+    assert res.landings == pytest.approx([t_land], abs=1e-9)       # s
+    assert len(res.takeoffs) == 0
+
+
+# -- frames too far apart for the surface's motion -----------------------------------------
+def plate_file(path, times, zs, vs, freq, part_z=1e-3):
+    """A part hanging still part_z above the plane over a surface recorded at the given frames."""
+    frames = [(k, float(t), parts([1], [[0.0, 0.0, part_z + R]], radius=R, mass=M, force=[[0, 0, -M * G]]))
+              for k, t in enumerate(times)]
+    surface = [([0.0, 0.0, z], [0.0, 0.0, v]) for z, v in zip(zs, vs)]
+    variables = {"freq": (repr(float(freq)), "Hz", "f", "50"), "incline": ("0", "deg", "i", "0")}
+    return Result(write_result(path, frames, surface=surface, variables=variables))
+
+
+def test_a_still_floor_is_followed_at_any_frame_spacing(tmp_path):
+    # the bouncing ball, its floor still, frames 5 ms apart at a 50 Hz deck (a quarter period,
+    # twice the limit for a moving surface): the impacts between frames are found all the same
+    r, times, hits = bouncing_file(tmp_path, dt=5e-3, n=3)
+    with r:
+        res = Flights(r).run().results
+    t_hit = np.array([h[0] for h in hits if h[0] < times[-1]])
+    assert len(t_hit) == 2 and res.landings == pytest.approx(t_hit, abs=1e-9)   # s
+
+
+def test_frames_at_the_plates_turning_points_are_refused(tmp_path):
+    # frames half a period apart catch the plate at its top and bottom, standing still there
+    # (velocity 0 at every frame): it moves between them all the same
+    amp, freq = 5e-5, 100.0
+    times = np.arange(6) * 0.5 / freq
+    with plate_file(tmp_path / "t.h5", times, amp * (-1.0) ** np.arange(6), np.zeros(6), freq) as r, \
+            pytest.raises(InputError, match=r"output_dt <= 0\.00125 s"):
+        Flights(r).run()
+
+
+def test_frames_too_far_apart_for_a_slow_plate_are_refused(tmp_path):
+    # a 0.5 Hz shaker (period 2 s) recorded every 0.5 s: a quarter period, twice the limit
+    freq, amp = 0.5, 1e-3
+    times = np.arange(6) * 0.5
+    w = 2 * math.pi * freq
+    zs, vs = amp * np.sin(w * times), amp * w * np.cos(w * times)
+    with plate_file(tmp_path / "s.h5", times, zs, vs, freq) as r, \
+            pytest.raises(InputError, match=r"output_dt <= 0\.25 s"):
+        Flights(r).run()
+
+
+def test_a_part_seen_in_one_frame_over_a_moving_plate_has_no_flights(tmp_path):
+    # one frame has no spacing to refuse
+    with plate_file(tmp_path / "o.h5", [0.0], [0.0], [0.03], 100.0) as r:
+        res = Flights(r).run().results
+    assert res.n_hops == 0 and len(res.landings) == 0 and res.airborne_fraction == 0.0
+    assert res.max_gap == pytest.approx(1e-3, abs=1e-15)   # m
+
+
+def test_the_refusal_says_the_spacing_the_period_and_the_frames_needed(tmp_path):
+    # 120 Hz (period 1000 / 120 = 8.33 ms) recorded every 2 ms: eight frames a period need
+    # output_dt <= 0.125 / 120 = 0.00104 s
+    freq, amp = 120.0, 2e-5
+    times = np.arange(6) * 2e-3
+    w = 2 * math.pi * freq
+    msg = ("flights: frames 2 ms apart cannot follow a surface vibrating at 120 Hz (period 8.33 ms): "
+           "the events between frames need at least 8 frames per period (output_dt <= 0.00104 s)")
+    zs, vs = amp * np.sin(w * times), amp * w * np.cos(w * times)
+    with plate_file(tmp_path / "m.h5", times, zs, vs, freq) as r, \
+            pytest.raises(InputError, match=re.escape(msg)):
+        Flights(r).run()

@@ -23,6 +23,7 @@ farther from whole periods (per period) than the frame nearest ``end - P T``
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -182,3 +183,126 @@ def test_a_part_numbered_zero_is_a_part(tmp_path):
         tr = Transport(r, start=0.0).run().results
     assert tr.ids.tolist() == [0, 1]
     assert tr.velocities == pytest.approx([0.02, 0.01], rel=1e-9)
+
+
+# -- the whole-period window at its edges: hand-worked frame sets -----------------------
+SPEEDS = np.array([0.01, -0.02, 0.005])  # m/s
+
+
+def transport_on(tmp_path, times, freq, start, amp=AMP):
+    """Transport over parts present at every frame of ``times``, moving as ``position``."""
+    lifetimes = [(0, len(times) - 1)] * len(SPEEDS)
+    path = write_conveyor(tmp_path / "w.h5", np.asarray(times), lifetimes, SPEEDS, amp=amp, freq=freq)
+    with Result(path) as r:
+        return Transport(r, start=start).run().results
+
+
+def speed_over(t0, t1, freq, amp=AMP):
+    """Each part's displacement over [t0, t1] divided by t1 - t0 (write_conveyor's motion)."""
+    w = 2 * np.pi * freq
+    return SPEEDS + amp * (math.sin(w * t1) - math.sin(w * t0)) / (t1 - t0)
+
+
+@pytest.mark.parametrize("freq", [0.5, 100.0])
+def test_frames_one_period_apart_start_at_the_first_frame_after_start(tmp_path, freq):
+    """Frames every period (a strobe), start 0.2 period after frame 1: frame 2 is the only
+    frame at or after start a period before the last (3 T), so the window is (2 T, 3 T),
+    whole; frame 1, nearer start, lies before it."""
+    period = 1 / freq
+    times = np.arange(4) * period
+    res = transport_on(tmp_path, times, freq, start=1.2 * period)
+    assert res.window_frames == (2, 3) and res.alias == 0.0
+    assert res.window == pytest.approx((2 * period, 3 * period), rel=1e-12)  # s
+    assert res.velocities == pytest.approx(SPEEDS, abs=1e-12)  # m/s: one whole period
+
+
+def test_a_start_exactly_on_a_frame_takes_it_and_one_just_after_does_not(tmp_path):
+    """100 Hz, frames every T/10 over 3 periods. A start on frame 10 (t = T) keeps the two
+    periods from it; a start 1e-8 s (1e-6 period, far above round-off) after it leaves frame 10
+    out, and of frames 11..19 none is whole periods before the end (2.9 .. 2.1 periods):
+    frame 20, one period before it, is."""
+    freq = 100.0
+    times = np.arange(31) * 1e-3
+    on = transport_on(tmp_path, times, freq, start=float(times[10]))
+    assert on.window_frames == (10, 30) and on.alias == 0.0
+    assert on.velocities == pytest.approx(SPEEDS, abs=1e-12)  # m/s: two whole periods
+    after = transport_on(tmp_path, times, freq, start=float(times[10]) + 1e-8)
+    assert after.window_frames == (20, 30) and after.alias == 0.0
+    assert after.window[0] >= float(times[10]) + 1e-8
+    assert after.velocities == pytest.approx(SPEEDS, abs=1e-12)  # m/s: one whole period
+
+
+def test_frames_whose_spacing_does_not_divide_the_period(tmp_path):
+    """Frames every 0.4 T (5 frames to 2 periods) from 0 to 4 T. From start 0 the window is the
+    four periods; from 0.1 T the candidates 0.4 T .. 1.6 T are 3.6, 3.2, 2.8, 2.4 periods
+    before the end (off 0.4, 0.2, 0.2, 0.4), and 2 T, two periods before it, is whole."""
+    freq = 50.0
+    period = 1 / freq
+    times = np.arange(11) * 0.4 * period
+    res = transport_on(tmp_path, times, freq, start=0.0)
+    assert res.window_frames == (0, 10) and res.alias == 0.0
+    assert res.velocities == pytest.approx(SPEEDS, abs=1e-12)  # m/s
+    res = transport_on(tmp_path, times, freq, start=0.1 * period)
+    assert res.window_frames == (5, 10) and res.alias == 0.0
+    assert res.window == pytest.approx((2 * period, 4 * period), rel=1e-12)  # s
+    assert res.velocities == pytest.approx(SPEEDS, abs=1e-12)  # m/s
+
+
+def test_an_aliased_window_reports_its_alias_and_the_speed_it_measures(tmp_path):
+    """Frames every 0.7 T up to 3.5 T, start 0: the windows to the end span 3.5, 2.8, 2.1, 1.4
+    and 0.7 periods, off 0.5, 0.2, 0.1, 0.4, 0.3 from whole ones: per period 0.143, 0.071,
+    0.048, 0.29, 0.43. The least is from 1.4 T: alias 0.1 period, and each speed is the
+    displacement over 2.1 T, within amp 2 pi alias / window of the part's own."""
+    freq = 50.0
+    period = 1 / freq
+    times = np.arange(6) * 0.7 * period
+    res = transport_on(tmp_path, times, freq, start=0.0)
+    assert res.window_frames == (2, 5)
+    assert res.alias == pytest.approx(0.1, abs=1e-9)  # periods
+    t0, t1 = 1.4 * period, 3.5 * period
+    assert res.window == pytest.approx((t0, t1), rel=1e-12)  # s
+    assert res.velocities == pytest.approx(speed_over(t0, t1, freq), abs=1e-12)  # m/s
+    assert np.all(np.abs(res.velocities - SPEEDS) <= AMP * 2 * np.pi * 0.1 / (t1 - t0) + 1e-12)
+
+
+def test_a_run_stopped_half_a_period_after_a_frame_ends_at_the_frame_before(tmp_path):
+    """Three frames: 0, T and 1.5 T (the run stopped half a period after its last output).
+    From a start exactly on frame 0, the window to 1.5 T is 0.5 period off whole ones, the
+    window to T is whole: it is the one period (0, T), each part at its own speed."""
+    freq = 50.0
+    period = 1 / freq
+    times = np.array([0.0, 1.0, 1.5]) * period
+    res = transport_on(tmp_path, times, freq, start=0.0)
+    assert res.window_frames == (0, 1) and res.alias == 0.0
+    assert res.window == pytest.approx((0.0, period), abs=1e-15)  # s
+    assert res.velocities == pytest.approx(SPEEDS, abs=1e-12)  # m/s
+
+
+def test_the_last_frame_is_kept_when_its_interval_is_the_usual_one(tmp_path):
+    """Frames 0, 0.4 T, 0.7 T, T, 1.3 T: the usual interval is 0.3 T, the odd one is the first,
+    so the run did not stop between outputs and the window ends at the last frame (not at T,
+    whole from 0). To 1.3 T: from 0 1.3 periods (off 0.3), from 0.4 T 0.9 (off 0.1), from 0.7 T
+    0.6 (off 0.4): the window is (0.4 T, 1.3 T), alias 0.1 period."""
+    freq = 50.0
+    period = 1 / freq
+    times = np.array([0.0, 0.4, 0.7, 1.0, 1.3]) * period
+    res = transport_on(tmp_path, times, freq, start=0.0)
+    assert res.window_frames == (1, 4)
+    assert res.alias == pytest.approx(0.1, abs=1e-9)  # periods
+    t0, t1 = 0.4 * period, 1.3 * period
+    assert res.velocities == pytest.approx(speed_over(t0, t1, freq), abs=1e-12)  # m/s
+
+
+def test_without_a_frequency_the_window_starts_at_the_frame_nearest_start(tmp_path):
+    """No vibration (freq 0): no period to fit, the window runs from the frame nearest start."""
+    times = np.arange(11) * 1e-3
+    res = transport_on(tmp_path, times, 0.0, start=0.0031, amp=0.0)
+    assert res.window_frames == (3, 10) and res.alias == 0.0
+    assert res.velocities == pytest.approx(SPEEDS, abs=1e-12)  # m/s
+    assert transport_on(tmp_path, times, 0.0, start=0.0036, amp=0.0).window_frames == (4, 10)
+
+
+def test_a_start_after_the_last_frame_names_the_last_frame(tmp_path):
+    times = np.arange(11) * 0.125
+    with pytest.raises(InputError, match=re.escape("(1.25 s)")):
+        transport_on(tmp_path, times, 50.0, start=2.0)
