@@ -45,7 +45,9 @@ mutants. The score is (killed + equivalent) / mutants tested, per target. A targ
 same ones every time: the score is then an estimate. ``--min-score`` makes the exit status 1
 when any target is below it (CTest ``mutation``). ``--plan`` sets the sessions up and times each
 target's tests once: the mutants to test and the most they take (one test run each).
-Survivors with their diffs go to ``WORKDIR/survivors.md``, the figures to ``WORKDIR/summary.md``.
+Survivors with their diffs go to ``WORKDIR/survivors.md``, the figures to ``WORKDIR/summary.md``;
+survivors.md also lists the rows of EQUIVALENT.md that only killed mutants match, to review
+(a row whose claim the tests disprove, or one about a twin left out of the sample).
 """
 
 from __future__ import annotations
@@ -390,12 +392,13 @@ def equivalents() -> list[tuple[str, str, str]]:
     return out
 
 
-def is_equivalent(module: str, op: str, text: str, rows) -> bool:
+def matching_rows(module: str, op: str, text: str, rows) -> list[tuple[str, str, str]]:
+    """The rows of ``rows`` (see :func:`equivalents`) that name this mutant."""
     def match(pattern: str, value: str, glob: bool = False) -> bool:
         if pattern.startswith("re:"):
             return re.fullmatch(pattern[3:], value) is not None
         return fnmatch.fnmatchcase(value, pattern) if glob else pattern == value
-    return any(match(m, module, glob=True) and match(o, op) and match(t, text) for m, o, t in rows)
+    return [r for r in rows if match(r[0], module, glob=True) and match(r[1], op) and match(r[2], text)]
 
 
 def results(name: str, workdir: Path) -> dict:
@@ -410,6 +413,9 @@ def results(name: str, workdir: Path) -> dict:
     eq = equivalents()
     counts = dict(mutants=0, killed=0, timeout=0, equivalent=0, survived=0, pending=0, sampled_out=0)
     survivors = []
+    # A row that names only killed mutants of this session is listed for review: its claim is
+    # disproved, or gone stale, or (a sampled target) it is about a twin not in the sample.
+    named_killed, named_survived = set(), set()
     for _job, module, op, row, worker, outcome, diff, output in rows:
         worker, outcome = (worker or "").lower() or None, (outcome or "").lower()
         if worker == "skipped":
@@ -418,23 +424,27 @@ def results(name: str, workdir: Path) -> dict:
         counts["mutants"] += 1
         if worker is None:
             counts["pending"] += 1
-        elif outcome == "survived":
+        else:
             source = home / "sources" / module
             src = (source if source.exists() else REPO / module).read_text().splitlines()
             text = src[row - 1].strip() if row - 1 < len(src) else ""
-            if is_equivalent(module, op, text, eq):
+            rows_named = matching_rows(module, op, text, eq)
+            if outcome != "survived":
+                counts["killed"] += 1
+                counts["timeout"] += output == "timeout"
+                named_killed.update(rows_named)
+            elif rows_named:
                 counts["equivalent"] += 1
+                named_survived.update(rows_named)
             else:
                 counts["survived"] += 1
                 survivors.append((module, row, op, text, diff))
-        else:
-            counts["killed"] += 1
-            counts["timeout"] += output == "timeout"
     done = counts["mutants"] - counts["pending"]
     counts["score"] = (counts["killed"] + counts["equivalent"]) / done if done else float("nan")
     wall = home / "wall.json"
     counts["wall_s"] = json.loads(wall.read_text()).get("total_exec_s", 0.0) if wall.exists() else 0.0
     counts["survivors"] = survivors
+    counts["disproved_rows"] = sorted(named_killed - named_survived)
     return counts
 
 
@@ -447,6 +457,7 @@ def report(names, workdir: Path, cfg: dict) -> float:
     total = dict(mutants=0, killed=0, timeout=0, equivalent=0, survived=0, pending=0, wall_s=0.0)
     surv = ["# Surviving mutants\n"]
     scores = []
+    disproved = []
     for name in names:
         if not (workdir / name / "session.sqlite").exists():
             lines.append(f"| {name} | not run | | | | | | | |")
@@ -461,12 +472,18 @@ def report(names, workdir: Path, cfg: dict) -> float:
                      f"| {r['wall_s'] / 60:.0f} min | {r['sampled_out'] or ''} |")
         for module, row, op, text, diff in r["survivors"]:
             surv.append(f"## {module}:{row} `{op}`\n\n`{text}`\n\n```diff\n{diff}\n```\n")
+        disproved.extend(r["disproved_rows"])
     done = total["mutants"] - total["pending"]
     score = (total["killed"] + total["equivalent"]) / done if done else float("nan")
     lines.append(f"| **all** | {total['mutants']} | {total['killed']} ({total['timeout']}) "
                  f"| {total['equivalent']} | {total['survived']} | {total['pending']} "
                  f"| {100 * score:.1f} % | {total['wall_s'] / 60:.0f} min | |")
     text = "\n".join(lines) + "\n"
+    if disproved:
+        surv.append("# Rows of EQUIVALENT.md that only killed mutants match (review them)\n")
+        surv.extend(f"- `{m}` `{o}` `{t}`" for m, o, t in sorted(set(disproved)))
+        text += (f"\n{len(set(disproved))} row(s) of EQUIVALENT.md match only killed mutants: "
+                 "listed in survivors.md\n")
     (workdir / "summary.md").write_text(text)
     (workdir / "survivors.md").write_text("\n".join(surv))
     print(text + f"\nsurvivors: {workdir / 'survivors.md'}")

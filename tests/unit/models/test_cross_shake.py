@@ -245,3 +245,50 @@ def test_a_skewed_drive_shifted_in_phase_as_a_whole_conveys_the_same(shift):
     b = sliding_speed(FREQ, 5e-5 * s, 3e-5 * s, normal * s, MU)
     assert b.velocity == pytest.approx(a.velocity, rel=STEP_ERROR, abs=SPEED)
     assert b.across == pytest.approx(a.across, rel=STEP_ERROR, abs=SPEED)
+
+
+def test_a_frictionless_block_drifts_across_to_a_wall_half_the_clearance_away():
+    """Without friction (mu = 0, level floor) the block keeps the floor's speed at t = 0, w Ay
+    across, and drifts from the middle by y(t) = Ay (w t - sin w t) relative to the floor:
+    2 pi Ay a period. It reaches the wall at clearance / 2 in period n = floor(c / (4 pi Ay)),
+    here 159 (its phase there, the root of phi - sin phi = 2 pi frac(c / (4 pi Ay)), below pi
+    for frac < 1/2: the floor's acceleration presses it on the wall), is carried by that wall
+    until the floor's speed is least (-w Ay, period n + 1/2) and leaves with it, drifting back
+    by 2 pi Ay a period, not reaching the other wall by period 300. It never settles (no cycle
+    with 0 mean across): the speed across is the mean of the last half, periods 150 to 300,
+    the displacement over it / 150 T (the floor's mean velocity is 0), neither the median
+    -w Ay of the periods drifting back nor w Ay had the walls been further. Along, the walls'
+    friction (mu J) is 0."""
+    from vibrofeed.models.cross_shake import MAX_PERIODS
+
+    amp_x, amp_y, clearance = 5e-5, 2e-5, 0.04
+    w, period = 2 * math.pi * FREQ, 1 / FREQ
+    s = sliding_speed(FREQ, complex(amp_x), complex(amp_y), 0j, 0.0, clearance=clearance)
+    side, per = clearance / 2, 2 * math.pi * amp_y  # [m], drift a period [m]
+    n = math.floor(side / per)
+    assert MAX_PERIODS == 300 and 150 < n < 300 and side / per - n < 0.5
+    start = 150 * per  # [m] at period 150, still drifting out
+    end = side - per * (300 - (n + 0.5))  # [m] at period 300, drifting back
+    assert -side < end < side  # (the other wall not reached)
+    assert s.cycle == 0 and s.periods == 300
+    assert s.across == pytest.approx((end - start) / (150 * period), rel=0, abs=1e-3 * w * amp_y)  # [m/s]
+    assert s.velocity == pytest.approx(w * amp_x, rel=1e-9, abs=0)
+
+
+@pytest.mark.parametrize("k", [1, 2])
+def test_between_walls_a_frictionless_block_bounces_in_a_cycle_of_2k_plus_1_periods(k):
+    """Without friction, walls c = 2 pi Ay (k + 1/4) apart: the block leaves a wall when the
+    floor's speed across is extreme (+-w Ay) and crosses (y = Ay (w t - sin w t) = c) in k
+    periods and a phase psi, psi - sin psi = pi / 2 (psi < pi), arriving as the floor's
+    acceleration presses it on that wall, which carries it to the floor's opposite extreme: a
+    crossing every k + 1/2 periods, a cycle of 2k + 1. Its periods' mean speeds across are
+    w Ay times 1 (k times), -1/4, -1 (k - 1 times), -3/4: their mean is 0 (the block stays
+    between the walls; the floor's mean velocity is 0), so the cycle is found and kept (their
+    median, -1/4 w Ay, would count as a drift across)."""
+    amp_x, amp_y = 5e-5, 2e-5
+    w = 2 * math.pi * FREQ
+    s = sliding_speed(FREQ, complex(amp_x), complex(amp_y), 0j, 0.0,
+                      clearance=2 * math.pi * amp_y * (k + 0.25))
+    assert s.cycle == 2 * k + 1
+    assert s.across == pytest.approx(0.0, abs=1e-3 * w * amp_y)  # [m/s]
+    assert s.velocity == pytest.approx(w * amp_x, rel=1e-9, abs=0)
