@@ -373,3 +373,125 @@ def test_without_a_pre_fill_its_place_is_not_checked():
         resolve(DECK, {"n_parts": "1", "inlet_rate": "200", "gate_width": "8e-4", "fill_to": "0.9"})
     with pytest.raises(ParameterError, match="fill_from=0.5 must be below fill_to=0.5"):
         resolve(DECK, {"n_parts": "1", "fill_from": "0.5", "fill_to": "0.5"})
+
+
+# -- the fixed dt against the contact: the fractions users read, the automatic dt's edge --------
+PULLOFF = Deck.find("pulloff")
+
+
+def pulloff_times(youngs):
+    """The pull-off deck's contact times by the closed forms above: its 0.3 mm silicon
+    spheres (density 2330, poisson 0.28) at 1 cm/s, part-part or part-track (aluminium's
+    poisson 0.33, E x 70/130), the shorter Hertz time."""
+    r = 1.5e-4
+    m = 4 / 3 * math.pi * r ** 3 * 2330
+    pp = hertz_time(m / 2, r / 2, e_star(youngs, 0.28, youngs, 0.28), 0.01)
+    pw = hertz_time(m, r, e_star(youngs, 0.28, youngs * 70 / 130, 0.33), 0.01)
+    return min(pp, pw), rayleigh_time(r, 2330, youngs, 0.28)
+
+
+def whole_percent(fraction):
+    """``fraction`` in whole percent, as the message rounds it (asserted away from a rounding edge)."""
+    pct = round(100 * fraction)
+    assert abs(100 * fraction - pct) < 0.4
+    return pct
+
+
+def test_a_step_past_both_limits_is_refused_with_its_fractions_of_both_times():
+    hertz, rayleigh = pulloff_times(5e7)  # the deck's softened silicon
+    dt = 0.15 * hertz  # 15 % of the Hertz time (limit 10 %); and 0.15 t_H / T_R of the Rayleigh time
+    with pytest.raises(ParameterError) as err:
+        resolve(PULLOFF, {"dt": repr(dt)})
+    assert str(err.value) == (
+        f"dt={dt:g} s is {whole_percent(0.15 * hertz / rayleigh)}% of the Rayleigh time (limit 20%) "
+        "and 15% of the Hertz time (limit 10%): contacts would last a few steps and parts gain energy; "
+        "lower dt or set dt=0 (automatic); to run it anyway add -p dt_unchecked=1 (vibrofeed check "
+        "then fails the result)")
+
+
+def test_the_automatic_step_is_allowed_even_past_a_fifth_of_the_rayleigh_time():
+    from vibrofeed.parameters import contact_times
+
+    # unsoftened silicon: t_H / 50 (the decks' automatic dt) lies past 0.2 T_R; a fixed dt that
+    # long is still allowed, one a bit longer is beyond the Rayleigh limit (not the Hertz one)
+    hertz, rayleigh = pulloff_times(1.3e11)
+    assert 0.2 * rayleigh < hertz / 50 < 0.1 * hertz
+    given = {"youngs": "1.3e11"}
+    times = contact_times({k: float(v) for k, v in resolve(PULLOFF, given).items()})
+    assert times["hertz"] == pytest.approx(hertz, rel=1e-12)
+    assert times["rayleigh"] == pytest.approx(rayleigh, rel=1e-12)
+    automatic = times["hertz"] / 50  # as the check takes it, to the last bit
+    assert resolve(PULLOFF, {**given, "dt": repr(automatic)})["dt"] == repr(automatic)
+    longer = math.nextafter(automatic, math.inf)
+    with pytest.raises(ParameterError) as err:
+        resolve(PULLOFF, {**given, "dt": repr(longer)})
+    assert str(err.value).startswith(f"dt={longer:g} s is {whole_percent(hertz / 50 / rayleigh)}% "
+                                     "of the Rayleigh time (limit 20%): contacts would last")
+
+
+def test_a_stroke_without_a_frequency_is_no_drive():
+    from vibrofeed.parameters import contact_times
+
+    # a deck of one's own may declare a stroke but no freq: nothing moves it, so the contact is
+    # timed at 1 cm/s as without a stroke (5 mm at 1 Hz would be 2 pi 5e-3 = 3.1 cm/s)
+    r = 1.5e-4
+    m = 4 / 3 * math.pi * r ** 3 * 2330
+    pp = hertz_time(m / 2, r / 2, e_star(1.3e11, 0.28, 1.3e11, 0.28), 0.01)
+    times = contact_times({**SILICON, "part_size": 3e-4, "amp_t": 5e-3, "amp_n": 5e-3})
+    assert times["hertz"] == pytest.approx(pp, rel=1e-12)
+
+
+def test_a_deck_without_dt_unchecked_refuses_a_step_beyond_the_contact(tmp_path):
+    # a deck of one's own with a contact and a fixed dt but no dt_unchecked: nobody insisted
+    own = own_deck(tmp_path, radius=5e-4, density=2330, youngs=5e7, poisson=0.3, dt=0)
+    m = 4 / 3 * math.pi * 5e-4 ** 3 * 2330  # a sphere on a plate of its material, at 1 cm/s
+    hertz = hertz_time(m, 5e-4, e_star(5e7, 0.3, 5e7, 0.3), 0.01)
+    assert resolve(own, {"dt": repr(hertz / 100)})["dt"] == repr(hertz / 100)
+    with pytest.raises(ParameterError, match=r"20% of the Hertz time \(limit 10%\): contacts would") as e:
+        resolve(own, {"dt": repr(0.2 * hertz)})
+    # and it is not told to add a parameter its deck does not declare
+    assert str(e.value).endswith("lower dt or set dt=0 (automatic)")
+
+
+def test_a_pre_fill_place_is_checked_where_a_deck_declares_one(tmp_path):
+    # a gate on a deck that declares no pre-fill place (no fill_to): nothing reaches into it
+    gate_only = own_deck(tmp_path, part_size=3e-4, track_width=2e-3, track_length=0.02, gate_width=8e-4)
+    assert resolve(gate_only, {})["gate_width"] == "0.0008"
+    # a pre-fill place without n_parts (the deck's own count, as the gate deck above): checked
+    place = own_deck(tmp_path, part_size=3e-4, track_width=2e-3, fill_from=0.1, fill_to=0.9)
+    assert resolve(place, {"fill_from": "0.4", "fill_to": "0.5"})["fill_from"] == "0.4"
+    with pytest.raises(ParameterError, match=r"^fill_from=0.5 must be below fill_to=0.5$"):
+        resolve(place, {"fill_from": "0.5", "fill_to": "0.5"})
+
+
+def test_a_bowl_fed_only_along_its_track_resolves():
+    # the bowl has no inlet (no inlet_rate): with n_parts=0 its n_track parts along the track
+    # are its feed; only both at 0 is no feed, in the bowl's words
+    bowl = Deck.find("bowl_feeder")
+    assert "inlet_rate" not in bowl.tunables
+    assert resolve(bowl, {"n_parts": "0"})["n_parts"] == "0"
+    with pytest.raises(ParameterError, match="^n_parts=0 and n_track=0: no part in the bowl"):
+        resolve(bowl, {"n_parts": "0", "n_track": "0"})
+
+
+def test_a_deck_of_ones_own_without_n_parts_is_not_refused_for_no_inlet(tmp_path):
+    # parts put on its track some other way (no n_parts declared): inlet_rate=0 is no refusal
+    own = own_deck(tmp_path, part_size=3e-4, track_width=2e-3, inlet_rate=10)
+    assert resolve(own, {"inlet_rate": "0"})["inlet_rate"] == "0"
+    # with n_parts declared and 0, no part would ever come
+    both = own_deck(tmp_path, part_size=3e-4, track_width=2e-3, inlet_rate=10, n_parts=0)
+    with pytest.raises(ParameterError, match=r"^n_parts=0 and inlet_rate=0: no part would ever be fed"):
+        resolve(both, {"inlet_rate": "0"})
+
+
+def test_a_pile_on_a_deck_without_a_fill_place_spreads_over_the_whole_track(tmp_path):
+    # no fill_from/fill_to declared: the pre-fill lies along the whole track (0 .. 1 of it).
+    # 300 um spheres, 2 mm x 20 mm track, packed at 0.6: n parts pile n V / (0.6 L W) high
+    d, W, L, wall = 3e-4, 2e-3, 0.02, 1e-3
+    per_part = math.pi / 6 * d ** 3 / (0.6 * L * W)        # m of pile per part
+    n_high = math.ceil(1.5 * wall / per_part)               # 1.5 x the wall: refused
+    n_low = math.floor(0.9 * wall / per_part)               # 0.9 x the wall: fits
+    own = own_deck(tmp_path, part_size=d, track_width=W, track_length=L, wall_height=wall, n_parts=10)
+    assert resolve(own, {"n_parts": str(n_low)})["n_parts"] == str(n_low)
+    with pytest.raises(ParameterError, match=rf"^n_parts={n_high} settle 0\.0015\d* m high, above the walls"):
+        resolve(own, {"n_parts": str(n_high)})

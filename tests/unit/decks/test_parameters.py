@@ -1,5 +1,7 @@
 """Run parameters are checked against physical limits before anything starts."""
 
+import math
+
 import pytest
 
 from helpers import DECKS
@@ -168,3 +170,44 @@ def test_warnings_point_at_the_caller_of_resolve(deck):
         resolve(deck, {"dt": "1e-4", "dt_unchecked": "1"})
     assert "run as dt_unchecked=1 asks" in str(caught[-1].message)
     assert [w.filename for w in caught] == [__file__] * 2
+
+
+# -- a modulus in GPa, and the slip behind a refused relation ---------------------------------
+YOUNGS_REFUSED = ("parameter youngs={} Pa must be in (5e+06, inf) (LIGGGHTS' Hertz model needs "
+                  "youngsModulus > 5e6 Pa)")
+GPA_HINT = "; a modulus in GPa? (moduli are in Pa: silicon 1.3e11)"
+
+
+@pytest.mark.parametrize("value, hinted", [
+    ("0.8", True), ("1", True), ("130", True), ("9999.5", True),  # under 1e4 Pa: a modulus in GPa
+    ("1e4", False), ("0", False), ("-0.5", False),  # the hint's bounds are open: 0 < x < 1e4
+    ("1e5", False),  # refused, but 1e5 GPa is no material either: no hint
+])
+def test_a_youngs_modulus_in_gpa_is_named_as_a_likely_slip(deck, value, hinted):
+    with pytest.raises(ParameterError) as err:
+        resolve(deck, {"youngs": value})
+    assert str(err.value) == YOUNGS_REFUSED.format(value) + (GPA_HINT if hinted else "")
+
+
+def test_a_refused_relation_names_the_slip_of_a_value_it_names(deck):
+    # freq typed in rad/s (2 pi x 100 Hz): 1 mm at 628.3 Hz moves the surface at
+    # 2 pi 628.3 1e-3 = 4 pi^2 0.1 = 3.95 m/s, past the 2 m/s limit; the refusal comes before
+    # the warning would, so it names the rad/s slip of freq itself. The density in g/cm^3 is a
+    # slip too, but the refusal does not name density: it stays a warning's business.
+    omega = repr(2 * math.pi * 100)
+    with pytest.raises(ParameterError) as err:
+        resolve(deck, {"freq": omega, "amp_n": "1e-3", "amp_t": "0", "density": "2.33"})
+    assert str(err.value) == (
+        "amp_n=0.001 m at freq=628.319 Hz moves the surface at 3.95 m/s peak (limit 2 m/s: real "
+        "feeders stay below 0.5 m/s); lower amp_n or freq; parameter freq=628.319 Hz is 2 pi x 100: "
+        "an angular frequency in rad/s? (freq is in Hz)")
+
+
+def test_a_modulus_beyond_any_solid_with_a_fixed_dt_is_refused_in_one_line(deck):
+    # youngs has no upper limit (a rigid contact); past ~2.4e154 Pa the square of E* overflowed
+    # a float and a fixed dt ended in an OverflowError instead of a refusal. The Hertz time of
+    # the 0.5 mm sphere at 1e160 Pa is ~1e-70 s: any fixed dt is far beyond its tenth.
+    assert resolve(deck, {"youngs": "1e160"})["youngs"] == "1e160"  # automatic dt: no limit
+    with pytest.raises(ParameterError, match=r"^dt=1e-07 s is \d+% of the Rayleigh time \(limit "
+                                             r"20%\) and \d+% of the Hertz time \(limit 10%\): "):
+        resolve(deck, {"youngs": "1e160", "dt": "1e-7"})
