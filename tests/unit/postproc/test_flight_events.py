@@ -569,3 +569,84 @@ def test_a_contact_tolerance_that_is_not_a_gap_is_refused(tmp_path, tol):
 
     with pytest.raises(InputError, match=r"contact_tolerance must be a gap of 0 m or more, got "):
         Flights(None, contact_tolerance=tol)
+
+
+def test_a_result_without_a_vibration_frequency_is_analysed_at_any_frame_spacing(tmp_path):
+    # a plate rising at a steady 1 cm/s (followed exactly by its Hermite cubic), the part resting
+    # on it, frames 0.2 s apart and no `freq` in the deck: no period to hold the frames to, so
+    # nothing is refused; the part stays in contact throughout
+    v = 0.01
+
+    def plate(t):
+        return v * t, v
+
+    rows = [(t, v * t - 1e-9, v, M * G) for t in (0.0, 0.2, 0.4)]
+    with record(tmp_path, rows, variables={"incline": ("0", "deg", "i", "0")}, plate=plate) as r:
+        fl = Flights(r).run().results
+    assert len(fl.landings) == 0 and len(fl.takeoffs) == 0 and fl.n_hops == 0
+    assert fl.max_gap == pytest.approx(-1e-9, abs=1e-15)   # m
+
+
+def test_with_a_recorded_force_the_launch_is_not_traced_back_past_the_last_frame_in_contact(tmp_path):
+    # Falls onto the floor at 1.5 frames, pushed at frames 2 and 3 (two frames: no lift-off
+    # from the force), seen in flight from frame 4 on. That flight traced back meets the floor
+    # at 2.5 frames, before frame 3, where the recorded force still pushes: the contact lasts
+    # to frame 3, so the launch is not there but at the first frame in flight.
+    t1, t_back, w = 1.5 * DT, 2.5 * DT, 0.05
+    h = G * t1 ** 2 / 2
+    rows = [(k * DT, *flight(k * DT, 0.0, h, 0.0), 0.0) for k in range(2)]
+    rows += [(k * DT, -1e-9, 0.0, 3 * M * G) for k in (2, 3)]
+    rows += [(k * DT, *flight(k * DT, t_back, 0.0, w), 0.0) for k in range(4, 8)]
+    assert flight(3 * DT, t_back, 0.0, w)[0] > 0    # the traced flight is above the floor at frame 3
+    with record(tmp_path, rows) as r:
+        fl = Flights(r).run().results
+    assert fl.landings[0] == pytest.approx(t1, abs=1e-12)
+    assert fl.takeoffs.tolist() == [4 * DT] and fl.takeoff_kinds == ["rebound"]
+
+
+def test_a_lift_off_extrapolated_past_the_contact_is_the_first_frame_in_flight(tmp_path):
+    # Sustained contact at frames 3..5 whose force falls slowly (3, 2.5, 2 x m g): extrapolated,
+    # it would reach zero 4 frames after frame 5; the part is seen in flight at frame 6, so it
+    # lifted off by then: the lift-off is frame 6, not later.
+    force = {3: 3.0, 4: 2.5, 5: 2.0}
+    rows = [(k * DT, 1e-6 * (3 - k), -1e-2 * (k < 2), 0.0) for k in range(3)]
+    rows += [(k * DT, -1e-9, 0.0, force[k] * M * G) for k in (3, 4, 5)]
+    rows += [(k * DT, *flight(k * DT, 5.9 * DT, 0.0, 3e-3), 0.0) for k in range(6, 10)]
+    with record(tmp_path, rows) as r:
+        fl = Flights(r).run().results
+    assert fl.takeoffs.tolist() == [6 * DT] and fl.takeoff_kinds == ["lift-off"]
+
+
+def test_a_touch_down_at_zero_speed_that_leaves_again_realises_no_restitution(tmp_path):
+    # The touch-down without approach (w_in = 0 exactly at frame 3), after which the part leaves
+    # at 3.4 frames upward at 0.02 m/s: whatever the speed out, out over an approach of 0 is no
+    # restitution; it is 0, not infinite.
+    t = np.arange(8) * DT
+    v_hold = G * (t[3] - t[2])      # m/s: the same product the free flight subtracts
+    t_up, w = 3.4 * DT, 0.02
+    rows = [(t[k], 1e-6, v_hold, 0.0) for k in range(3)] + [(t[3], 0.0, 0.0, M * G)]
+    rows += [(t[k], *flight(t[k], t_up, 0.0, w), 0.0) for k in range(4, 8)]
+    with record(tmp_path, rows) as r:
+        fl = Flights(r).run().results
+    assert fl.landings.tolist() == [t[3]]
+    assert fl.takeoffs == pytest.approx([t_up], abs=1e-12)              # s
+    assert fl.impacts.tolist() == [[t[3], 0.0, 0.0]]
+    assert fl.realised_restitution == 0.0
+
+
+def test_a_launch_seen_coming_down_realises_no_restitution(tmp_path):
+    # Falls onto the floor at 1.5 frames, touches at frame 2, and is next seen 5 um up at frame
+    # 3 coming down at 1 cm/s (its flight traced back does not reach the floor: launched at
+    # frame 3), landing again at frame 4. Just after that launch it approaches the floor: it
+    # did not rebound, and a restitution is never negative: 0 (not -1e-2 / -1.5e-3).
+    t1 = 1.5 * DT
+    h = G * t1 ** 2 / 2
+    rows = [(k * DT, *flight(k * DT, 0.0, h, 0.0), 0.0) for k in range(2)]
+    rows += [(2 * DT, -1e-9, 0.0, 5 * M * G), (3 * DT, 5e-6, -0.01, 0.0)]
+    rows += [(k * DT, -1e-9, 0.0, M * G) for k in (4, 5)]
+    with record(tmp_path, rows) as r:
+        fl = Flights(r).run().results
+    assert fl.landings == pytest.approx([t1, 4 * DT], abs=1e-12)      # s
+    assert fl.takeoffs.tolist() == [3 * DT] and fl.takeoff_kinds == ["rebound"]
+    assert fl.impacts[0, 1] == pytest.approx(-G * t1, rel=1e-9)        # m/s: it did approach
+    assert fl.impacts[:, 2].tolist() == [0.0, 0.0]

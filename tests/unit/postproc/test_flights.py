@@ -227,3 +227,18 @@ def test_the_refusal_says_the_spacing_the_period_and_the_frames_needed(tmp_path)
     with plate_file(tmp_path / "m.h5", times, zs, vs, freq) as r, \
             pytest.raises(InputError, match=re.escape(msg)):
         Flights(r).run()
+
+
+def test_two_frames_too_far_apart_are_refused_and_the_refusal_gives_their_spacing(tmp_path):
+    # two frames 8 ms apart over a 50 Hz plate (period 20 ms; eight frames a period need
+    # output_dt <= 0.125 / 50 = 0.0025 s): one interval is a spacing to refuse, and the
+    # message gives it to three digits (8 ms, not 7.99 or 8.01)
+    freq, amp = 50.0, 2e-5
+    times = np.array([0.0, 8e-3])
+    w = 2 * math.pi * freq
+    msg = ("flights: frames 8 ms apart cannot follow a surface vibrating at 50 Hz (period 20 ms): "
+           "the events between frames need at least 8 frames per period (output_dt <= 0.0025 s)")
+    zs, vs = amp * np.sin(w * times), amp * w * np.cos(w * times)
+    with plate_file(tmp_path / "two.h5", times, zs, vs, freq) as r, \
+            pytest.raises(InputError, match=re.escape(msg)):
+        Flights(r).run()
