@@ -281,14 +281,13 @@ def test_a_flat_contact_force_cannot_be_extrapolated_and_the_launch_is_the_fligh
     assert fl.takeoffs == pytest.approx([t_up], abs=1e-12) and fl.takeoff_kinds == ["rebound"]
 
 
-def test_a_contact_seen_at_one_frame_lands_and_launches(tmp_path):
-    # hits at 2.6 frames, seen touching at frame 3 only, leaves at 3.3 frames; the record
-    # ends in contact (frames 8, 9), after the landing that ends the hop
-    t1, t_up, w = 2.6 * DT, 3.3 * DT, 2e-3
+def drop_and_hop(n, t1, t_up, w):
+    """n frames of a part dropped from rest at t = 0 that lands at t1, is pressed (5 m g) until
+    t_up, leaves at relative speed w and rests (m g) from its next landing t2 on: (rows, t2)."""
     h = G * t1 ** 2 / 2
     t2 = t_up + 2 * w / G
     rows = []
-    for k in range(10):
+    for k in range(n):
         t = k * DT
         if t < t1:
             rows.append((t, *flight(t, 0.0, h, 0.0), 0.0))
@@ -298,6 +297,14 @@ def test_a_contact_seen_at_one_frame_lands_and_launches(tmp_path):
             rows.append((t, *flight(t, t_up, 0.0, w), 0.0))
         else:
             rows.append((t, -1e-9, 0.0, M * G))
+    return rows, t2
+
+
+def test_a_contact_seen_at_one_frame_lands_and_launches(tmp_path):
+    # hits at 2.6 frames, seen touching at frame 3 only, leaves at 3.3 frames; the record
+    # ends in contact (frames 8, 9), after the landing that ends the hop
+    t1, t_up, w = 2.6 * DT, 3.3 * DT, 2e-3
+    rows, t2 = drop_and_hop(10, t1, t_up, w)
     assert 7 * DT < t2 < 8 * DT
     with record(tmp_path, rows) as r:
         fl = Flights(r).run().results
@@ -422,19 +429,7 @@ def test_a_hop_shorter_than_two_frames_after_a_contact_lands(tmp_path):
     # lands again 1.2 frames later, at 4.5 frames, frame 4 its only airborne frame; at rest after
     t1, t_up = 2.6 * DT, 3.3 * DT
     w = G * 1.2 * DT / 2
-    h = G * t1 ** 2 / 2
-    t2 = t_up + 2 * w / G
-    rows = []
-    for k in range(9):
-        t = k * DT
-        if t < t1:
-            rows.append((t, *flight(t, 0.0, h, 0.0), 0.0))
-        elif t < t_up:
-            rows.append((t, -1e-9, 0.0, 5 * M * G))
-        elif t < t2:
-            rows.append((t, *flight(t, t_up, 0.0, w), 0.0))
-        else:
-            rows.append((t, -1e-9, 0.0, M * G))
+    rows, t2 = drop_and_hop(9, t1, t_up, w)
     assert 4 * DT < t2 < 5 * DT and rows[4][1] > 0
     with record(tmp_path, rows) as r:
         fl = Flights(r).run().results

@@ -215,30 +215,21 @@ def test_a_part_seen_in_one_frame_over_a_moving_plate_has_no_flights(tmp_path):
     assert res.max_gap == pytest.approx(1e-3, abs=1e-15)   # m
 
 
-def test_the_refusal_says_the_spacing_the_period_and_the_frames_needed(tmp_path):
+@pytest.mark.parametrize("freq, times, msg", [
     # 120 Hz (period 1000 / 120 = 8.33 ms) recorded every 2 ms: eight frames a period need
     # output_dt <= 0.125 / 120 = 0.00104 s
-    freq, amp = 120.0, 2e-5
-    times = np.arange(6) * 2e-3
-    w = 2 * math.pi * freq
-    msg = ("flights: frames 2 ms apart cannot follow a surface vibrating at 120 Hz (period 8.33 ms): "
-           "the events between frames need at least 8 frames per period (output_dt <= 0.00104 s)")
+    (120.0, np.arange(6) * 2e-3,
+     "flights: frames 2 ms apart cannot follow a surface vibrating at 120 Hz (period 8.33 ms): "
+     "the events between frames need at least 8 frames per period (output_dt <= 0.00104 s)"),
+    # two frames 8 ms apart over a 50 Hz plate (period 20 ms; output_dt <= 0.125 / 50 =
+    # 0.0025 s): one interval is a spacing to refuse, given to three digits (8 ms, not 7.99)
+    (50.0, np.array([0.0, 8e-3]),
+     "flights: frames 8 ms apart cannot follow a surface vibrating at 50 Hz (period 20 ms): "
+     "the events between frames need at least 8 frames per period (output_dt <= 0.0025 s)"),
+])
+def test_the_refusal_says_the_spacing_the_period_and_the_frames_needed(tmp_path, freq, times, msg):
+    amp, w = 2e-5, 2 * math.pi * freq
     zs, vs = amp * np.sin(w * times), amp * w * np.cos(w * times)
     with plate_file(tmp_path / "m.h5", times, zs, vs, freq) as r, \
-            pytest.raises(InputError, match=re.escape(msg)):
-        Flights(r).run()
-
-
-def test_two_frames_too_far_apart_are_refused_and_the_refusal_gives_their_spacing(tmp_path):
-    # two frames 8 ms apart over a 50 Hz plate (period 20 ms; eight frames a period need
-    # output_dt <= 0.125 / 50 = 0.0025 s): one interval is a spacing to refuse, and the
-    # message gives it to three digits (8 ms, not 7.99 or 8.01)
-    freq, amp = 50.0, 2e-5
-    times = np.array([0.0, 8e-3])
-    w = 2 * math.pi * freq
-    msg = ("flights: frames 8 ms apart cannot follow a surface vibrating at 50 Hz (period 20 ms): "
-           "the events between frames need at least 8 frames per period (output_dt <= 0.0025 s)")
-    zs, vs = amp * np.sin(w * times), amp * w * np.cos(w * times)
-    with plate_file(tmp_path / "two.h5", times, zs, vs, freq) as r, \
             pytest.raises(InputError, match=re.escape(msg)):
         Flights(r).run()
