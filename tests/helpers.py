@@ -7,12 +7,37 @@ import math
 import os
 import subprocess
 import sys
+import threading
+import time
 from pathlib import Path
 
 import numpy as np
 
 REPO = Path(__file__).resolve().parent.parent
 DECKS = REPO / "decks"
+
+
+def run_in_flight(record: list, wait: float = 10.0) -> threading.Thread:
+    """A run going on in another (daemon) thread, registered with vibrofeed.interrupt once this
+    returns: stopped, it appends why to ``record``, takes a moment to record its end, appends
+    "recorded its end" and only then unregisters, as runner.run_deck does."""
+    from vibrofeed import interrupt
+
+    registered = threading.Event()
+
+    def in_flight():
+        stopped = threading.Event()
+        key = interrupt.register(lambda why: (record.append(why), stopped.set()))
+        registered.set()
+        stopped.wait(wait)
+        time.sleep(0.05)  # recording the end takes a while: a stopper that does not wait misses it
+        record.append("recorded its end")
+        interrupt.unregister(key)
+
+    thread = threading.Thread(target=in_flight, daemon=True)  # a failure must not hold the suite
+    thread.start()
+    assert registered.wait(wait), "the run did not register"
+    return thread
 
 
 class FakeClock:

@@ -5,10 +5,9 @@ interpreter's end, its run's scratch folder kept and its file's status never wri
 
 from __future__ import annotations
 
-import threading
-
 import pytest
 
+from helpers import run_in_flight
 from vibrofeed import cli, interrupt
 from vibrofeed.cli import decks as decks_cli
 from vibrofeed.errors import RunError
@@ -25,18 +24,7 @@ def command_with_a_run_in_flight(failure: BaseException, record: list):
     """A command's ``run`` that leaves one run going in another thread, then fails."""
 
     def run(args):
-        registered = threading.Event()
-
-        def in_flight():
-            stopped = threading.Event()
-            key = interrupt.register(lambda why: (record.append(why), stopped.set()))
-            registered.set()
-            stopped.wait(10)
-            record.append("recorded its end")  # before unregistering, as runner.run_deck does
-            interrupt.unregister(key)
-
-        threading.Thread(target=in_flight, daemon=True).start()
-        assert registered.wait(10)
+        run_in_flight(record)
         raise failure
 
     return run

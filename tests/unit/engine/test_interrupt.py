@@ -8,6 +8,7 @@ import time
 
 import pytest
 
+from helpers import run_in_flight
 from vibrofeed import interrupt
 
 
@@ -134,23 +135,10 @@ def test_stop_left_stops_the_runs_a_failed_command_left_and_waits_for_them(fresh
     """A command ending on an error stops the runs other threads still wait for, as
     Ctrl-C does: each is told why, has recorded its end when stop_left returns, and
     stop_left says there were some."""
-    told, ended = [], threading.Event()
-    registered = threading.Event()
-
-    def run():
-        stopped = threading.Event()
-        key = interrupt.register(lambda why: (told.append(why), stopped.set()))
-        registered.set()
-        stopped.wait(5)
-        time.sleep(0.05)  # recording the end takes a while
-        ended.set()
-        interrupt.unregister(key)
-
-    thread = threading.Thread(target=run, daemon=True)  # a failure must not hold the suite
-    thread.start()
-    assert registered.wait(5), "the run did not register"
+    record: list = []
+    thread = run_in_flight(record, wait=5)
     assert interrupt.stop_left("stopped: the command ended on an error", timeout=5) is True
-    assert told == ["stopped: the command ended on an error"] and ended.is_set()
+    assert record == ["stopped: the command ended on an error", "recorded its end"]
     assert not interrupt._stoppers
     with pytest.raises(KeyboardInterrupt):  # and no run starts after
         interrupt.check()
