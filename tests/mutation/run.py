@@ -416,6 +416,7 @@ def results(name: str, workdir: Path) -> dict:
     # A row that names only killed mutants of this session is listed for review: its claim is
     # disproved, or gone stale, or (a sampled target) it is about a twin not in the sample.
     named_killed, named_survived = set(), set()
+    sources: dict[str, list[str]] = {}  # each module's source, read once
     for _job, module, op, row, worker, outcome, diff, output in rows:
         worker, outcome = (worker or "").lower() or None, (outcome or "").lower()
         if worker == "skipped":
@@ -425,8 +426,10 @@ def results(name: str, workdir: Path) -> dict:
         if worker is None:
             counts["pending"] += 1
         else:
-            source = home / "sources" / module
-            src = (source if source.exists() else REPO / module).read_text().splitlines()
+            if module not in sources:
+                source = home / "sources" / module
+                sources[module] = (source if source.exists() else REPO / module).read_text().splitlines()
+            src = sources[module]
             text = src[row - 1].strip() if row - 1 < len(src) else ""
             rows_named = matching_rows(module, op, text, eq)
             if outcome != "survived":
@@ -444,7 +447,7 @@ def results(name: str, workdir: Path) -> dict:
     wall = home / "wall.json"
     counts["wall_s"] = json.loads(wall.read_text()).get("total_exec_s", 0.0) if wall.exists() else 0.0
     counts["survivors"] = survivors
-    counts["disproved_rows"] = sorted(named_killed - named_survived)
+    counts["rows_to_review"] = sorted(named_killed - named_survived)
     return counts
 
 
@@ -457,7 +460,7 @@ def report(names, workdir: Path, cfg: dict) -> float:
     total = dict(mutants=0, killed=0, timeout=0, equivalent=0, survived=0, pending=0, wall_s=0.0)
     surv = ["# Surviving mutants\n"]
     scores = []
-    disproved = []
+    to_review = []
     for name in names:
         if not (workdir / name / "session.sqlite").exists():
             lines.append(f"| {name} | not run | | | | | | | |")
@@ -472,17 +475,17 @@ def report(names, workdir: Path, cfg: dict) -> float:
                      f"| {r['wall_s'] / 60:.0f} min | {r['sampled_out'] or ''} |")
         for module, row, op, text, diff in r["survivors"]:
             surv.append(f"## {module}:{row} `{op}`\n\n`{text}`\n\n```diff\n{diff}\n```\n")
-        disproved.extend(r["disproved_rows"])
+        to_review.extend(r["rows_to_review"])
     done = total["mutants"] - total["pending"]
     score = (total["killed"] + total["equivalent"]) / done if done else float("nan")
     lines.append(f"| **all** | {total['mutants']} | {total['killed']} ({total['timeout']}) "
                  f"| {total['equivalent']} | {total['survived']} | {total['pending']} "
                  f"| {100 * score:.1f} % | {total['wall_s'] / 60:.0f} min | |")
     text = "\n".join(lines) + "\n"
-    if disproved:
+    if to_review:
         surv.append("# Rows of EQUIVALENT.md that only killed mutants match (review them)\n")
-        surv.extend(f"- `{m}` `{o}` `{t}`" for m, o, t in sorted(set(disproved)))
-        text += (f"\n{len(set(disproved))} row(s) of EQUIVALENT.md match only killed mutants: "
+        surv.extend(f"- `{m}` `{o}` `{t}`" for m, o, t in sorted(set(to_review)))
+        text += (f"\n{len(set(to_review))} row(s) of EQUIVALENT.md match only killed mutants: "
                  "listed in survivors.md\n")
     (workdir / "summary.md").write_text(text)
     (workdir / "survivors.md").write_text("\n".join(surv))
