@@ -91,8 +91,7 @@ import math
 
 import numpy as np
 
-from ..errors import InputError
-from ..line import section_drive, section_from
+from ..errors import InputError, ParameterError
 from ..results import layout as L
 from .base import AnalysisBase
 from .line import (
@@ -101,7 +100,6 @@ from .line import (
     batch_cuts,
     batch_means,
     bed_pass,
-    bowl_tooling,
     is_line,
     section_bounds,
     tooling,
@@ -113,6 +111,7 @@ from .path import (  # noqa: F401  (outlet_x: imported from here)
     along,
     bowl_of,
     falls,
+    feeder_of,
     is_bowl,
     outlet_x,
     path_end,
@@ -602,9 +601,9 @@ class FeedRate(AnalysisBase):
                                                              else chute_model(result.parameters))
                 else:
                     try:
-                        drive = section_drive(result.parameters, k)
-                    except KeyError as exc:
-                        sec["model_speed"], sec["model_note"] = None, f"the result lacks {exc.args[0]}"
+                        drive = feeder_of(result.parameters).section_values(k)
+                    except ParameterError as exc:
+                        sec["model_speed"], sec["model_note"] = None, f"the result lacks {exc}"
                     else:
                         sec["model_speed"], sec["model_note"] = dilute_limit(drive)
                 sec["speed_ratio"] = velocity_ratio(sec["speed"], sec["model_speed"])
@@ -780,14 +779,12 @@ class FeedRate(AnalysisBase):
         size = float(result.parameters.get("part_size", 0.0))
         t_lo, t_hi = float(self.times[0]), float(self.times[-1])
         run = (rejects["time"] > t_lo) & (rejects["time"] <= t_hi)
-        if is_bowl(result.parameters):  # its falls, where they left the helix
-            b = bowl_of(result.parameters)
-            which = bowl_tooling(rejects["where"], b, size)
-            has = {"side_drop": b.drop is not None, "wiper": b.wiper is not None}
+        stations = feeder_of(result.parameters).stations
+        if "where" in rejects:  # a bowl's falls, where they left the helix
+            which = tooling(rejects["where"], 1, stations, size)
         else:
-            s = section_from(result.parameters)
-            which = tooling(rejects["position"][:, self.axis], rejects["section"], s, size)
-            has = {"side_drop": s.has_drop, "wiper": s.has_wiper}
+            which = tooling(rejects["position"][:, self.axis], rejects["section"], stations, size)
+        has = {kind: any(st.kind == kind for st in stations) for kind in ("side_drop", "wiper")}
         out = {}
         for k, name in enumerate(TOOLING):
             if not has.get(name, True):

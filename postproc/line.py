@@ -13,8 +13,8 @@ yet, and either drive's amplitude is far below a section's length.
   also shakes it across, docs/bowl.md);
 * :func:`bed_pass`: one pass over the frames giving each joint's crossings and the parts
   over each section at each frame (the hold-up);
-* :func:`tooling`: the rejects sorted by the tool that threw them off (a bowl's falls:
-  :func:`bowl_tooling`);
+* :func:`tooling`: the rejects sorted by the tool that threw them off (a bowl's falls
+  too);
 * :func:`batch_cuts`, :func:`batch_means`: a quantity in batches of whole periods over
   the window; :func:`drift`, :func:`trend`, :func:`unsteady`: whether it drifts, and
   the words that say so.
@@ -29,9 +29,8 @@ import math
 
 import numpy as np
 
-from ..line import section_from
 from ..results import layout as L
-from .path import BLOCK_VALUES, along, bowl_of, is_bowl
+from .path import BLOCK_VALUES, along, feeder_of
 
 _BLOCK_VALUES = BLOCK_VALUES  # (a name of this module's: tests set it to read in small blocks)
 # Rejects: the tools, in the order they are tried (a part falls sideways only where the
@@ -47,21 +46,18 @@ DRIFT_MIN_BATCHES = 6
 
 
 def is_line(parameters) -> bool:
-    """Whether the result is a feeder line (``sections`` > 1)."""
-    return int(float(parameters.get("sections", 1))) > 1
+    """Whether the result is a feeder line (more than one driven section)."""
+    feeder = feeder_of(parameters)
+    return feeder is not None and feeder.is_line
 
 
 def section_bounds(parameters, edge: float) -> list[tuple[float, float]]:
-    """[(x_from, x_to)] of each section in the track's frame [m]: the track from 0 to
-    the outlet ``edge``; a line's section 1 to the joint, section 2 from it to the edge; a
-    bowl's helix (along its path, :mod:`.path`) to its end, then its chute to the edge."""
-    if is_bowl(parameters):
-        joint = bowl_of(parameters).length
-        return [(0.0, joint), (joint, edge)]
-    if not is_line(parameters):
-        return [(0.0, edge)]
-    joint = section_from(parameters).x0
-    return [(0.0, joint), (joint, edge)]
+    """[(from, to)] of each section along the path [m], the last one ending at the outlet
+    ``edge``: the feeder's (:attr:`vibrofeed.feeders.Feeder.bounds`; a line's sections in
+    the track's frame, a bowl's helix then its chute along its path, :mod:`.path`)."""
+    feeder = feeder_of(parameters)
+    bounds = feeder.bounds if feeder is not None else [(0.0, edge)]
+    return bounds[:-1] + [(bounds[-1][0], edge)]
 
 
 def section_index(track_x, joints, edge: float) -> np.ndarray:
@@ -141,36 +137,21 @@ def bed_pass(result, frames, joints, edge: float, gone_ids=(), gone_times=(), ax
     return crossings, counts
 
 
-def tooling(x, section, s, size: float) -> np.ndarray:
-    """Index into :data:`TOOLING` of each reject at ``x`` [m] (its crossing of the catch
-    plane) fallen from ``section`` (1-based), on a line whose section 2 is ``s``
-    (:class:`vibrofeed.line.Section`), parts ``size`` across: the side drop's stretch
-    widened by a part size either way; else from :data:`WIPER_REACH` part sizes upstream
-    of the wiper's face to its bar's downstream end; else other (section 1's rejects too)."""
-    x = np.asarray(x, dtype=float)
-    on_2 = np.asarray(section) == 2
-    out = np.full(len(x), TOOLING.index("other"))
-    wiper = on_2 & s.has_wiper & (x >= s.wiper_x[0] - WIPER_REACH * size) & (x <= s.wiper_x[1])
-    out[wiper] = TOOLING.index("wiper")
-    drop = on_2 & s.has_drop & (x >= s.drop_x[0] - size) & (x <= s.drop_x[1] + size)
-    out[drop] = TOOLING.index("side_drop")
-    return out
-
-
-def bowl_tooling(where, b, size: float) -> np.ndarray:
-    """Index into :data:`TOOLING` of each fall off a bowl's helix at path coordinate
-    ``where`` [m] (the last on the track), on the bowl ``b`` (:class:`vibrofeed.bowl.Bowl`),
-    parts ``size`` across: as :func:`tooling` does along a line, the side drop's stretch
-    widened by a part size either way, else from :data:`WIPER_REACH` part sizes upstream of
-    the wiper's face to its bar's end, else other."""
+def tooling(where, section, stations, size: float) -> np.ndarray:
+    """Index into :data:`TOOLING` of each reject at path coordinate ``where`` [m] (a line's:
+    its crossing of the catch plane; a bowl's fall: the last on the track) fallen from
+    ``section`` (1-based), among the feeder's tooling ``stations``
+    (:attr:`vibrofeed.feeders.Feeder.stations`), parts ``size`` across: a side drop's
+    stretch on its section widened by a part size either way; else from
+    :data:`WIPER_REACH` part sizes upstream of a wiper's face to its bar's downstream end;
+    else other."""
     s = np.asarray(where, dtype=float)
+    section = np.broadcast_to(np.asarray(section), s.shape)
     out = np.full(len(s), TOOLING.index("other"))
-    if b.wiper is not None:
-        w0, w1 = (float(b.arc_length(t)) for t in b.wiper)
-        out[(s >= w0 - WIPER_REACH * size) & (s <= w1)] = TOOLING.index("wiper")
-    if b.drop is not None:
-        d0, d1 = (float(b.arc_length(t)) for t in b.drop)
-        out[(s >= d0 - size) & (s <= d1 + size)] = TOOLING.index("side_drop")
+    for kind, before, after in (("wiper", WIPER_REACH, 0.0), ("side_drop", 1.0, 1.0)):
+        for st in (st for st in stations if st.kind == kind):  # (a side drop is decided last)
+            hit = (section == st.section) & (s >= st.start - before * size) & (s <= st.end + after * size)
+            out[hit] = TOOLING.index(kind)
     return out
 
 

@@ -23,14 +23,25 @@ import numpy as np
 BLOCK_VALUES = 1 << 22
 
 
+def feeder_of(parameters):
+    """The feeder a result's parameters describe (vibrofeed.feeders.Feeder), or None for a
+    deck of one's own without the feeders' vocabulary (a single track to the outlet)."""
+    from ..errors import ParameterError
+    from ..feeders.feeder import Feeder
+
+    try:
+        return Feeder.from_values(parameters)
+    except ParameterError:
+        return None
+
+
 def is_bowl(parameters) -> bool:
     return "bowl_diameter" in parameters
 
 
 def bowl_of(parameters):
-    from ..bowl import bowl_from
-
-    return bowl_from({k: float(v) for k, v in parameters.items() if isinstance(v, int | float)})
+    """A bowl result's geometry (vibrofeed.bowl.Bowl), as its feeder holds it."""
+    return feeder_of(parameters).elements[0].bowl
 
 
 def outlet_x(result) -> float:
@@ -45,8 +56,7 @@ def outlet_x(result) -> float:
 def path_end(result) -> float:
     """The outlet edge's coordinate along the path [m] (a linear track: :func:`outlet_x`)."""
     if is_bowl(result.parameters):
-        b = bowl_of(result.parameters)
-        return b.length + b.chute_length
+        return feeder_of(result.parameters).path_end
     return outlet_x(result)
 
 

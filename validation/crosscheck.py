@@ -48,7 +48,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import CaseError
-from ..line import section_drive
+from ..feeders.feeder import Feeder
 from ..models import deck as dm
 from ..models.constants import G
 from ..results import layout as L
@@ -709,7 +709,7 @@ def _line_transport(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) ->
             if n == 0:
                 raise CaseError(f"case {case.name} [{run.label}]: no part was measured on section "
                                 f"{k} (lengthen t_end or move the pre-fill towards the joint)")
-            models.append(dm.transport(section_drive(p, k)).velocity)
+            models.append(dm.transport(Feeder.from_values(p).section_values(k)).velocity)
             out.rows.append(row(case, "section_speed", f"{run.label},s{k}", models[-1], dem, "m/s"))
         joint = run.number("track_length")
         panels.append(dict(label=run.label, x=x_all, v=v_all, model=models, dem=[s for s, _ in speeds],

@@ -173,29 +173,40 @@ class Deck:
     first definition counts).
     """
 
-    def __init__(self, path: str | os.PathLike):
+    def __init__(self, path: str | os.PathLike, include_dir: str | os.PathLike | None = None):
         self.path = Path(path).resolve()
         self.text = read_text(Path(path))  # errors name the path as given
         self.name = self.path.stem
+        # the folder ${deck_dir} names: the deck's own, or the project's decks for a deck
+        # generated from a feeder description (which lives elsewhere)
+        self.include_dir = Path(include_dir).resolve() if include_dir else self.path.parent
+        self.description = None  # the feeder description it was generated from, if any
+        self.aliases: dict[str, str] = {}  # other names of its tunables (a description's dotted ones)
         self.sources: dict[str, str] = {self.path.name: self.text}
         self.generated: list[str] = []  # includes of files the prepare hook writes
-        self.variables: dict[str, Variable] = {}
         self.formulas: dict[str, str] = {}
         self.commands = self._expand(self.path, self.text, (self.path,))
-        for number, line in enumerate(self.text.splitlines(), start=1):
-            m = _INDEX.match(line)
-            if m and m["name"] not in self.variables:  # LIGGGHTS keeps an index variable's first value
-                unit, description = "", (m["comment"] or "").strip()
-                um = _UNIT.match(description)
-                if um:
-                    unit, description = um["unit"].strip(), um["text"].strip()
-                self.variables[m["name"]] = Variable(m["name"], m["value"], unit, description, number)
+        self.variables = self.parse_variables(self.text)
         for c in self.commands:
             m = _EQUAL.match(c.text)
             if m and m["name"] not in self.formulas:
                 self.formulas[m["name"]] = m["formula"]
         if not self.variables:
             raise DeckError(f"{self.path}: declares no tunables ('variable NAME index VALUE # [unit] ...')")
+
+    @staticmethod
+    def parse_variables(text: str) -> dict[str, Variable]:
+        """The index variables ``text`` declares, with their units and meanings."""
+        variables: dict[str, Variable] = {}
+        for number, line in enumerate(text.splitlines(), start=1):
+            m = _INDEX.match(line)
+            if m and m["name"] not in variables:  # LIGGGHTS keeps an index variable's first value
+                unit, description = "", (m["comment"] or "").strip()
+                um = _UNIT.match(description)
+                if um:
+                    unit, description = um["unit"].strip(), um["text"].strip()
+                variables[m["name"]] = Variable(m["name"], m["value"], unit, description, number)
+        return variables
 
     def _expand(self, path: Path, text: str, chain: tuple[Path, ...]) -> list[Command]:
         """The commands of ``text`` (from ``path``) with its includes expanded."""
@@ -222,7 +233,7 @@ class Deck:
         return out
 
     def _include_target(self, spec: str, cmd: Command, path: Path) -> Path:
-        resolved = spec.replace(_DECK_DIR, str(self.path.parent))
+        resolved = spec.replace(_DECK_DIR, str(self.include_dir))
         where = f"{_shown(path)}:{cmd.line}"
         if "$" in resolved:
             raise DeckError(f"{where}: cannot follow 'include {spec}': only {_DECK_DIR} is resolved "
@@ -234,15 +245,20 @@ class Deck:
 
     def _relative(self, path: Path) -> str:
         """``path`` relative to the deck's folder (as in :attr:`sources`), else absolute."""
-        try:
-            return path.relative_to(self.path.parent).as_posix()
-        except ValueError:
-            return str(path)
+        for folder in (self.path.parent, self.include_dir):
+            try:
+                return path.relative_to(folder).as_posix()
+            except ValueError:
+                pass
+        return str(path)
 
     @classmethod
     def find(cls, spec: str | os.PathLike) -> Deck:
-        """A deck by path, or by name from the project's decks folder."""
+        """A deck by path, or by name from the project's decks folder; a feeder description
+        (FEEDER.toml, docs/feeders.md) becomes the deck that runs it."""
         p = Path(spec)
+        if p.suffix == ".toml" and p.is_file():
+            return cls.from_description(p)
         if p.is_file():
             return cls(p)
         candidate = decks_dir() / (p.name if p.suffix == DECK_SUFFIX else p.name + DECK_SUFFIX)
@@ -250,6 +266,19 @@ class Deck:
             return cls(candidate)
         names = ", ".join(available()) or "none"
         raise DeckError(f"no deck {str(spec)!r} (not a file; decks available by name: {names})")
+
+    @classmethod
+    def from_description(cls, path: str | os.PathLike, folder: Path | None = None) -> Deck:
+        """The deck generated from the feeder description ``path`` (vibrofeed.feeders), written
+        into ``folder`` (default: a cache folder named by its text's hash)."""
+        from .feeders import description as fd
+
+        described = fd.read(path)
+        template = read_text(decks_dir() / f"bulk_feeder{DECK_SUFFIX}")
+        deck_path = fd.write_deck(fd.deck_text(described, template), fd.slug(described.name), folder)
+        deck = cls(deck_path, include_dir=decks_dir())
+        deck.description, deck.aliases = described, described.aliases
+        return deck
 
     @property
     def header(self) -> str:

@@ -28,6 +28,9 @@ from pathlib import Path
 import numpy as np
 
 from .errors import ParameterError
+from .feeders.deck import guard_lines
+from .feeders.feeder import Feeder
+from .feeders.records import number, shape_code
 from .line import combined, write_sections  # a line's further sections (sections > 1)
 from .mesh import MeshBuilder, write_stl
 
@@ -37,7 +40,6 @@ CLUMP_SPACING = 0.75
 # A part's catch face, written at unit size: the deck scales it to its width and places it
 # below the outlet edge (fix mesh/surface ... scale ... move ...).
 CATCH_LENGTH = 1.0
-SHAPES = {"sphere": 0, "chip": 1, "disc": 2}
 
 
 @dataclass
@@ -188,29 +190,6 @@ def insertion_seeds(seed: int, count: int) -> list[int]:
 
 
 # ------------------------------------------------------------------ the hook
-def _number(values: Mapping[str, str], name: str) -> float:
-    try:
-        return float(values[name])
-    except KeyError:
-        raise ParameterError(f"the bulk feeder's geometry needs the parameter {name!r}") from None
-    except ValueError:
-        raise ParameterError(f"parameter {name}={values[name]!r} is not a number") from None
-
-
-def shape_code(value: str) -> int:
-    """``shape`` as the deck's integer code: 0 sphere, 1 chip, 2 disc (names accepted)."""
-    text = str(value).strip().lower()
-    if text in SHAPES:
-        return SHAPES[text]
-    try:
-        code = float(text)
-    except ValueError:
-        code = -1.0
-    if code not in (0.0, 1.0, 2.0):
-        raise ParameterError(f"parameter shape={value} must be sphere, chip or disc (0, 1 or 2)")
-    return int(code)
-
-
 def _part_files(values: Mapping[str, str], folder: Path, hook: str, shape: int, size: float,
                 thickness: float) -> tuple[list[str], np.ndarray | None]:
     """What every feeder deck's prepare hook writes for its parts: the catch face, the clump
@@ -222,7 +201,7 @@ def _part_files(values: Mapping[str, str], folder: Path, hook: str, shape: int, 
         write_template(rows, folder / f"{name}.multisphere", name)
     lines = [f"# written by vibrofeed.geometry.{hook} for one run\n"]
     lines += [f"variable n_sph_{name} equal {len(rows)}\n" for name, rows in templates.items()]
-    seed = int(_number(values, "seed")) if "seed" in values else 5489
+    seed = int(number(values, "seed")) if "seed" in values else 5489
     lines += [f"variable seed_{k} equal {p}\n" for k, p in enumerate(insertion_seeds(seed, 6), 1)]
     return lines, {0: None, 1: templates["chip"], 2: templates["disc"]}[shape]
 
@@ -230,32 +209,53 @@ def _part_files(values: Mapping[str, str], folder: Path, hook: str, shape: int, 
 def prepare_bulk_feeder(values: Mapping[str, str], folder: str | Path) -> Prepared:
     """Write the bulk feeder's geometry for one run into ``folder`` and describe it.
 
-    Files: ``track.stl`` (the track at rest; a line's section 2: ``track_s2.stl``,
-    vibrofeed.line), ``catch.stl`` (a unit catch face the deck
-    scales and places), ``chip.multisphere`` and ``disc.multisphere`` (clump templates),
-    ``prepared.in`` (LIGGGHTS variables: the templates' sphere counts and the insertion
-    seeds; the deck includes it, since a file-style variable crashes LIGGGHTS 3.8 at exit).
+    Files: ``track.stl`` (the track at rest; a line's further sections: ``track_s2.stl``,
+    ``track_s3.stl`` ..., vibrofeed.line, and the deck's generated ``line_*.in``,
+    vibrofeed.feeders.deck), ``catch.stl`` (a unit catch face the deck scales and places),
+    ``chip.multisphere`` and ``disc.multisphere`` (clump templates), ``prepared.in``
+    (LIGGGHTS variables: the templates' sphere counts and the insertion seeds; the deck
+    includes it, since a file-style variable crashes LIGGGHTS 3.8 at exit; and the
+    refusal of a run by hand with other values than the geometry was written for).
+    The feeder's sections and joints are checked first (vibrofeed.feeders).
     """
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    length, width = _number(values, "track_length"), _number(values, "track_width")
-    gate_width = _number(values, "gate_width")
-    gate_x = _number(values, "gate_at") * length
-    size, thickness = _number(values, "part_size"), _number(values, "part_thickness")
-    shape = shape_code(values.get("shape", "0"))
-
-    tilt = float(values.get("cross_tilt", 0.0))
-    vertices, triangles = track_mesh(length, width, _number(values, "wall_height"), gate_width, gate_x,
-                                     cross_tilt=tilt)
+    for name in ("track_length", "track_width", "wall_height", "gate_width", "gate_at", "part_size",
+                 "part_thickness"):
+        number(values, name)  # (the track's own numbers have no neutral value)
+    feeder = Feeder.from_values(values)
+    feeder.check()
+    first = feeder.linear_sections[0]
+    size, thickness = feeder.part.size, feeder.part.thickness
+    gate = first.gate
+    vertices, triangles = track_mesh(first.length, first.width, first.wall_height,
+                                     gate.width if gate else 0.0,
+                                     gate.at * first.length if gate else None,
+                                     cross_tilt=first.cross_tilt)
     write_stl(vertices, triangles, folder / "track.stl", "track")
-    lines, template = _part_files(values, folder, "prepare_bulk_feeder", shape, size, thickness)
+    lines, template = _part_files(values, folder, "prepare_bulk_feeder", feeder.part.shape, size,
+                                  thickness)
+    lines += guard_lines({**values, "shape": feeder.part.shape}, feeder_names(feeder))
     (folder / "prepared.in").write_text("".join(lines))
 
-    section_2 = write_sections(values, folder)
-    if section_2 is not None:
-        vertices, triangles = combined((vertices, triangles), section_2)
+    further = write_sections(feeder, folder)
+    if further:
+        vertices, triangles = combined((vertices, triangles), *further)
     return Prepared(variables={"mesh_dir": str(folder.resolve())}, track=(vertices, triangles),
                     body_template=template)
+
+
+def feeder_names(feeder: Feeder) -> list[str]:
+    """The parameters a line's geometry and its checks read: what prepared.in holds a run
+    by hand to (the part, section 1's track, and a line's every section and drive)."""
+    from .feeders.linear import KEYS, deck_name
+
+    names = ["shape", "part_size", "part_thickness", "size_spread", "sections"]
+    n = len(feeder.linear_sections)
+    geometry = [key for key in KEYS if key[0] != "drive"] if n == 1 else list(KEYS)
+    for k in range(1, n + 1):
+        names += [name for key in geometry if (name := deck_name(k, key)) is not None]
+    return names
 
 
 def prepare_bowl_feeder(values: Mapping[str, str], folder: str | Path) -> Prepared:
@@ -270,7 +270,7 @@ def prepare_bowl_feeder(values: Mapping[str, str], folder: str | Path) -> Prepar
 
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    numbers = {name: _number(values, name) for name in GEOMETRY + PART if name != "shape"}
+    numbers = {name: number(values, name) for name in GEOMETRY + PART if name != "shape"}
     numbers["shape"] = shape_code(values.get("shape", "0"))
     check_bowl(numbers)
     lines, template = _part_files(values, folder, "prepare_bowl_feeder", numbers["shape"],

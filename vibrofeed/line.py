@@ -1,19 +1,20 @@
-"""Feeder lines: a bulk track followed by a faster section with its own drive and tooling.
+"""The meshes of a line's further sections: a track after the one before, a step down,
+with its own walls and tooling.
 
-A line is the bulk feeder (decks/bulk_feeder.liggghts) with ``sections=2``: section 1 is
-the bulk feeder's track with its own vocabulary (``track_length``, ``track_width``,
-``gate_*``, ``freq``, ``amp_t`` ...), section 2 follows it along x with the ``s2_*``
-parameters (docs/feeder-lines.md). With ``sections=1`` (the default) nothing here is used.
+A line is the bulk feeder (decks/bulk_feeder.liggghts) with ``sections`` >= 2: section 1
+is the bulk feeder's track (vibrofeed.geometry.track_mesh), each further section k
+follows the one before along x with the ``s<k>_*`` parameters (docs/feeder-lines.md);
+which sections there are and where each lies is the feeder's (vibrofeed.feeders).
 
-Frame: the deck's. Section 2 runs from the joint ``x0 = track_length`` to the outlet edge
-``x1 = x0 + s2_length``, centred on y = 0 as section 1. Its floor lies ``s2_step`` below
+Frame: the deck's. Section k runs from its joint ``x0`` to ``x1 = x0 + length``,
+centred on y = 0. Its floor lies ``step`` (the steps of the joints before it summed) below
 section 1's at its high edge (y = +w/2) and, with a cross tilt, descends towards the
 wall at y = -w/2 (parts are kept against that wall, the reference wall):
 ``z(y) = -step - (w/2 - y) tan(cross_tilt)``. The wall at -w/2 runs the whole section;
 the wall at +w/2 is missing over the side drop, where the floor narrows to
-``s2_drop_width`` from the reference wall and parts not against it fall off the open
+``drop_width`` from the reference wall and parts not against it fall off the open
 side. The wiper is a bar across the track whose underside follows the floor at
-``s2_wiper_height``: a part taller than that (stacked, on edge) is swept back.
+``wiper_height``: a part taller than that (stacked, on edge) is swept back.
 
 Meshes are indexed triangle sets as in :mod:`vibrofeed.geometry`, with shared vertices
 along common edges (floor and walls form one surface, without seams).
@@ -28,6 +29,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import ParameterError
+from .feeders.feeder import Feeder
+from .feeders.linear import LinearSection
 from .mesh import MeshBuilder, write_stl
 
 # The wiper's bar along x, in part sizes: long enough that a part cannot wedge under it
@@ -37,7 +40,7 @@ WIPER_LENGTH = 1.0
 
 @dataclass(frozen=True)
 class Section:
-    """Section 2's geometry [m, deg]. ``drop_from``/``drop_to`` and ``wiper_at`` are
+    """A further section's mesh geometry [m, deg]. ``drop_from``/``drop_to`` and ``wiper_at`` are
     fractions of the section's length (a drop with drop_to <= drop_from, or a wiper with
     height 0, is absent)."""
 
@@ -100,14 +103,14 @@ def _stations(s: Section, spacing: float | None) -> np.ndarray:
 
 
 def section_mesh(s: Section, spacing: float | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Section 2 at rest: floor, the reference wall (y = -w/2), the other wall except over
+    """A further section at rest: floor, the reference wall (y = -w/2), the other wall except over
     the side drop, and the wiper. No wall at the joint (parts arrive over it from section 1)
     nor at the outlet edge."""
     if s.has_drop and not s.x0 <= s.drop_x[0] < s.drop_x[1] <= s.x1:
-        raise ParameterError("the side drop does not fit on section 2: 0 <= s2_drop_from < "
-                             "s2_drop_to <= 1")
+        raise ParameterError("the side drop does not fit on its section: 0 <= drop_from < "
+                             "drop_to <= 1")
     if s.has_wiper and not s.x0 <= s.wiper_x[0] < s.wiper_x[1] <= s.x1:
-        raise ParameterError("the wiper does not fit on section 2: lower s2_wiper_at")
+        raise ParameterError("the wiper does not fit on its section: lower its wiper_at")
     xs = _stations(s, spacing)
     lo, hi = -s.width / 2, s.width / 2
     inner = lo + s.drop_width  # the drop's open edge
@@ -151,133 +154,36 @@ def combined(*meshes: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.nda
 
 
 # ------------------------------------------------------------------ parameters
-def _get(p: Mapping, name: str, default: float = 0.0) -> float:
-    return float(p.get(name, default))
-
-
-def section_from(p: Mapping) -> Section:
-    """Section 2 of a line from the deck's parameters (numbers or their strings)."""
+def section_mesh_of(s: LinearSection) -> Section:
+    """The mesh's description of a further section of a feeder (vibrofeed.feeders)."""
+    drop, wiper = s.side_drop, s.wiper
     return Section(
-        x0=_get(p, "track_length"), length=_get(p, "s2_length"), width=_get(p, "s2_width"),
-        wall_height=_get(p, "s2_wall_height"), step=_get(p, "s2_step"),
-        cross_tilt=_get(p, "s2_cross_tilt"), drop_from=_get(p, "s2_drop_from"),
-        drop_to=_get(p, "s2_drop_to"), drop_width=_get(p, "s2_drop_width"),
-        wiper_height=_get(p, "s2_wiper_height"), wiper_at=_get(p, "s2_wiper_at", 0.5),
-        wiper_length=WIPER_LENGTH * _get(p, "part_size"))
+        x0=s.x0, length=s.length, width=s.width, wall_height=s.wall_height, step=s.level,
+        cross_tilt=s.cross_tilt, drop_from=drop.start if drop else 0.0,
+        drop_to=drop.end if drop else 0.0, drop_width=drop.width if drop else 0.0,
+        wiper_height=wiper.height if wiper else 0.0, wiper_at=wiper.at if wiper else 0.5,
+        wiper_length=wiper.length if wiper else 0.0)
 
 
-def section_drive(p: Mapping, k: int) -> dict:
-    """The parameters with section ``k``'s drive (1-based) as the deck's ``freq``,
-    ``amp_t``, ``amp_n``, ``phase`` and ``waveform``: what a model of one part alone on
-    that section takes (section 2 runs a sine)."""
-    if k == 1:
-        return dict(p)
-    return {**p, "freq": p["s2_freq"], "amp_t": p["s2_amp_t"], "amp_n": p["s2_amp_n"],
-            "phase": p["s2_phase"], "waveform": 0}
+def section_from(p: Mapping, k: int = 2) -> Section:
+    """Section ``k`` (>= 2) of a line from the deck's parameters (numbers or their strings)."""
+    sections = max(k, int(float(p.get("sections", 1))))  # (a section's own values, even on a track)
+    return section_mesh_of(Feeder.from_values({**p, "sections": sections}).linear_sections[k - 1])
 
 
-def joint_motion(p: Mapping[str, float]) -> tuple[float, float]:
-    """How far the floors at the joint move apart at most [m]: normal (dz) and along the
-    track (dx). Sines of one frequency: the amplitude of their difference, sqrt(a1^2 + a2^2
-    - 2 a1 a2 cos(phase1 - phase2)) normal, |amp_t - s2_amp_t| along (both start at
-    sin(w t)); of two frequencies: the sum of the amplitudes (the phases drift)."""
-    a1, a2 = p.get("amp_n", 0.0), p.get("s2_amp_n", 0.0)
-    b1, b2 = p.get("amp_t", 0.0), p.get("s2_amp_t", 0.0)
-    if p.get("freq", 0.0) != p.get("s2_freq", 0.0):
-        return a1 + a2, b1 + b2
-    dphi = math.radians(p.get("phase", 0.0) - p.get("s2_phase", 0.0))
-    return math.sqrt(max(a1 * a1 + a2 * a2 - 2 * a1 * a2 * math.cos(dphi), 0.0)), abs(b1 - b2)
+def further_meshes(feeder: Feeder) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The meshes at rest of a line's sections 2, 3, ... (none for a single track)."""
+    return [section_mesh(section_mesh_of(s)) for s in feeder.linear_sections[1:]]
 
 
-def joint_steps(p: Mapping[str, float]) -> tuple[float, float]:
-    """The step down from section 1's floor to section 2's at the joint, at rest, at its
-    least and its most across section 1's exit [m]: both floors are planes tilted down
-    towards -y (``cross_tilt``, ``s2_cross_tilt``), so the step is linear in y and its
-    extremes lie at the exit's two ends."""
-    s = section_from(p)
-    w1 = p.get("track_width", 0.0)
-    exit_width = p["gate_width"] if p.get("gate_width", 0.0) > 0 else w1
-    t1 = math.tan(math.radians(p.get("cross_tilt", 0.0)))
-    t2 = math.tan(math.radians(s.cross_tilt))
-    steps = [s.step + (s.width / 2 - y) * t2 - (w1 / 2 - y) * t1 for y in (-exit_width / 2, exit_width / 2)]
-    return min(steps), max(steps)
+def write_sections(feeder: Feeder, folder) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The prepare hook's part for a line: each further section's mesh at rest as
+    ``track_s<k>.stl`` in ``folder``, and the deck's generated line files
+    (vibrofeed.feeders.deck); returns the further meshes (none for a single track)."""
+    from .feeders.deck import write_line_files
 
-
-def check_line(p: Mapping[str, float]) -> None:
-    """Relations between a line's parameters (``sections`` > 1), one-line errors; the
-    deck refuses the same for runs by hand."""
-    recirculate = p.get("recirculate", 0.0)
-    if recirculate not in (0, 1):
-        raise ParameterError(f"recirculate={recirculate:g} must be 0 (rejects removed) or 1 "
-                             "(returned to the inlet)")
-    if p.get("return_delay", 0.0) < 0:
-        raise ParameterError(f"return_delay={p['return_delay']:g} s must be >= 0")
-    if int(p.get("sections", 1)) <= 1:
-        if recirculate:
-            raise ParameterError("recirculate=1: a single track has no rejects to return; "
-                                 "a line (sections=2) has")
-        return
-    size, shape = p["part_size"], int(p.get("shape", 0))
-    widest = size * (1 + p.get("size_spread", 0.0)) if shape == 0 else size
-    thickness = widest if shape == 0 else p.get("part_thickness", size)
-    s = section_from(p)
-    exit_width = p["gate_width"] if p.get("gate_width", 0.0) > 0 else p["track_width"]
-    if s.width < widest:
-        raise ParameterError(f"s2_width={s.width:g} m is narrower than a part ({widest:g} m across)")
-    if s.width < exit_width:
-        raise ParameterError(
-            f"s2_width={s.width:g} m is narrower than section 1's exit ({exit_width:g} m): the "
-            "sections do not join (parts would fall at the joint); narrow section 1 with its gate")
-    dz, dx = joint_motion(p)
-    low, high = joint_steps(p)
-    if low <= dz:
-        raise ParameterError(
-            f"s2_step={s.step:g} m: the joint must step down by more than the floors move apart "
-            f"normal to them ({dz:.3g} m: amp_n, s2_amp_n, phases), or section 2's floor rises above "
-            "section 1's and parts catch its edge"
-            + (f" (with the cross tilts the step is {low:.3g} m at its least)" if low != s.step else ""))
-    if high >= thickness:
-        raise ParameterError(f"s2_step={s.step:g} m is not a small step: keep it below a part's "
-                             f"thickness ({thickness:g} m)"
-                             + (f" (with the cross tilts it is {high:.3g} m at its most)"
-                                if high != s.step else ""))
-    if dx >= size / 2:
-        raise ParameterError(f"the joint opens by up to {dx:.3g} m along the track (amp_t, s2_amp_t), "
-                             f"more than half a part ({size / 2:g} m): parts would fall into it")
-    radius = thickness / 2
-    if s.wall_height <= radius:
-        raise ParameterError(f"s2_wall_height={s.wall_height:g} m is no higher than a part's centre "
-                             f"({radius:g} m): parts would leave over the walls")
-    if s.wiper_height > 0:
-        if s.wiper_height < thickness:
-            raise ParameterError(f"s2_wiper_height={s.wiper_height:g} m is lower than a part's "
-                                 f"thickness ({thickness:g} m): no part would pass the wiper")
-        if s.wiper_height >= s.wall_height:
-            raise ParameterError(f"s2_wiper_height={s.wiper_height:g} m is not below the walls "
-                                 f"(s2_wall_height={s.wall_height:g} m): the wiper would not exist")
-        if s.wiper_at * s.length + WIPER_LENGTH * size > s.length:
-            raise ParameterError(f"s2_wiper_at={s.wiper_at:g}: the wiper's bar ({WIPER_LENGTH * size:g} "
-                                 "m long) runs past the outlet edge; lower s2_wiper_at")
-    if s.drop_to > s.drop_from:
-        if not 0 < s.drop_width < s.width:
-            raise ParameterError(f"s2_drop_width={s.drop_width:g} m must be > 0 and narrower than "
-                                 f"s2_width={s.width:g} m (the side drop narrows the track)")
-        if s.drop_width < 0.5 * widest:
-            raise ParameterError(f"s2_drop_width={s.drop_width:g} m is less than half a part "
-                                 f"({widest / 2:g} m): every part would fall off the drop")
-    if p.get("hamaker", 0.0) > 0 or p.get("air_viscosity", 0.0) > 0:
-        raise ParameterError("hamaker and air_viscosity act on section 1's floor only: a line "
-                             "(sections=2) runs without them in this version")
-    if p.get("waveform", 0) != 0:
-        raise ParameterError("a line (sections=2) drives both sections with sines (waveform=0) in "
-                             "this version")
-
-
-def write_sections(values: Mapping[str, str], folder) -> tuple[np.ndarray, np.ndarray] | None:
-    """The prepare hook's part for a line: section 2's mesh at rest as ``track_s2.stl`` in
-    ``folder``; returns it (None for a single section)."""
-    if int(float(values.get("sections", "1"))) <= 1:
-        return None
-    mesh = section_mesh(section_from(values))
-    write_stl(*mesh, folder / "track_s2.stl", "track_s2")
-    return mesh
+    meshes = further_meshes(feeder)
+    for k, mesh in enumerate(meshes, start=2):
+        write_stl(*mesh, folder / f"track_s{k}.stl", f"track_s{k}")
+    write_line_files(feeder, folder)
+    return meshes

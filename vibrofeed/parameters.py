@@ -16,7 +16,8 @@ from collections.abc import Callable, Mapping
 from .bowl import check_bowl, climb_advice
 from .decks import RESERVED, Deck
 from .errors import ParameterError
-from .line import check_line
+from .feeders.feeder import Feeder
+from .feeders.linear import MAX_SECTIONS
 from .plausibility import DENSITY_MAX, PART_MAX, advice
 
 NO_MICRO_PART = "a metre is no micro-part; lengths are in metres"
@@ -153,7 +154,7 @@ RULES: dict[str, Callable[[float], str | None]] = {
     "dt_unchecked": _integer(choices=(0, 1)),
     # a feeder line's section 2 (vibrofeed.line; docs/feeder-lines.md); the twins of
     # section 1's parameters follow below
-    "sections": _integer(choices=(1, 2)),
+    "sections": _integer(choices=tuple(range(1, MAX_SECTIONS + 1))),
     "s2_step": _positive,
     "s2_drop_from": _between(0, 1, lo_open=False, hi_open=False),
     "s2_drop_to": _between(0, 1, lo_open=False, hi_open=False),
@@ -176,6 +177,15 @@ SECTION_2_TWINS = {"s2_length": "track_length", "s2_width": "track_width",
                    "s2_wall_height": "wall_height", "s2_freq": "freq", "s2_amp_t": "amp_t",
                    "s2_amp_n": "amp_n", "s2_phase": "phase", "s2_cross_tilt": "cross_tilt"}
 RULES.update({twin: RULES[name] for twin, name in SECTION_2_TWINS.items()})
+# A line's section k >= 3 (a feeder description's, docs/feeders.md) has section 2's names
+# with its own number: s3_amp_n takes s2_amp_n's rule.
+_FURTHER = re.compile(r"^s([3-9])_(\w+)$")
+
+
+def rule_for(name: str) -> Callable[[float], str | None] | None:
+    """The limit of parameter ``name`` (None: no limit of its own)."""
+    m = _FURTHER.match(name)
+    return RULES.get(f"s2_{m[2]}" if m else name)
 
 # Parameters that also take names; a name is replaced by the deck's number.
 NAMED_VALUES: dict[str, dict[str, str]] = {
@@ -207,6 +217,14 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
     that runs but looks like a slip (:func:`vibrofeed.plausibility.advice`) is a
     :class:`ParameterWarning` naming it."""
     tunables = deck.tunables
+    if deck.aliases:  # a feeder description's dotted names (element.3.drive.amp_n) for the deck's own
+        named: dict[str, str] = {}
+        for name, value in given.items():
+            own = deck.aliases.get(name, name)
+            if own in named:
+                raise ParameterError(f"parameter {own!r} given twice (as {name!r} too)")
+            named[own] = value
+        given = named
     for name in given:
         if name in RESERVED:
             raise ParameterError(f"parameter {name!r} is set by vibrofeed itself, not by -p")
@@ -224,7 +242,7 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
     numbers = {}
     for name, value in values.items():
         var = tunables[name]
-        if not (var.is_numeric or name in RULES):
+        if not (var.is_numeric or rule_for(name)):
             continue
         try:
             x = float(value)
@@ -236,13 +254,19 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
         if not math.isfinite(x):
             raise ParameterError(f"parameter {name}={value} is not finite")
         numbers[name] = x
-        rule = RULES.get(name)
+        rule = rule_for(name)
         problem = rule(x) if rule else None
         if problem:
             unit = f" {var.unit}" if var.unit and var.unit != "-" else ""
             slip = UNIT_SLIPS.get(name)
             hint = f"; {slip[1]}" if slip and slip[0](x) else ""
             raise ParameterError(f"parameter {name}={value}{unit} {problem}{hint}")
+    declared = max((int(m[1]) for n in tunables if (m := re.match(r"^s(\d)_length$", n))), default=1)
+    if numbers.get("sections", 1) > declared:
+        raise ParameterError(
+            f"parameter sections={values['sections']}: deck {deck.name} declares "
+            f"{'one section' if declared == 1 else f'sections 1 to {declared}'}; a line of more "
+            "sections is a feeder description (docs/feeders.md)")
     try:
         _check_relations(numbers)
     except ParameterError as exc:
@@ -271,7 +295,8 @@ MAX_FRAMES = 1_000_000
 
 def _check_relations(p: Mapping[str, float]) -> None:
     """Limits that involve several parameters."""
-    drives = (("amp_n", "freq"), ("amp_t", "freq"), ("s2_amp_n", "s2_freq"), ("s2_amp_t", "s2_freq"))
+    drives = (("amp_n", "freq"), ("amp_t", "freq"),
+              *((f"s{k}_amp_{a}", f"s{k}_freq") for k in range(2, MAX_SECTIONS + 1) for a in "nt"))
     for amp, freq in drives:
         if amp in p and freq in p:
             speed = 2 * math.pi * p[freq] * p[amp]
@@ -290,7 +315,7 @@ def _check_relations(p: Mapping[str, float]) -> None:
                 f"t_end={p['t_end']:g} s with output_dt={p['output_dt']:g} s would write "
                 f"{frames:.3g} frames (limit {MAX_FRAMES:.0e}); raise output_dt or shorten t_end")
     _check_bulk_feeder(p)
-    check_line(p)
+    _check_feeder(p)
     check_bowl(p)
     _check_surface_forces(p)
     dt = p.get("dt", 0.0)
@@ -301,6 +326,19 @@ def _check_relations(p: Mapping[str, float]) -> None:
         if "t_end" in p and p["t_end"] < dt:
             raise ParameterError(f"t_end={p['t_end']:g} s is shorter than the timestep dt={dt:g} s")
     _check_contact_step(p)
+
+
+def _check_feeder(p: Mapping[str, float]) -> None:
+    """A line's sections and joints, and its rejects' return (vibrofeed.feeders: the rules
+    live there, the deck repeats none of them)."""
+    recirculate = p.get("recirculate", 0.0)
+    if recirculate not in (0, 1):
+        raise ParameterError(f"recirculate={recirculate:g} must be 0 (rejects removed) or 1 "
+                             "(returned to the inlet)")
+    if "part_size" in p and "track_width" in p and "bowl_diameter" not in p:
+        Feeder.from_values(p).check()
+    elif p.get("return_delay", 0.0) < 0:
+        raise ParameterError(f"return_delay={p['return_delay']:g} s must be >= 0")
 
 
 # Random loose packing of a settled pre-fill, to tell whether it stays between the walls.

@@ -21,7 +21,7 @@ def add_arguments(p) -> None:
 def liggghts_line(deck, given: dict[str, str], values: dict[str, str], extra: dict[str, str]) -> str:
     """The command that runs ``deck`` by hand with the parameters the user gave
     (as the run would resolve them) and the prepared ``-var`` values."""
-    words = ["liggghts", "-in", str(deck.path), "-var", "deck_dir", str(deck.path.parent)]
+    words = ["liggghts", "-in", str(deck.path), "-var", "deck_dir", str(deck.include_dir)]
     for name, value in extra.items():
         words += ["-var", name, value]
     for name in given:
@@ -44,6 +44,9 @@ def run(args) -> int:
     values = resolve(deck, given)
     folder = folder_destination("-o", args.output, parents=True)
     before = _stamps(folder)
+    if deck.description is not None:  # the generated deck goes with its meshes, to be run by hand
+        deck = Deck.from_description(deck.description.path, folder.resolve())
+        given = {deck.aliases.get(k, k): v for k, v in given.items()}
     prepared = deck.prepare(values, folder.resolve())
     extra = dict(prepared.variables) if prepared is not None else {}
     if prepared is None:

@@ -359,7 +359,8 @@ class _Run:
         deck, values = self.deck, self.values
         prepared = deck.prepare(values, self.tmp)
         spec = {
-            "deck": str(deck.path), "deck_name": deck.name, "variables": values,
+            "deck": str(deck.path), "deck_dir": str(deck.include_dir), "deck_name": deck.name,
+            "variables": values,
             "var_meta": {n: [v.unit, v.description, v.default] for n, v in deck.tunables.items()},
             "constants": deck.constants,
             "output": str(self.part), "log": str(self.log), "screen": str(self.screen),

@@ -242,6 +242,7 @@ class BulkFrames:
     """
 
     def __init__(self, lmp, spec: dict):
+        from ..feeders.feeder import Feeder
         from .outlet import LineOutlet, Outlet, gravity_vector
 
         self.n_spheres = int(round(lmp.variable("body_spheres")))
@@ -249,8 +250,11 @@ class BulkFrames:
         variables = spec.get("variables", {})
         incline = float(variables.get("incline", 0.0))
         where = (lmp.variable("outlet_x"), lmp.variable("catch_z"), gravity_vector(g, incline))
-        self.line = float(variables.get("sections", 1)) > 1
-        self.outlet = (LineOutlet(*where, (0.0, float(variables["track_length"]))) if self.line
+        # the feeder the deck's parameters describe (None: a deck of one's own without the
+        # feeders' vocabulary, run as a single track)
+        self.feeder = Feeder.from_values(variables) if "part_size" in variables else None
+        self.line = self.feeder is not None and self.feeder.is_line
+        self.outlet = (LineOutlet(*where, [b[0] for b in self.feeder.bounds]) if self.line
                        else Outlet(*where))
         # recirculation (a line's rejects back to the inlet): the driver's, never by hand
         self.returns = None
@@ -265,8 +269,8 @@ class BulkFrames:
         self.names = PER_ATOM + (("molecule",) if self.n_spheres > 1 else ())
         self.warnings: list[str] = []
         if self.line and self.track is not None and self.track_sections is None:
-            self.warnings.append("the line's track mesh does not end with section 2's mesh: the "
-                                 "file cannot say which vertices move with section 2")
+            self.warnings.append("the line's track mesh does not end with its further sections' "
+                                 "meshes: the file cannot say which vertices move with which section")
         if self.template is not None and self.n_spheres > 1 and len(self.template) != self.n_spheres:
             raise ValueError(f"the body template has {len(self.template)} spheres, the deck's "
                              f"body_spheres is {self.n_spheres}")
@@ -360,22 +364,24 @@ def recorded_sections(lmp, spec: dict) -> int:
 
 def track_sections(track, variables: dict) -> np.ndarray | None:
     """(V,) the section (1-based) of each vertex of a line's track, or None when it cannot be
-    told. The prepare hook writes section 1's mesh, then appends section 2's
-    (vibrofeed.line.section_mesh of the same parameters), each with its own vertices: the
-    track's last vertices must be that mesh exactly, and only then are they section 2's."""
-    from ..line import section_from, section_mesh
+    told. The prepare hook writes section 1's mesh, then appends each further section's
+    (vibrofeed.line.further_meshes of the same parameters' feeder), each with its own
+    vertices: the track's last vertices must be those meshes exactly, and only then are they
+    theirs."""
+    from ..feeders.feeder import Feeder
+    from ..line import further_meshes
 
     if track is None:
         return None
     vertices = track[0]
     try:
-        second = section_mesh(section_from(variables))[0]
+        further = [m[0] for m in further_meshes(Feeder.from_values(variables))]
     except (ValueError, ArithmeticError):  # a bad value, or a dimension missing (0: a division by it)
         return None
-    n1 = len(vertices) - len(second)
-    if n1 <= 0 or not np.array_equal(vertices[n1:], second):
+    n1 = len(vertices) - sum(len(v) for v in further)
+    if n1 <= 0 or not further or not np.array_equal(vertices[n1:], np.concatenate(further)):
         return None
-    return np.repeat(np.array([1, 2], dtype=np.int32), [n1, len(second)])
+    return np.repeat(np.arange(1, len(further) + 2, dtype=np.int32), [n1] + [len(v) for v in further])
 
 
 def _includes(spec: dict) -> dict[str, str]:
@@ -391,7 +397,8 @@ def engine_arguments(spec: dict) -> list[str]:
         args += ["-var", name, str(value)]
     for name, value in ((spec.get("prepared") or {}).get("variables") or {}).items():
         args += ["-var", name, str(value)]  # e.g. mesh_dir, from the deck's prepare hook
-    return args + ["-var", "driver", "1", "-var", "deck_dir", str(Path(spec["deck"]).parent)]
+    deck_dir = spec.get("deck_dir") or str(Path(spec["deck"]).parent)  # (a generated deck's is elsewhere)
+    return args + ["-var", "driver", "1", "-var", "deck_dir", deck_dir]
 
 
 def read_contract(lmp) -> tuple[int, int, float, bool]:

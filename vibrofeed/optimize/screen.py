@@ -1,7 +1,7 @@
 """The cheap first stage: what the analytic models say of a setting before any DEM run.
 
 Each section's drive (section 1's ``freq``, ``amp_t``, ``amp_n``, ``phase``, ``waveform``,
-``duty``; a line's section 2's ``s2_*`` sine: :func:`vibrofeed.line.section_drive`) is the
+``duty``; a line's section 2's ``s2_*`` sine: :meth:`vibrofeed.feeders.Feeder.section_values`) is the
 surface motion the decks move (:func:`vibrofeed.models.deck.waveform`), sampled over one
 period for its peak acceleration (|a|, in g), its peak displacement (half the stroke of
 either component) and whether it throws a part off the floor (the floor accelerates
@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..line import section_drive
+from ..feeders.feeder import Feeder
 from ..models.constants import G
 from .spec import StudySpec
 
@@ -65,7 +65,7 @@ def drive(values: dict, k: int, with_model: bool = True) -> Drive:
     """Section ``k``'s drive (1-based) of resolved deck values (numbers or their strings)."""
     from ..models.deck import transport, waveform
 
-    p = {name: _number(v) for name, v in section_drive(values, k).items()}
+    p = {name: _number(v) for name, v in Feeder.from_values(values).section_values(k).items()}
     motion = waveform(p)
     freq = float(p["freq"])
     t = np.arange(SAMPLES) / (SAMPLES * freq)

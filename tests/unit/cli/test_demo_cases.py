@@ -10,7 +10,7 @@ import pytest
 from helpers import DECKS
 from vibrofeed.cli.demo import CASES, SUPPLY
 from vibrofeed.decks import Deck
-from vibrofeed.line import joint_motion, joint_steps
+from vibrofeed.feeders import Feeder
 from vibrofeed.parameters import resolve
 
 
@@ -26,9 +26,11 @@ def test_each_case_is_a_valid_run_of_the_bulk_feeder(case):
 def test_the_line_steps_down_at_every_instant_and_is_fed_not_drained():
     _, _, given = CASES["line"]
     p = {k: float(v) for k, v in resolve(Deck(DECKS / "bulk_feeder.liggghts"), given).items()
-         if k in given or k in ("freq", "s2_freq", "amp_n", "phase", "part_size", "gate_width")}
-    dz, dx = joint_motion(p)
-    low, high = joint_steps(p)
+         if k in given or k in ("freq", "s2_freq", "amp_n", "phase", "part_size", "gate_width",
+                               "sections")}
+    joint = Feeder.from_values(p).joints[0]
+    dz, dx = joint.motion
+    low, high = joint.steps
     assert low > dz and high < p["part_size"]  # a small step down, below the floors' motion
     assert dx < p["part_size"] / 2
     # a sub-hopping single-file section (Gamma_n < 1): hopping spheres convey at scattered speeds

@@ -148,7 +148,9 @@ def test_valid_combinations_resolve():
 
 def test_deck_declares_its_prepare_hook_and_generated_include():
     assert DECK.prepare_target == "vibrofeed.geometry:prepare_bulk_feeder"
-    assert DECK.generated == ["${mesh_dir}/prepared.in"]
+    assert DECK.generated == ["${mesh_dir}/prepared.in", "${mesh_dir}/line_derived.in",
+                              "${mesh_dir}/line_meshes.in", "${mesh_dir}/line_catch.in",
+                              "${mesh_dir}/line_motion.in"]
     assert "mesh_dir" not in DECK.tunables and "outlet_file" not in DECK.tunables
     for name in ("outlet_x", "catch_z", "body_spheres", "k_pp", "k_pw", "pulloff_pp", "pulloff_pw",
                  "dt_hertz_fraction", "dt_rayleigh_fraction", "fall_depth", "n_prefilled"):

@@ -13,21 +13,30 @@ from helpers import DECKS
 from vibrofeed.decks import Deck
 from vibrofeed.engine.outlet import LineOutlet, gravity_vector
 from vibrofeed.errors import ParameterError
+from vibrofeed.feeders import Feeder
 from vibrofeed.geometry import prepare_bulk_feeder, track_mesh
-from vibrofeed.line import (
-    Section,
-    check_line,
-    combined,
-    joint_motion,
-    joint_steps,
-    section_drive,
-    section_from,
-    section_mesh,
-)
+from vibrofeed.line import Section, combined, section_from, section_mesh
 from vibrofeed.parameters import resolve
 
 L1, W1 = 0.01, 1.2e-3
 TOL = 1e-12
+
+
+def line_of(p: dict) -> Feeder:
+    """The two-section feeder of ``p`` (absent numbers: zero, as the decks' tools)."""
+    return Feeder.from_values({"sections": 2, "part_size": 3e-4, **p})
+
+
+def joint_motion(p: dict) -> tuple[float, float]:
+    return line_of(p).joints[0].motion
+
+
+def joint_steps(p: dict) -> tuple[float, float]:
+    return line_of(p).joints[0].steps
+
+
+def check_line(p: dict) -> None:
+    Feeder.from_values(p).check()
 
 
 def section(**kw) -> Section:
@@ -138,10 +147,12 @@ def test_a_drop_needs_a_length_and_must_leave_a_floor():
 
 def test_each_section_has_its_own_drive():
     p = {"freq": 100.0, "amp_t": 1e-5, "amp_n": 2e-5, "phase": 30.0, "waveform": 2,
-         "s2_freq": 120.0, "s2_amp_t": 3e-5, "s2_amp_n": 4e-5, "s2_phase": 45.0}
-    assert section_drive(p, 1) == p
-    assert section_drive(p, 2) == {**p, "freq": 120.0, "amp_t": 3e-5, "amp_n": 4e-5, "phase": 45.0,
-                                   "waveform": 0}  # section 2 runs a sine
+         "s2_freq": 120.0, "s2_amp_t": 3e-5, "s2_amp_n": 4e-5, "s2_phase": 45.0,
+         "sections": 2, "part_size": 3e-4}
+    feeder = Feeder.from_values(p)
+    assert feeder.section_values(1) == p
+    assert feeder.section_values(2) == {**p, "freq": 120.0, "amp_t": 3e-5, "amp_n": 4e-5,
+                                        "phase": 45.0, "waveform": 0}  # section 2 runs a sine
 
 
 def test_section_joins_section_one_with_a_step_down():
@@ -225,7 +236,7 @@ def test_a_single_section_is_the_bulk_feeder_unchanged(tmp_path):
     # that does not clear it (no cross tilt at the gate's high end: the step there is s2_step)
     ({"s2_freq": 120, "s2_step": 1e-4}, "must step down by more than"),
     ({"s2_amp_n": 0.005}, "s2_amp_n=0.005 m at s2_freq=100 Hz"),
-    ({"sections": 3}, "sections=3"),
+    ({"sections": 3}, "sections=3: deck bulk_feeder declares sections 1 to 2"),
 ])
 def test_line_refusals_are_one_line(given, words):
     deck = Deck(DECKS / "bulk_feeder.liggghts")
@@ -380,7 +391,6 @@ def minimal_line(**kw):
 
 
 def test_check_line_takes_absent_options_as_off():
-    check_line({})  # a deck without a line (bowl, single part): nothing to check, no recirculation
     # absent: spheres without spread, no gate, no drive, no surface forces, sines
     check_line(minimal_line())
     # a spread given alone applies to spheres: the largest (4.35e-4 m) is wider than section 2

@@ -223,7 +223,8 @@ def test_prepare_writes_the_files_and_describes_them(tmp_path):
     p = prepare_bulk_feeder(VALUES, tmp_path / "m")
     assert isinstance(p, Prepared)
     names = sorted(f.name for f in (tmp_path / "m").iterdir())
-    assert names == ["catch.stl", "chip.multisphere", "disc.multisphere", "prepared.in", "track.stl"]
+    assert names == ["catch.stl", "chip.multisphere", "disc.multisphere", "line_catch.in",
+                     "line_derived.in", "line_meshes.in", "line_motion.in", "prepared.in", "track.stl"]
     assert p.variables == {"mesh_dir": str((tmp_path / "m").resolve())}
     text = (tmp_path / "m" / "prepared.in").read_text()
     assert "variable n_sph_chip equal 9" in text and "variable seed_6 equal" in text

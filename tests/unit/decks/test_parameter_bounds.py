@@ -82,7 +82,7 @@ BULK = {
     "pull_speed": (0, False, INF, False, None),
     "overlap0": (0, False, INF, False, None),
     # a feeder line's section 2 (vibrofeed.line)
-    "sections": (1, True, 2, True, (1, 2)),
+    "sections": (1, True, 9, True, tuple(range(1, 10))),  # (the deck declares fewer: refused by resolve)
     "s2_length": (0, False, INF, False, None),
     "s2_width": (0, False, INF, False, None),
     "s2_wall_height": (0, False, INF, False, None),

@@ -360,23 +360,25 @@ def test_a_bowls_sections_are_its_helix_and_its_chute(tmp_path):
 
 
 def test_a_bowls_falls_by_tooling_where_they_left_the_helix():
-    """bowl_tooling: the side drop's stretch (its stations' arc lengths) widened by a part size
-    either way; else from 3 part sizes upstream of the wiper's face to its bar's end; else
-    other; by hand at each boundary, a nanometre either side."""
-    from vibrofeed.postproc.line import TOOLING, bowl_tooling
+    """tooling of a bowl's falls: the side drop's stretch (its stations' arc lengths) widened
+    by a part size either way; else from 3 part sizes upstream of the wiper's face to its bar's
+    end; else other; by hand at each boundary, a nanometre either side."""
+    from vibrofeed.feeders import Feeder
+    from vibrofeed.postproc.line import TOOLING, tooling
 
     size = 3e-4
-    b = bowl_from({**BOWL, "drop_from": 0.5, "drop_to": 0.7, "drop_width": 4e-4,
-                   "wiper_height": 4.5e-4, "wiper_at": 0.2})
+    tooled = {**BOWL, "drop_from": 0.5, "drop_to": 0.7, "drop_width": 4e-4,
+              "wiper_height": 4.5e-4, "wiper_at": 0.2}
+    b = bowl_from(tooled)
     d0, d1 = (float(b.arc_length(t)) for t in b.drop)
     w0, w1 = (float(b.arc_length(t)) for t in b.wiper)
     eps = 1e-9
     where = np.array([d0 - size - eps, d0 - size + eps, d1 + size - eps, d1 + size + eps,
                       w0 - 3 * size - eps, w0 - 3 * size + eps, w1 - eps, w1 + eps, 0.0])
     want = ["other", "side_drop", "side_drop", "other", "other", "wiper", "wiper", "other", "other"]
-    assert [TOOLING[k] for k in bowl_tooling(where, b, size)] == want
-    plain = bowl_from(BOWL)  # no tooling: every fall is other
-    assert set(bowl_tooling(where, plain, size)) == {TOOLING.index("other")}
+    assert [TOOLING[k] for k in tooling(where, 1, Feeder.from_values(tooled).stations, size)] == want
+    plain = Feeder.from_values(BOWL)  # no tooling: every fall is other
+    assert set(tooling(where, 1, plain.stations, size)) == {TOOLING.index("other")}
 
 
 def test_no_falls_on_a_linear_track_nor_in_fewer_than_two_frames(tmp_path):

@@ -329,14 +329,16 @@ def test_the_single_part_line_says_what_a_sliding_block_means_for_spheres():
 
 
 def test_each_section_is_compared_with_the_model_of_its_own_drive():
-    from vibrofeed.line import section_drive
+    from vibrofeed.feeders import Feeder
     from vibrofeed.models.deck import transport
 
     p = {"freq": 100.0, "amp_t": 3.5e-5, "amp_n": 5e-5, "phase": 0.0, "mu": 0.5, "restitution": 0.3,
-         "s2_freq": 150.0, "s2_amp_t": 1e-4, "s2_amp_n": 2e-5, "s2_phase": -30.0, "waveform": 0}
-    two = section_drive(p, 2)
+         "s2_freq": 150.0, "s2_amp_t": 1e-4, "s2_amp_n": 2e-5, "s2_phase": -30.0, "waveform": 0,
+         "sections": 2, "part_size": 3e-4}
+    feeder = Feeder.from_values(p)
+    two = feeder.section_values(2)
     assert (two["freq"], two["amp_t"], two["amp_n"], two["phase"]) == (150.0, 1e-4, 2e-5, -30.0)
-    assert section_drive(p, 1) == p
+    assert feeder.section_values(1) == p
     # the model of section 2's drive is the model of a track driven as section 2 is
     alone = {**p, "freq": 150.0, "amp_t": 1e-4, "amp_n": 2e-5, "phase": -30.0}
     assert transport(two).velocity == pytest.approx(transport(alone).velocity, rel=1e-12)

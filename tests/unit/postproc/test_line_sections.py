@@ -227,7 +227,7 @@ def test_the_uneven_last_interval_is_left_out_of_the_speeds(tmp_path):
 
 # -- rejects by tooling -----------------------------------------------------------------------
 def test_rejects_are_sorted_by_the_tooling_where_they_fell(tmp_path):
-    from vibrofeed.line import section_from
+    from vibrofeed.feeders import Feeder
 
     # x of each reject: inside the drop; a part size before it and after it (slack); beyond
     # the slack; upstream of the wiper within three part sizes; farther upstream
@@ -241,7 +241,7 @@ def test_rejects_are_sorted_by_the_tooling_where_they_fell(tmp_path):
         fr = FeedRate(r, start=0.1, end=0.3).run().results
         section = r.rejects["section"]
     names = np.array(["side_drop", "wiper", "other"])
-    got = names[tooling(np.array(at), section, section_from(params), D)]
+    got = names[tooling(np.array(at), section, Feeder.from_values(params).stations, D)]
     assert got.tolist() == want
     assert section.tolist() == [2, 2, 2, 2, 2, 2, 2, 1]           # 3 mm: off section 1
     # reached at tj + (x - J) / v2 on section 2, tj - (J - x) / v1 on section 1
@@ -470,32 +470,36 @@ def test_a_pass_over_a_single_frame_counts_its_parts(tmp_path):
 def test_line_tooling_at_the_exact_ends_of_each_stretch():
     # the bounds are inclusive: a reject exactly at the side drop's widened ends or at the
     # wiper's reach and bar end belongs to that tool
+    from vibrofeed.feeders import Feeder
     from vibrofeed.line import section_from
 
-    s = section_from({"track_length": JOINT, "s2_length": S2_LENGTH, "s2_width": 4.2e-4,
-                      "s2_drop_from": 0.2, "s2_drop_to": 0.6, "s2_drop_width": 2e-4,
-                      "s2_wiper_height": 4e-4, "s2_wiper_at": 0.9, "part_size": D})
+    values = {"sections": 2, "track_length": JOINT, "s2_length": S2_LENGTH, "s2_width": 4.2e-4,
+              "s2_drop_from": 0.2, "s2_drop_to": 0.6, "s2_drop_width": 2e-4,
+              "s2_wiper_height": 4e-4, "s2_wiper_at": 0.9, "part_size": D}
+    s = section_from(values)
     (d0, d1), (w0, w1) = s.drop_x, s.wiper_x
     names = np.array(["side_drop", "wiper", "other"])
     at = np.array([d0 - D, d1 + D, w0 - 3.0 * D, w1, d0 - D])
-    got = names[tooling(at, [2, 2, 2, 2, 1], s, D)]
+    got = names[tooling(at, [2, 2, 2, 2, 1], Feeder.from_values(values).stations, D)]
     assert got.tolist() == ["side_drop", "side_drop", "wiper", "wiper", "other"]
 
 
 def test_bowl_tooling_at_the_exact_ends_of_each_stretch():
-    from vibrofeed.bowl import bowl_from
-    from vibrofeed.postproc.line import TOOLING, bowl_tooling
+    from vibrofeed.feeders import Feeder
+    from vibrofeed.postproc.line import TOOLING
 
     size = 3e-4
-    b = bowl_from({"bowl_diameter": 0.02, "track_width": 1.2e-3, "helix_angle": 3.0, "turns": 1.5,
-                   "wall_height": 1e-3, "cone_angle": 3.0, "cross_tilt": 3.0, "lip_height": 0.0,
-                   "chute_length": 8e-3, "part_size": size, "drop_from": 0.5, "drop_to": 0.7,
-                   "drop_width": 4e-4, "wiper_height": 4.5e-4, "wiper_at": 0.2})
+    feeder = Feeder.from_values({
+        "bowl_diameter": 0.02, "track_width": 1.2e-3, "helix_angle": 3.0, "turns": 1.5,
+        "wall_height": 1e-3, "cone_angle": 3.0, "cross_tilt": 3.0, "lip_height": 0.0,
+        "chute_length": 8e-3, "part_size": size, "drop_from": 0.5, "drop_to": 0.7,
+        "drop_width": 4e-4, "wiper_height": 4.5e-4, "wiper_at": 0.2})
+    b = feeder.elements[0].bowl
     d0, d1 = (float(b.arc_length(t)) for t in b.drop)
     w0, w1 = (float(b.arc_length(t)) for t in b.wiper)
     where = np.array([d0 - size, d1 + size, w0 - 3.0 * size, w1])
-    assert [TOOLING[k] for k in bowl_tooling(where, b, size)] == ["side_drop", "side_drop",
-                                                                  "wiper", "wiper"]
+    assert [TOOLING[k] for k in tooling(where, 1, feeder.stations, size)] == [
+        "side_drop", "side_drop", "wiper", "wiper"]
 
 
 def test_batch_cuts_without_a_frequency_at_a_slow_one_and_under_half_a_period():

@@ -1,0 +1,17 @@
+"""Feeders: one description for every feeder, and the object the rest of vibrofeed asks
+about its geometry.
+
+A feeder is its parts and its elements in conveying order (today: linear sections, any
+number of them, and the bowl), each element with its own drive and tooling stations.
+:class:`Feeder` is built once from the deck's vocabulary (:meth:`Feeder.from_values`);
+a description file (docs/feeders.md, :mod:`.description`) produces that vocabulary and
+the deck that runs it.
+"""
+
+from .feeder import BowlElement, Feeder
+from .joints import Joint
+from .linear import LinearSection
+from .records import Drive, Gate, Part, SideDrop, Wiper
+
+__all__ = ["BowlElement", "Drive", "Feeder", "Gate", "Joint", "LinearSection", "Part", "SideDrop",
+           "Wiper"]

@@ -1,0 +1,291 @@
+"""A feeder description: a TOML file naming the parts, their supply and the elements in
+conveying order (docs/feeders.md), and the deck it becomes.
+
+A description is read once (:func:`load`): every key is checked against the vocabulary
+below (an unknown or misspelled key is a one-line error naming its table and the key it
+was probably meant to be), and its numbers become the deck's parameters
+(:attr:`Description.values`). Each number also has a dotted name (``element.3.drive.amp_n``,
+``parts.size``: :attr:`Description.aliases`) that ``-p``, sweeps and studies take beside the
+deck's own name (``s3_amp_n``). :func:`deck_text` writes the deck that runs it:
+decks/bulk_feeder.liggghts with the description's numbers as its defaults and every
+further section's tunables declared, so that ``liggghts -in`` runs it as it runs the
+project's decks.
+"""
+
+from __future__ import annotations
+
+import difflib
+import hashlib
+import math
+import os
+import re
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..errors import ParameterError
+from .linear import KEYS, MAX_SECTIONS, deck_names
+
+SUFFIX = ".toml"
+ELEMENT_KINDS = ("linear",)
+# table -> {key: deck name}; the element's keys are vibrofeed.feeders.linear.KEYS
+TABLES: dict[str, dict[str, str]] = {
+    "feeder": {"incline": "incline"},
+    "parts": {"shape": "shape", "size": "part_size", "thickness": "part_thickness",
+              "size_spread": "size_spread", "density": "density", "youngs": "youngs",
+              "poisson": "poisson", "restitution": "restitution", "restitution_pp": "restitution_pp",
+              "mu": "mu", "mu_pp": "mu_pp", "rolling_friction": "rolling_friction",
+              "surface_energy": "surface_energy", "surface_energy_pp": "surface_energy_pp",
+              "hamaker": "hamaker", "roughness": "roughness", "air_viscosity": "air_viscosity"},
+    "surface": {"youngs": "youngs_track", "poisson": "poisson_track"},
+    "supply": {k: k for k in ("n_parts", "fill_from", "fill_to", "inlet_rate", "inlet_batch",
+                              "recirculate", "return_delay")},
+    "run": {k: k for k in ("t_end", "t_settle", "output_dt", "dt", "dt_unchecked", "seed")},
+}
+TEXT_KEYS = {"feeder": ("name", "description")}  # words, not numbers
+_TUNABLES = "# ------------------------------------------------------------------ tunables"
+_LINE = "# ------------------------------------------------------------------ line"
+_REFUSALS = "# ------------------------------------------------------------------ refusals"
+
+
+@dataclass
+class Description:
+    """A feeder description read from ``path``: its ``name``, ``text`` (what it says it is),
+    ``sections`` (linear sections), ``values`` (the deck's parameters it sets, as strings),
+    ``aliases`` (dotted name -> deck name, for every number it may set) and ``source`` (the
+    file's text)."""
+
+    path: Path
+    name: str
+    text: str
+    sections: int
+    values: dict[str, str] = field(default_factory=dict)
+    aliases: dict[str, str] = field(default_factory=dict)
+    source: str = ""
+
+
+def _fail(path: Path, message: str) -> ParameterError:
+    return ParameterError(f"{path.name}: {message}")
+
+
+def _unknown(path: Path, where: str, key: str, known) -> ParameterError:
+    close = difflib.get_close_matches(key, list(known), n=1)
+    hint = f" (did you mean {close[0]!r}?)" if close else ""
+    return _fail(path, f"unknown key {key!r} in {where}{hint}; keys there: {', '.join(known)}")
+
+
+def _value(path: Path, dotted: str, value) -> str:
+    """A description's number (or a shape's name) as the deck's string."""
+    if isinstance(value, bool):
+        return "1" if value else "0"
+    if isinstance(value, int | float):
+        if isinstance(value, float) and not math.isfinite(value):
+            raise _fail(path, f"{dotted} = {value} is not finite")
+        return repr(value) if isinstance(value, float) else str(value)
+    if isinstance(value, str) and dotted == "parts.shape":
+        return value
+    raise _fail(path, f"{dotted} = {value!r} must be a number")
+
+
+def aliases(sections: int) -> dict[str, str]:
+    """Every dotted name of a description of ``sections`` linear sections, and its deck name."""
+    out = {f"{table}.{key}": name for table, keys in TABLES.items() for key, name in keys.items()}
+    for k in range(1, sections + 1):
+        out.update({f"element.{k}." + ".".join(key): name for key, name in deck_names(k).items()})
+    return out
+
+
+def read(path: str | os.PathLike, text: str | None = None) -> Description:
+    """The description in ``path`` (its ``text`` if given), checked key by key."""
+    path = Path(path)
+    if text is None:
+        try:
+            text = path.read_text()
+        except (OSError, UnicodeDecodeError) as exc:
+            raise ParameterError(f"cannot read feeder description {path}: "
+                                 f"{getattr(exc, 'strerror', None) or exc}") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise _fail(path, f"not valid TOML: {exc}") from None
+    values: dict[str, str] = {}
+    for table, body in data.items():
+        if table == "element":
+            continue
+        if table not in TABLES:
+            raise _unknown(path, "the description", table, [*TABLES, "element"])
+        if not isinstance(body, dict):
+            raise _fail(path, f"{table} must be a table ([{table}])")
+        keys = TABLES[table]
+        for key, value in body.items():
+            if key in TEXT_KEYS.get(table, ()):
+                if not isinstance(value, str):
+                    raise _fail(path, f"{table}.{key} must be text")
+                continue
+            if key not in keys:
+                raise _unknown(path, f"[{table}]", key, [*TEXT_KEYS.get(table, ()), *keys])
+            values[keys[key]] = _value(path, f"{table}.{key}", value)
+    elements = data.get("element")
+    if not isinstance(elements, list) or not elements or not all(isinstance(e, dict) for e in elements):
+        raise _fail(path, "a feeder needs its elements, in conveying order: one [[element]] table each")
+    if len(elements) > MAX_SECTIONS:
+        raise _fail(path, f"{len(elements)} elements: at most {MAX_SECTIONS} in this version")
+    for k, element in enumerate(elements, start=1):
+        values.update(_element(path, k, element))
+    values["sections"] = str(len(elements))
+    feeder = data.get("feeder", {})
+    return Description(path=path, name=feeder.get("name", path.stem),
+                       text=feeder.get("description", ""), sections=len(elements), values=values,
+                       aliases=aliases(len(elements)), source=text)
+
+
+def _element(path: Path, k: int, element: dict) -> dict[str, str]:
+    """Element ``k``'s numbers as the deck's parameters."""
+    where = f"element {k}"
+    kind = element.get("kind")
+    if kind not in ELEMENT_KINDS:
+        raise _fail(path, f"{where}: kind = {kind!r}: this version builds {', '.join(ELEMENT_KINDS)} "
+                          "elements (kind = \"linear\")")
+    names = deck_names(k)
+    tables = sorted({key[0] for key in KEYS if len(key) == 2})
+    out = {}
+    for key, value in element.items():
+        if key == "kind":
+            continue
+        if isinstance(value, dict):
+            if key not in tables:
+                raise _unknown(path, where, key, [key for key in KEYS if len(key) == 1] + tables)
+            for sub, x in value.items():
+                full = (key, sub)
+                if full not in KEYS:
+                    raise _unknown(path, f"{where}'s {key}", sub, [s for t, *s in KEYS if t == key
+                                                                    for s in s])
+                if full not in names:
+                    raise _fail(path, f"{where}: {key}.{sub}: {_not_here(k, full)}")
+                out[names[full]] = _value(path, f"element.{k}.{key}.{sub}", x)
+            continue
+        if (key,) not in KEYS:
+            raise _unknown(path, where, key, [key for key in KEYS if len(key) == 1] + tables)
+        if (key,) not in names:
+            raise _fail(path, f"{where}: {key}: {_not_here(k, (key,))}")
+        out[names[(key,)]] = _value(path, f"element.{k}.{key}", value)
+    for needed in (("length",), ("width",)):
+        if needed not in {tuple(n) for n in _given(element)}:
+            raise _fail(path, f"{where} has no {needed[0]}: every section states its own")
+    return out
+
+
+def _given(element: dict):
+    for key, value in element.items():
+        if isinstance(value, dict):
+            yield from ((key, sub) for sub in value)
+        else:
+            yield (key,)
+
+
+def _not_here(k: int, key: tuple[str, ...]) -> str:
+    if key[0] == "step":
+        return "the first section has no joint before it to step down at"
+    if key[0] == "gate":
+        return "a gate is built on the first section only in this version"
+    if key[0] in ("side_drop", "wiper"):
+        return f"a {key[0].replace('_', ' ')} is built on the second section on in this version"
+    return "only the first section's drive takes a waveform other than a sine in this version"
+
+
+# ------------------------------------------------------------------ the deck
+def _declaration(name: str, value: str, unit: str, text: str) -> str:
+    comment = f"# [{unit}] {text}" if unit else f"# {text}"
+    return f"variable {name:<12} index {value:<12} {comment}"
+
+
+def deck_text(description: Description, template: str) -> str:
+    """The deck that runs ``description``: ``template`` (decks/bulk_feeder.liggghts) with a
+    header of its own, the description's numbers as the tunables' defaults and each further
+    section's tunables (section 2's, numbered) declared."""
+    from ..decks import Deck
+
+    lines = template.splitlines()
+    try:
+        a, b, c = lines.index(_TUNABLES), lines.index(_LINE), lines.index(_REFUSALS)
+    except ValueError:
+        raise ParameterError("decks/bulk_feeder.liggghts lacks the block markers a feeder "
+                             "description's deck is made from") from None
+    variables = Deck.parse_variables("\n".join(lines[a:c]))
+    values = description.values
+    n = description.sections
+    out = [_TUNABLES]
+    for v in variables.values():
+        if re.match(r"^s2_", v.name) or v.name == "sections":
+            continue
+        out.append(_declaration(v.name, values.get(v.name, v.default), v.unit, v.description))
+    out += ["", _LINE, f"# {n} linear section(s) (the description's elements, in conveying order);",
+            "# section 1's numbers are the tunables above, section k's the s<k>_* below.",
+            _declaration("sections", str(n), "-", "linear sections of the line")]
+    seconds = [v for v in variables.values() if v.name.startswith("s2_")]
+    for k in range(2, n + 1):
+        for v in seconds:
+            name = f"s{k}_" + v.name[3:]
+            text = v.description.replace("section 2", f"section {k}").replace(
+                "section 1's exit", f"section {k - 1}'s exit")
+            out.append(_declaration(name, values.get(name, v.default), v.unit, text))
+    body = lines[c:]
+    header = _header(description, n)
+    return "\n".join(header + [""] + out + [""] + body) + "\n"
+
+
+def _header(description: Description, n: int) -> list[str]:
+    said = " ".join(description.text.split())
+    words = [f"# vibrofeed deck: {description.name}",
+             "# vibrofeed prepare: vibrofeed.geometry:prepare_bulk_feeder",
+             "#",
+             f"# Generated by vibrofeed from the feeder description {description.path.name}",
+             f"# (docs/feeders.md): a line of {n} linear section(s). The commands are",
+             "# decks/bulk_feeder.liggghts's (its header says what they do); the tunables",
+             "# hold the description's numbers."]
+    if said:
+        words += ["#"] + ["# " + line for line in _wrap(said, 78)]
+    words += ["#", "# Run by hand: `vibrofeed prepare FEEDER.toml -o DIR` writes this deck, the",
+              "# meshes and the generated includes into DIR and prints the liggghts line.",
+              "#", "# Units: SI (m, kg, s, Pa, J/m^2); angles in degrees."]
+    return words
+
+
+def _wrap(text: str, width: int) -> list[str]:
+    out, line = [], ""
+    for word in text.split():
+        if line and len(line) + 1 + len(word) > width:
+            out.append(line)
+            line = word
+        else:
+            line = f"{line} {word}" if line else word
+    return out + ([line] if line else [])
+
+
+def slug(name: str) -> str:
+    """A deck's file name from a description's name: letters, digits, _ and -."""
+    return re.sub(r"[^A-Za-z0-9_-]+", "_", name).strip("_") or "feeder"
+
+
+def cache_dir() -> Path:
+    """Where generated decks are kept: $XDG_CACHE_HOME/vibrofeed/decks (~/.cache/...)."""
+    root = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(root) / "vibrofeed" / "decks"
+
+
+def write_deck(text: str, stem: str, folder: Path | None = None) -> Path:
+    """``text`` as ``stem``.liggghts in ``folder`` (default: the cache, in a folder named by
+    the text's hash, so that one deck text has one path); written whole or not at all."""
+    digest = hashlib.sha256(text.encode()).hexdigest()[:16]
+    folder = folder if folder is not None else cache_dir() / digest
+    path = folder / f"{stem}.liggghts"
+    if path.is_file() and path.read_text() == text:
+        return path
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        tmp = folder / f".{stem}.{os.getpid()}.tmp"
+        tmp.write_text(text)
+        os.replace(tmp, path)
+    except OSError as exc:
+        raise ParameterError(f"cannot write the generated deck {path}: {exc.strerror}") from None
+    return path

@@ -1,0 +1,74 @@
+"""Joints: where one element hands its parts to the next, and what makes one sound.
+
+A joint passes parts from element a's exit onto element b. It is sound when at every
+instant b's floor lies below a's edge (a step down larger than the floors' relative
+normal motion: no edge a part can catch), the step is small (below a part's
+thickness: a part steps down, it does not fall), b is at least as wide as a's exit, and
+the gap the two drives open along the path stays below half a part.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from ..errors import ParameterError
+from .linear import LinearSection
+from .records import Part
+
+
+@dataclass(frozen=True)
+class Joint:
+    """The joint from element ``a`` to element ``b``: its position along the path ``at`` [m],
+    the step down at rest at its least and most across a's exit [m], and how far the floors
+    move apart normal (``dz``) and along (``dx``) [m]."""
+
+    a: LinearSection
+    b: LinearSection
+
+    @property
+    def at(self) -> float:
+        return self.b.x0
+
+    @property
+    def steps(self) -> tuple[float, float]:
+        """The step down from a's floor to b's at rest, least and most across a's exit: both
+        floors are planes tilted down towards -y, so the step is linear in y and its extremes
+        lie at the exit's two ends."""
+        e = self.a.exit_width / 2
+        steps = [float(self.a.floor_z(y) - self.b.floor_z(y)) for y in (-e, e)]
+        return min(steps), max(steps)
+
+    @property
+    def motion(self) -> tuple[float, float]:
+        """(dz, dx): the floors' relative motion at most, normal and along [m]."""
+        return self.a.drive.relative_to(self.b.drive)
+
+    def check(self, part: Part) -> None:
+        """One-line ParameterError naming b's parameter when the joint is not sound."""
+        a, b = self.a, self.b
+        step = b.name(("step",))
+        if b.width < a.exit_width:
+            raise ParameterError(
+                f"{b.name(('width',))}={b.width:g} m is narrower than section {a.number}'s exit "
+                f"({a.exit_width:g} m): the sections do not join (parts would fall at the joint); "
+                f"narrow section {a.number} with its gate")
+        dz, dx = self.motion
+        low, high = self.steps
+        tilted = not math.isclose(low, high, rel_tol=0, abs_tol=1e-15)
+        if low <= dz:
+            raise ParameterError(
+                f"{step}={b.step:g} m: the joint must step down by more than the floors move apart "
+                f"normal to them ({dz:.3g} m: the two drives' amp_n and phases), or section "
+                f"{b.number}'s floor rises above section {a.number}'s and parts catch its edge"
+                + (f" (with the cross tilts the step is {low:.3g} m at its least)" if tilted else ""))
+        if high >= part.tallest:
+            raise ParameterError(f"{step}={b.step:g} m is not a small step: keep it below a part's "
+                                 f"thickness ({part.tallest:g} m)"
+                                 + (f" (with the cross tilts it is {high:.3g} m at its most)"
+                                    if tilted else ""))
+        if dx >= part.size / 2:
+            raise ParameterError(f"the joint opens by up to "
+                                 f"{dx:.3g} m along the track ({a.name(('drive', 'amp_t'))}, "
+                                 f"{b.name(('drive', 'amp_t'))}), more than half a part "
+                                 f"({part.size / 2:g} m): parts would fall into it")

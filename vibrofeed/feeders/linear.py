@@ -1,0 +1,178 @@
+"""A linear section: a straight track with its own drive and tooling, one element of a feeder.
+
+Frame: the deck's (x along the track towards the outlet, y across, z normal to the
+first section's floor). Section k runs from ``x0`` (the sum of the lengths before it) to
+``x1 = x0 + length``, centred on y = 0. The first section's floor is z = 0 at its high
+edge (y = +w/2); every later one lies ``step`` below the one before it at its high edge
+(``level``: the steps summed) and, with a cross tilt, descends towards the reference wall
+at y = -w/2: ``z(y) = -level - (w/2 - y) tan(cross_tilt)``.
+
+The first section has a back wall, and may have a singulation gate; a later one has
+no wall at its joint and may carry a side drop and a wiper (vibrofeed.line builds them).
+
+Its numbers in the deck's vocabulary: section 1 takes the bulk feeder's own names
+(``track_length``, ``freq``, ``gate_width`` ...), section k >= 2 the same quantities as
+``s<k>_<name>`` (``s3_amp_n``): :data:`KEYS` maps the description's keys to both.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+from ..errors import ParameterError
+from .records import Drive, Gate, Part, SideDrop, Wiper, number
+
+# The wiper's bar along the track, in part sizes (vibrofeed.line's WIPER_LENGTH).
+WIPER_LENGTH = 1.0
+
+# description key (table, key) -> (section 1's deck name, later sections' suffix); None:
+# that section has no such number (a gate on section 1 only, a step, side drop and wiper
+# on later ones: the meshes of this version build them there).
+KEYS: dict[tuple[str, ...], tuple[str | None, str | None]] = {
+    ("length",): ("track_length", "length"),
+    ("width",): ("track_width", "width"),
+    ("wall_height",): ("wall_height", "wall_height"),
+    ("cross_tilt",): ("cross_tilt", "cross_tilt"),
+    ("step",): (None, "step"),
+    ("drive", "freq"): ("freq", "freq"),
+    ("drive", "amp_t"): ("amp_t", "amp_t"),
+    ("drive", "amp_n"): ("amp_n", "amp_n"),
+    ("drive", "phase"): ("phase", "phase"),
+    ("drive", "waveform"): ("waveform", None),
+    ("drive", "duty"): ("duty", None),
+    ("gate", "width"): ("gate_width", None),
+    ("gate", "at"): ("gate_at", None),
+    ("side_drop", "from"): (None, "drop_from"),
+    ("side_drop", "to"): (None, "drop_to"),
+    ("side_drop", "width"): (None, "drop_width"),
+    ("wiper", "height"): (None, "wiper_height"),
+    ("wiper", "at"): (None, "wiper_at"),
+}
+# The further sections' numbers carry the prefix s<k>_ with k from 2 to this.
+MAX_SECTIONS = 9
+
+
+def deck_name(k: int, key: tuple[str, ...]) -> str | None:
+    """Section ``k``'s deck name of the description ``key`` (None: it has none)."""
+    first, suffix = KEYS[key]
+    if k == 1:
+        return first
+    return None if suffix is None else f"s{k}_{suffix}"
+
+
+def deck_names(k: int) -> dict[tuple[str, ...], str]:
+    """Section ``k``'s description keys and their deck names."""
+    return {key: name for key in KEYS if (name := deck_name(k, key)) is not None}
+
+
+@dataclass(frozen=True)
+class LinearSection:
+    """Section ``number`` (1-based) of a line (module docstring)."""
+
+    kind = "linear"
+    number: int
+    x0: float
+    length: float
+    width: float
+    wall_height: float
+    drive: Drive
+    cross_tilt: float = 0.0
+    step: float = 0.0  # below the section before it, at the high edges (0 for the first)
+    level: float = 0.0  # below the first section's floor: the steps summed
+    gate: Gate | None = None
+    side_drop: SideDrop | None = None
+    wiper: Wiper | None = None
+
+    @classmethod
+    def from_values(cls, values: Mapping, k: int, x0: float = 0.0, level: float = 0.0,
+                    part: Part | None = None) -> LinearSection:
+        """Section ``k`` from the deck's parameters (numbers or their strings); its tools are
+        absent where their numbers say so (gate_width 0, drop_to <= drop_from, wiper_height 0)."""
+        def get(key, default=0.0):  # (absent: zero, i.e. off or not moving, as the decks' tools)
+            name = deck_name(k, key)
+            return number(values, name, default) if name is not None else default
+
+        first = k == 1
+        drive = Drive(freq=get(("drive", "freq")), amp_t=get(("drive", "amp_t")),
+                      amp_n=get(("drive", "amp_n")), phase=get(("drive", "phase"), 0.0),
+                      waveform=int(get(("drive", "waveform"), 0.0)) if first else 0,
+                      duty=get(("drive", "duty"), 0.7) if first else 0.7)
+        step = 0.0 if first else get(("step",))
+        gate = side_drop = wiper = None
+        if first and get(("gate", "width"), 0.0) > 0:
+            gate = Gate(width=get(("gate", "width")), at=get(("gate", "at"), 0.7))
+        if not first:
+            start, end = get(("side_drop", "from"), 0.0), get(("side_drop", "to"), 0.0)
+            if end > start:
+                side_drop = SideDrop(start=start, end=end, width=get(("side_drop", "width"), 0.0))
+            if get(("wiper", "height"), 0.0) > 0:
+                wiper = Wiper(height=get(("wiper", "height")), at=get(("wiper", "at"), 0.5),
+                              length=WIPER_LENGTH * (part.size if part else number(values, "part_size")))
+        return cls(number=k, x0=x0, length=get(("length",)), width=get(("width",)),
+                   wall_height=get(("wall_height",)), drive=drive, cross_tilt=get(("cross_tilt",), 0.0),
+                   step=step, level=level + step, gate=gate, side_drop=side_drop, wiper=wiper)
+
+    # ---------------------------------------------------------------- geometry
+    @property
+    def x1(self) -> float:
+        """The section's end: its joint with the next, or the outlet edge."""
+        return self.x0 + self.length
+
+    @property
+    def exit_width(self) -> float:
+        """The width parts leave the section through (the gate's, if it has one)."""
+        return self.gate.width if self.gate else self.width
+
+    def floor_z(self, y):
+        """Height of the floor at rest at ``y`` [m] (module docstring)."""
+        return -self.level - (self.width / 2 - y) * math.tan(math.radians(self.cross_tilt))
+
+    @property
+    def lowest(self) -> float:
+        """The floor's lowest point at rest (at the reference wall) [m]."""
+        return self.floor_z(-self.width / 2)
+
+    def name(self, key: tuple[str, ...]) -> str:
+        """The deck name of ``key`` on this section (for messages)."""
+        return deck_name(self.number, key) or ".".join(key)
+
+    # ---------------------------------------------------------------- checks
+    def check(self, part: Part, last: bool = True) -> None:
+        """The section on its own: a part fits, its walls hold it, its tools lie on it
+        (one-line ParameterError naming the parameter); ``last``: its end is the outlet edge."""
+        n = self.name
+        end = "the outlet edge" if last else f"the end of section {self.number}"
+        if self.width < part.widest:
+            raise ParameterError(f"{n(('width',))}={self.width:g} m is narrower than a part "
+                                 f"({part.widest:g} m across)")
+        radius = part.tallest / 2
+        if self.wall_height <= radius:
+            raise ParameterError(f"{n(('wall_height',))}={self.wall_height:g} m is no higher than a "
+                                 f"part's centre ({radius:g} m): parts would leave over the walls")
+        w = self.wiper
+        if w is not None:
+            if w.height < part.tallest:
+                raise ParameterError(f"{n(('wiper', 'height'))}={w.height:g} m is lower than a part's "
+                                     f"thickness ({part.tallest:g} m): no part would pass the wiper")
+            if w.height >= self.wall_height:
+                raise ParameterError(f"{n(('wiper', 'height'))}={w.height:g} m is not below the walls "
+                                     f"({n(('wall_height',))}={self.wall_height:g} m): the wiper would "
+                                     "not exist")
+            if not 0 <= w.at or w.at * self.length + w.length > self.length:
+                raise ParameterError(f"{n(('wiper', 'at'))}={w.at:g}: the wiper's bar ({w.length:g} m "
+                                     f"long) runs past {end}; lower {n(('wiper', 'at'))}")
+        d = self.side_drop
+        if d is not None:
+            if not 0 <= d.start < d.end <= 1:
+                raise ParameterError(f"{n(('side_drop', 'from'))}={d.start:g}, {n(('side_drop', 'to'))}="
+                                     f"{d.end:g}: the side drop lies outside section {self.number} "
+                                     "(0 <= from < to <= 1)")
+            if not 0 < d.width < self.width:
+                raise ParameterError(f"{n(('side_drop', 'width'))}={d.width:g} m must be > 0 and "
+                                     f"narrower than {n(('width',))}={self.width:g} m (the side drop "
+                                     "narrows the track)")
+            if d.width < 0.5 * part.widest:
+                raise ParameterError(f"{n(('side_drop', 'width'))}={d.width:g} m is less than half a "
+                                     f"part ({part.widest / 2:g} m): every part would fall off the drop")

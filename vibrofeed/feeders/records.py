@@ -1,0 +1,138 @@
+"""The typed records a feeder is made of: its parts, a drive, the tooling stations.
+
+Each record is read once from the deck's vocabulary (numbers, or the strings a deck's
+parameters are) and then passed around: no code converts ``p["amp_t"]`` again.
+Lengths in metres, angles in degrees, frequencies in hertz.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+from ..errors import ParameterError
+
+SHAPES = {"sphere": 0, "chip": 1, "disc": 2}
+
+
+def number(values: Mapping, name: str, default: float | None = None) -> float:
+    """``values[name]`` as a float (``default`` when absent); a one-line ParameterError
+    naming the parameter when it is missing or not a number."""
+    if name not in values:
+        if default is None:
+            raise ParameterError(f"the feeder needs the parameter {name!r}")
+        return float(default)
+    try:
+        return float(values[name])
+    except (TypeError, ValueError):
+        raise ParameterError(f"parameter {name}={values[name]!r} is not a number") from None
+
+
+def shape_code(value) -> int:
+    """A part's shape as the deck's code: 0 sphere, 1 chip, 2 disc (names accepted)."""
+    text = str(value).strip().lower()
+    if text in SHAPES:
+        return SHAPES[text]
+    try:
+        code = float(text)
+    except ValueError:
+        code = -1.0
+    if code not in (0.0, 1.0, 2.0):
+        raise ParameterError(f"parameter shape={value} must be sphere, chip or disc (0, 1 or 2)")
+    return int(code)
+
+
+@dataclass(frozen=True)
+class Part:
+    """The parts a feeder conveys: ``shape`` (0 sphere, 1 chip, 2 disc), ``size`` (a sphere's
+    diameter, a chip's edge, a disc's diameter), ``thickness`` (a chip's or disc's),
+    ``size_spread`` (spheres: radii R(1-s), R, R(1+s))."""
+
+    shape: int
+    size: float
+    thickness: float
+    size_spread: float = 0.0
+
+    @classmethod
+    def from_values(cls, values: Mapping) -> Part:
+        size = number(values, "part_size", 0.0)  # (absent: a result that records no part)
+        return cls(shape=shape_code(values.get("shape", 0)), size=size,
+                   thickness=number(values, "part_thickness", size),
+                   size_spread=number(values, "size_spread", 0.0))
+
+    @property
+    def widest(self) -> float:
+        """Across a part lying flat: the largest sphere, or the chip's or disc's edge [m]."""
+        return self.size * (1 + self.size_spread) if self.shape == 0 else self.size
+
+    @property
+    def tallest(self) -> float:
+        """A part's height lying flat: the largest sphere, or the thickness [m]."""
+        return self.widest if self.shape == 0 else self.thickness
+
+
+@dataclass(frozen=True)
+class Drive:
+    """An element's vibration: ``freq`` [Hz], displacement amplitudes along (``amp_t``) and
+    normal to (``amp_n``) its floor [m], the normal motion's lead ``phase`` [deg], and the
+    waveform (0 sine; 1-4 as include/surface_motion.liggghts, with ``duty``)."""
+
+    freq: float
+    amp_t: float
+    amp_n: float
+    phase: float = 0.0
+    waveform: int = 0
+    duty: float = 0.7
+
+    @property
+    def peak_speed(self) -> float:
+        """The sine's peak surface speed [m/s]."""
+        return 2 * math.pi * self.freq * math.hypot(self.amp_t, self.amp_n)
+
+    def relative_to(self, other: Drive) -> tuple[float, float]:
+        """How far two floors driven by this and ``other`` move apart at most [m]: normal (dz)
+        and along (dx). Sines of one frequency: the amplitude of their difference,
+        sqrt(a1^2 + a2^2 - 2 a1 a2 cos(phase1 - phase2)) normal, |amp_t1 - amp_t2| along
+        (both start at sin(w t)); of two frequencies: the sum of the amplitudes (the phases
+        drift)."""
+        if self.freq != other.freq:
+            return self.amp_n + other.amp_n, self.amp_t + other.amp_t
+        a1, a2 = self.amp_n, other.amp_n
+        dphi = math.radians(self.phase - other.phase)
+        dz = math.sqrt(max(a1 * a1 + a2 * a2 - 2 * a1 * a2 * math.cos(dphi), 0.0))
+        return dz, abs(self.amp_t - other.amp_t)
+
+
+# ------------------------------------------------------------------ tooling stations
+@dataclass(frozen=True)
+class Gate:
+    """A singulation gate: the walls narrow at 45 degrees from ``at`` (a fraction of the
+    element's length) to ``width`` and stay narrow to the element's end."""
+
+    kind = "gate"
+    width: float
+    at: float = 0.7
+
+
+@dataclass(frozen=True)
+class SideDrop:
+    """A side drop: from ``start`` to ``end`` (fractions of the element's length) the floor
+    narrows to ``width`` from the reference wall and the other wall is missing; a part not
+    against the wall falls off."""
+
+    kind = "side_drop"
+    start: float
+    end: float
+    width: float
+
+
+@dataclass(frozen=True)
+class Wiper:
+    """A wiper: a bar across the element at ``at`` (a fraction of its length), ``length`` long,
+    whose underside follows the floor ``height`` above it; a taller part is swept off."""
+
+    kind = "wiper"
+    height: float
+    at: float = 0.5
+    length: float = 0.0
