@@ -154,18 +154,18 @@ def _element(path: Path, k: int, element: dict) -> dict[str, str]:
             continue
         if isinstance(value, dict):
             if key not in tables:
-                raise _unknown(path, where, key, [key for key in KEYS if len(key) == 1] + tables)
+                raise _unknown(path, where, key, [key[0] for key in KEYS if len(key) == 1] + tables)
             for sub, x in value.items():
                 full = (key, sub)
                 if full not in KEYS:
-                    raise _unknown(path, f"{where}'s {key}", sub, [s for t, *s in KEYS if t == key
-                                                                    for s in s])
+                    raise _unknown(path, f"{where}'s {key}", sub, [k[1] for k in KEYS if k[0] == key
+                                                                    and len(k) == 2])
                 if full not in names:
                     raise _fail(path, f"{where}: {key}.{sub}: {_not_here(k, full)}")
                 out[names[full]] = _value(path, f"element.{k}.{key}.{sub}", x)
             continue
         if (key,) not in KEYS:
-            raise _unknown(path, where, key, [key for key in KEYS if len(key) == 1] + tables)
+            raise _unknown(path, where, key, [key[0] for key in KEYS if len(key) == 1] + tables)
         if (key,) not in names:
             raise _fail(path, f"{where}: {key}: {_not_here(k, (key,))}")
         out[names[(key,)]] = _value(path, f"element.{k}.{key}", value)
@@ -207,7 +207,7 @@ def deck_text(description: Description, template: str) -> str:
 
     lines = template.splitlines()
     try:
-        a, b, c = lines.index(_TUNABLES), lines.index(_LINE), lines.index(_REFUSALS)
+        a, _, c = lines.index(_TUNABLES), lines.index(_LINE), lines.index(_REFUSALS)
     except ValueError:
         raise ParameterError("decks/bulk_feeder.liggghts lacks the block markers a feeder "
                              "description's deck is made from") from None

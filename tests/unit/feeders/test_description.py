@@ -1,0 +1,172 @@
+"""Feeder descriptions (FEEDER.toml, docs/feeders.md): read key by key, with one-line errors
+naming the element and the key; the deck they become; their dotted parameter names."""
+
+import re
+
+import pytest
+
+from helpers import DECKS, REPO
+from vibrofeed.cli.demo import CASES
+from vibrofeed.decks import Deck
+from vibrofeed.errors import ParameterError
+from vibrofeed.feeders import Feeder
+from vibrofeed.feeders.deck import line_files
+from vibrofeed.feeders.description import read
+from vibrofeed.parameters import resolve
+
+EXAMPLES = REPO / "feeders"
+TWO = """
+[parts]
+size = 3e-4
+[[element]]
+kind = "linear"
+length = 0.004
+width = 1.2e-3
+[[element]]
+kind = "linear"
+length = 0.003
+width = 1.2e-3
+step = 5e-5
+drive = { freq = 100, amp_t = 1e-4, amp_n = 2e-5 }
+"""
+
+
+def described(tmp_path, text, name="f.toml"):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+@pytest.fixture(autouse=True)
+def cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))  # generated decks go there
+
+
+def test_the_demo_line_described_is_the_demo_cases_run():
+    """feeders/demo_line.toml resolves to the parameters `vibrofeed demo` runs bulk_feeder with:
+    the same deck commands and values, so the same run (measured: every dataset of the two
+    results equal, docs/feeders.md)."""
+    deck = Deck.find(EXAMPLES / "demo_line.toml")
+    _, name, given = CASES["line"]
+    want = resolve(Deck(DECKS / f"{name}.liggghts"), given)
+    got = resolve(deck, {})
+
+    def numbers(values):  # (the description writes 6e-4 as 0.0006: the same double)
+        return {k: float(v) if re.fullmatch(r"[-+.\deE]+", v) else v for k, v in values.items()}
+
+    assert numbers(got) == numbers(want)
+
+
+@pytest.mark.parametrize("example", sorted(p.name for p in EXAMPLES.glob("*.toml")))
+def test_each_example_resolves_and_its_feeder_passes_its_checks(example):
+    deck = Deck.find(EXAMPLES / example)
+    values = resolve(deck, {})
+    feeder = Feeder.from_values(values)
+    assert feeder.sections == deck.description.sections == int(values["sections"])
+    feeder.check()
+
+
+def test_the_generated_deck_declares_every_sections_tunables_and_the_bulk_feeders_commands(tmp_path):
+    deck = Deck.find(EXAMPLES / "three_section_line.toml")
+    bulk = Deck(DECKS / "bulk_feeder.liggghts")
+    assert deck.name == "three_section_line" and deck.include_dir == DECKS.resolve()
+    for name in bulk.tunables:
+        assert name in deck.tunables, name
+    for k in (2, 3):
+        assert {f"s{k}_" + n[3:] for n in bulk.tunables if n.startswith("s2_")} <= set(deck.tunables)
+    assert "s4_length" not in deck.tunables
+    # the commands after the tunables are the bulk feeder's, word for word
+    assert [c.text for c in deck.commands if not c.text.startswith("variable")][3:] == \
+        [c.text for c in bulk.commands if not c.text.startswith("variable")][3:]
+    assert deck.tunables["s3_amp_t"].default == "0.00026" and deck.tunables["s3_amp_t"].unit == "m"
+
+
+def test_dotted_names_set_the_decks_own(tmp_path):
+    deck = Deck.find(EXAMPLES / "three_section_line.toml")
+    values = resolve(deck, {"element.3.drive.amp_t": "2e-4", "supply.inlet_rate": "20",
+                            "parts.size": "3.2e-4"})
+    assert (values["s3_amp_t"], values["inlet_rate"], values["part_size"]) == ("2e-4", "20", "3.2e-4")
+    with pytest.raises(ParameterError, match=r"parameter 's3_amp_t' given twice \(as 's3_amp_t' too\)"):
+        resolve(deck, {"element.3.drive.amp_t": "2e-4", "s3_amp_t": "1e-4"})
+    with pytest.raises(ParameterError, match="unknown parameter 'element.4.length'"):
+        resolve(deck, {"element.4.length": "0.003"})
+
+
+def test_a_joint_that_does_not_step_down_is_refused_naming_the_element(tmp_path):
+    deck = Deck.find(EXAMPLES / "three_section_line.toml")
+    # equal amplitudes 60 degrees apart move 20 um apart normal to the floors: a 10 um step is lost
+    with pytest.raises(ParameterError, match=r"^s3_step=1e-05 m: the joint must step down by more than "
+                                             r"the floors move apart normal to them \(2e-05 m"):
+        resolve(deck, {"element.3.step": "1e-5", "element.3.drive.phase": "30"})
+
+
+@pytest.mark.parametrize("change, words", [
+    (("length = 0.003", "lenght = 0.003"), "f.toml: unknown key 'lenght' in element 2 (did you mean 'length'?)"),
+    (("amp_t = 1e-4", "ampt = 1e-4"), "unknown key 'ampt' in element 2's drive (did you mean 'amp_t'?)"),
+    (("[parts]", "[part]"), "unknown key 'part' in the description (did you mean 'parts'?)"),
+    (("size = 3e-4", "size = \"big\""), "f.toml: parts.size = 'big' must be a number"),
+    (("step = 5e-5", "step = 5e-5\nside_drop = { from = 0.2, to = 0.5, wdith = 4e-4 }"),
+     "unknown key 'wdith' in element 2's side_drop (did you mean 'width'?)"),
+    (('kind = "linear"\nlength = 0.004', 'kind = "linear"\nstep = 1e-5\nlength = 0.004'),
+     "element 1: step: the first section has no joint before it to step down at"),
+    (('kind = "linear"\nlength = 0.003', 'kind = "spiral"\nlength = 0.003'),
+     "element 2: kind = 'spiral': this version builds linear elements"),
+    (("length = 0.003\n", ""), "element 2 has no length: every section states its own"),
+    (("[[element]]", "[[elements]]"), "unknown key 'elements' in the description (did you mean 'element'?)"),
+    (("size = 3e-4", "size = 3e-4\n[[element"), "f.toml: not valid TOML"),
+])
+def test_a_slip_in_a_description_is_one_line_naming_where(tmp_path, change, words):
+    old, new = change
+    assert old in TWO
+    path = described(tmp_path, TWO.replace(old, new, 1))
+    with pytest.raises(ParameterError) as err:
+        read(path)
+    assert words in str(err.value) and "\n" not in str(err.value)
+
+
+def test_a_gate_on_a_later_section_is_refused_until_the_meshes_build_it(tmp_path):
+    path = described(tmp_path, TWO + "gate = { width = 6e-4, at = 0.5 }\n")
+    with pytest.raises(ParameterError, match="element 2: gate.width: a gate is built on the first section"):
+        read(path)
+
+
+def test_line_files_of_one_section_hold_no_command_but_the_wall_contact():
+    feeder = Feeder.from_values({"sections": 1, "part_size": 3e-4, "track_length": 0.01})
+    files = line_files(feeder)
+    commands = {name: [ln for ln in text.splitlines() if ln and not ln.startswith("#")]
+                for name, text in files.items()}
+    assert commands["line_derived.in"] == commands["line_catch.in"] == commands["line_motion.in"] == []
+    assert commands["line_meshes.in"][0] == "fix walls all wall/gran ${gran_model} mesh n_meshes 1 meshes track &"
+
+
+def test_line_files_of_three_sections_take_the_fastest_and_lowest_of_all_three():
+    values = resolve(Deck.find(EXAMPLES / "three_section_line.toml"), {})
+    files = line_files(Feeder.from_values(values))
+    derived = files["line_derived.in"]
+    # the levels are the steps summed; the outlet is the lengths summed
+    assert "variable s3_low equal -(v_s2_step+v_s3_step+v_s3_width*tan(v_s3_cross_tilt*PI/180))" in derived
+    assert "variable outlet_x equal v_track_length+v_s2_length+v_s3_length" in derived
+    # max(max(s1, s2), s3) as (a + b + |a - b|) / 2, min likewise
+    assert "variable peak_1_2 equal (v_s1_peak+v_s2_peak+abs(v_s1_peak-v_s2_peak))/2" in derived
+    assert "variable v_peak equal (v_peak_1_2+v_s3_peak+abs(v_peak_1_2-v_s3_peak))/2" in derived
+    assert "variable catch_z equal (v_catch_1_2+v_s3_catch-abs(v_catch_1_2-v_s3_catch))/2" in derived
+    assert "n_meshes 3 meshes track track_s2 track_s3" in files["line_meshes.in"]
+    motion = files["line_motion.in"]
+    for k in (2, 3):
+        assert re.search(rf"^fix s{k}_shake_t all move/mesh mesh track_s{k} wiggle", motion, re.M)
+        for axis in ("x", "y", "z", "vx", "vy", "vz"):
+            assert f"variable s{k}_surface_{axis} equal" in motion
+    assert "scale $(v_s2_length+v_s3_length)" in files["line_catch.in"]
+
+
+def test_prepared_in_holds_a_run_by_hand_to_the_values_it_was_checked_for(tmp_path):
+    deck = Deck.find(EXAMPLES / "three_section_line.toml")
+    values = resolve(deck, {})
+    deck.prepare(values, tmp_path / "m")
+    text = (tmp_path / "m" / "prepared.in").read_text()
+    for name, value in (("s3_amp_t", "0.00026"), ("s2_step", "5e-05"), ("sections", "3.0"),
+                        ("part_size", "0.0003")):
+        assert f'if "${{{name}}} != {value}" then &' in text, name
+    assert "run vibrofeed prepare again with the new value" in text
+    assert sorted(p.name for p in (tmp_path / "m").glob("track*.stl")) == [
+        "track.stl", "track_s2.stl", "track_s3.stl"]
