@@ -101,7 +101,8 @@ def test_a_joint_that_does_not_step_down_is_refused_naming_the_element(tmp_path)
 
 
 @pytest.mark.parametrize("change, words", [
-    (("length = 0.003", "lenght = 0.003"), "f.toml: unknown key 'lenght' in element 2 (did you mean 'length'?)"),
+    (("length = 0.003", "lenght = 0.003"),
+     "f.toml: unknown key 'lenght' in element 2 (did you mean 'length'?)"),
     (("amp_t = 1e-4", "ampt = 1e-4"), "unknown key 'ampt' in element 2's drive (did you mean 'amp_t'?)"),
     (("[parts]", "[part]"), "unknown key 'part' in the description (did you mean 'parts'?)"),
     (("size = 3e-4", "size = \"big\""), "f.toml: parts.size = 'big' must be a number"),
@@ -136,7 +137,8 @@ def test_line_files_of_one_section_hold_no_command_but_the_wall_contact():
     commands = {name: [ln for ln in text.splitlines() if ln and not ln.startswith("#")]
                 for name, text in files.items()}
     assert commands["line_derived.in"] == commands["line_catch.in"] == commands["line_motion.in"] == []
-    assert commands["line_meshes.in"][0] == "fix walls all wall/gran ${gran_model} mesh n_meshes 1 meshes track &"
+    assert commands["line_meshes.in"][0] == \
+        "fix walls all wall/gran ${gran_model} mesh n_meshes 1 meshes track &"
 
 
 def test_line_files_of_three_sections_take_the_fastest_and_lowest_of_all_three():
