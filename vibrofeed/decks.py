@@ -275,7 +275,8 @@ class Deck:
 
         described = fd.read(path)
         template = read_text(decks_dir() / f"bulk_feeder{DECK_SUFFIX}")
-        deck_path = fd.write_deck(fd.deck_text(described, template), fd.slug(described.name), folder)
+        text = fd.deck_text(described, template, cls.parse_variables(template))
+        deck_path = fd.write_deck(text, fd.slug(described.name), folder)
         deck = cls(deck_path, include_dir=decks_dir())
         deck.description, deck.aliases = described, described.aliases
         return deck

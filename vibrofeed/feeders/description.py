@@ -199,19 +199,17 @@ def _declaration(name: str, value: str, unit: str, text: str) -> str:
     return f"variable {name:<12} index {value:<12} {comment}"
 
 
-def deck_text(description: Description, template: str) -> str:
-    """The deck that runs ``description``: ``template`` (decks/bulk_feeder.liggghts) with a
-    header of its own, the description's numbers as the tunables' defaults and each further
-    section's tunables (section 2's, numbered) declared."""
-    from ..decks import Deck
-
+def deck_text(description: Description, template: str, variables: dict) -> str:
+    """The deck that runs ``description``: ``template`` (decks/bulk_feeder.liggghts, whose
+    tunables are ``variables``: vibrofeed.decks.Variable by name) with a header of its own,
+    the description's numbers as the tunables' defaults and each further section's tunables
+    (section 2's, numbered) declared."""
     lines = template.splitlines()
     try:
         a, _, c = lines.index(_TUNABLES), lines.index(_LINE), lines.index(_REFUSALS)
     except ValueError:
         raise ParameterError("decks/bulk_feeder.liggghts lacks the block markers a feeder "
                              "description's deck is made from") from None
-    variables = Deck.parse_variables("\n".join(lines[a:c]))
     values = description.values
     n = description.sections
     out = [_TUNABLES]
