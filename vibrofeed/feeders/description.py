@@ -206,7 +206,7 @@ def deck_text(description: Description, template: str, variables: dict) -> str:
     (section 2's, numbered) declared."""
     lines = template.splitlines()
     try:
-        a, _, c = lines.index(_TUNABLES), lines.index(_LINE), lines.index(_REFUSALS)
+        _, _, c = lines.index(_TUNABLES), lines.index(_LINE), lines.index(_REFUSALS)
     except ValueError:
         raise ParameterError("decks/bulk_feeder.liggghts lacks the block markers a feeder "
                              "description's deck is made from") from None
