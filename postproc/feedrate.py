@@ -605,7 +605,8 @@ class FeedRate(AnalysisBase):
                     except ParameterError as exc:
                         sec["model_speed"], sec["model_note"] = None, f"the result lacks {exc}"
                     else:
-                        sec["model_speed"], sec["model_note"] = dilute_limit(drive)
+                        sec["model_speed"], sec["model_note"] = (
+                            dilute_limit(drive) if drive is not None else (None, "undriven (a chute)"))
                 sec["speed_ratio"] = velocity_ratio(sec["speed"], sec["model_speed"])
 
     def _bed_pass(self, frames):

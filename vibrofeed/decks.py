@@ -52,6 +52,8 @@ _UNIT = re.compile(r"^\[(?P<unit>[^\]]*)\]\s*(?P<text>.*)$")
 _DECK_DIR = "${deck_dir}"
 _PREPARE = re.compile(r"^#\s*vibrofeed prepare:\s*(?P<target>[\w.]+:\w+)\s*$")
 _GENERATED_DIR = "${mesh_dir}/"  # files a prepare hook writes for each run
+# A deck generated from a feeder description says so in its header (vibrofeed.feeders).
+_GENERATED_FROM = re.compile(r"^# vibrofeed generated from: ", re.M)
 
 
 def decks_dir() -> Path:
@@ -179,6 +181,8 @@ class Deck:
         self.name = self.path.stem
         # the folder ${deck_dir} names: the deck's own, or the project's decks for a deck
         # generated from a feeder description (which lives elsewhere)
+        if include_dir is None and _GENERATED_FROM.search(self.text):
+            include_dir = decks_dir()  # (a generated deck, wherever it is, uses the project's blocks)
         self.include_dir = Path(include_dir).resolve() if include_dir else self.path.parent
         self.description = None  # the feeder description it was generated from, if any
         self.aliases: dict[str, str] = {}  # other names of its tunables (a description's dotted ones)

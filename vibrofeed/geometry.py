@@ -28,10 +28,10 @@ from pathlib import Path
 import numpy as np
 
 from .errors import ParameterError
-from .feeders.deck import guard_lines
+from .feeders.deck import guard_lines, write_line_files
 from .feeders.feeder import Feeder
 from .feeders.records import number, shape_code
-from .line import combined, write_sections  # a line's further sections (sections > 1)
+from .line import combined
 from .mesh import MeshBuilder, write_stl
 
 # Largest spacing of a clump's spheres, as a fraction of their diameter: the faces stay
@@ -225,7 +225,7 @@ def prepare_bulk_feeder(values: Mapping[str, str], folder: str | Path) -> Prepar
         number(values, name)  # (the track's own numbers have no neutral value)
     feeder = Feeder.from_values(values)
     feeder.check()
-    first = feeder.linear_sections[0]
+    first = feeder.elements[0]
     size, thickness = feeder.part.size, feeder.part.thickness
     gate = first.gate
     vertices, triangles = track_mesh(first.length, first.width, first.wall_height,
@@ -238,7 +238,7 @@ def prepare_bulk_feeder(values: Mapping[str, str], folder: str | Path) -> Prepar
     lines += guard_lines({**values, "shape": feeder.part.shape}, feeder_names(feeder))
     (folder / "prepared.in").write_text("".join(lines))
 
-    further = write_sections(feeder, folder)
+    further = write_line_files(feeder, folder)
     if further:
         vertices, triangles = combined((vertices, triangles), *further)
     return Prepared(variables={"mesh_dir": str(folder.resolve())}, track=(vertices, triangles),
@@ -247,14 +247,10 @@ def prepare_bulk_feeder(values: Mapping[str, str], folder: str | Path) -> Prepar
 
 def feeder_names(feeder: Feeder) -> list[str]:
     """The parameters a line's geometry and its checks read: what prepared.in holds a run
-    by hand to (the part, section 1's track, and a line's every section and drive)."""
-    from .feeders.linear import KEYS, deck_name
-
+    by hand to (the part, section 1's track, and a line's every element and drive)."""
     names = ["shape", "part_size", "part_thickness", "size_spread", "sections"]
-    n = len(feeder.linear_sections)
-    geometry = [key for key in KEYS if key[0] != "drive"] if n == 1 else list(KEYS)
-    for k in range(1, n + 1):
-        names += [name for key in geometry if (name := deck_name(k, key)) is not None]
+    for e in feeder.elements:
+        names += e.deck_names(drive=feeder.is_line)
     return names
 
 

@@ -23,15 +23,12 @@ along common edges (floor and walls form one surface, without seams).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
 from .errors import ParameterError
-from .feeders.feeder import Feeder
-from .feeders.linear import LinearSection
-from .mesh import MeshBuilder, write_stl
+from .mesh import MeshBuilder
 
 # The wiper's bar along x, in part sizes: long enough that a part cannot wedge under it
 # tilted, short enough to stay a bar.
@@ -151,39 +148,3 @@ def combined(*meshes: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.nda
         triangles.append(t + offset)
         offset += len(v)
     return np.concatenate(vertices), np.concatenate(triangles).astype(np.int32)
-
-
-# ------------------------------------------------------------------ parameters
-def section_mesh_of(s: LinearSection) -> Section:
-    """The mesh's description of a further section of a feeder (vibrofeed.feeders)."""
-    drop, wiper = s.side_drop, s.wiper
-    return Section(
-        x0=s.x0, length=s.length, width=s.width, wall_height=s.wall_height, step=s.level,
-        cross_tilt=s.cross_tilt, drop_from=drop.start if drop else 0.0,
-        drop_to=drop.end if drop else 0.0, drop_width=drop.width if drop else 0.0,
-        wiper_height=wiper.height if wiper else 0.0, wiper_at=wiper.at if wiper else 0.5,
-        wiper_length=wiper.length if wiper else 0.0)
-
-
-def section_from(p: Mapping, k: int = 2) -> Section:
-    """Section ``k`` (>= 2) of a line from the deck's parameters (numbers or their strings)."""
-    sections = max(k, int(float(p.get("sections", 1))))  # (a section's own values, even on a track)
-    return section_mesh_of(Feeder.from_values({**p, "sections": sections}).linear_sections[k - 1])
-
-
-def further_meshes(feeder: Feeder) -> list[tuple[np.ndarray, np.ndarray]]:
-    """The meshes at rest of a line's sections 2, 3, ... (none for a single track)."""
-    return [section_mesh(section_mesh_of(s)) for s in feeder.linear_sections[1:]]
-
-
-def write_sections(feeder: Feeder, folder) -> list[tuple[np.ndarray, np.ndarray]]:
-    """The prepare hook's part for a line: each further section's mesh at rest as
-    ``track_s<k>.stl`` in ``folder``, and the deck's generated line files
-    (vibrofeed.feeders.deck); returns the further meshes (none for a single track)."""
-    from .feeders.deck import write_line_files
-
-    meshes = further_meshes(feeder)
-    for k, mesh in enumerate(meshes, start=2):
-        write_stl(*mesh, folder / f"track_s{k}.stl", f"track_s{k}")
-    write_line_files(feeder, folder)
-    return meshes

@@ -71,6 +71,7 @@ def test_three_sections_mass_balance_is_exact(tmp_path, feeder, ranks):
     report = check_file(out)
     assert report.ok, [str(p) for p in report.problems]
     with Result(out) as r:
+        assert r.description == THREE  # the description, verbatim: the result says what feeder it is
         mb, ev, plane = r.mass_balance, r.outlet, r.outlet_plane
         assert (mb["lost"] == 0).all()
         assert (mb["inserted"] == mb["on_track"] + mb["exited"] + mb["rejected"]).all()
@@ -114,3 +115,68 @@ def test_the_prepared_deck_runs_by_hand_and_holds_to_its_values(tmp_path, feeder
     refused = subprocess.run(other, cwd=folder, capture_output=True, text=True, env=env, timeout=300)
     assert "Invalid s3_amp_t: the geometry in mesh_dir was checked and written for s3_amp_t=0.00015" \
         in refused.stdout
+
+
+CHUTE = """
+[feeder]
+name = "chute"
+[parts]
+size = 3e-4
+[supply]
+n_parts = 20
+fill_from = 0.5
+fill_to = 0.97
+[run]
+t_end = 0.2
+output_dt = 0.004
+
+[[element]]
+kind = "linear"
+length = 0.003
+width = 1.2e-3
+drive = { freq = 100, amp_t = 5e-5, amp_n = 5e-5 }
+
+[[element]]
+kind = "chute"
+length = 0.002
+width = 1.2e-3
+wall_height = 1e-3
+step = 8e-5
+slope = 10
+
+[[element]]
+kind = "linear"
+length = 0.002
+width = 1.2e-3
+wall_height = 1e-3
+step = 5e-5
+drive = { freq = 100, amp_t = 1e-4, amp_n = 2e-5 }
+"""
+
+
+@pytest.mark.parametrize("ranks", [1, 2])
+def test_a_line_through_a_chute_conserves_its_parts_and_the_chute_stands_still(tmp_path, monkeypatch,
+                                                                                ranks):
+    """The element kind added as one module (vibrofeed/feeders/chute.py) runs like the others:
+    parts slide down the chute onto the last section and leave over its end; the mass
+    balance is exact at every frame; `check` verifies that the chute did not move."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    path = tmp_path / "chute.toml"
+    path.write_text(CHUTE)
+    out = tmp_path / f"chute{ranks}.h5"
+    vibrofeed("run", path, "-q", "-o", out, "-n", ranks, check=True)
+    report = check_file(out)
+    assert report.ok, [str(p) for p in report.problems]
+    with Result(out) as r:
+        mb, ev = r.mass_balance, r.outlet
+        assert (mb["lost"] == 0).all()
+        assert (mb["inserted"] == mb["on_track"] + mb["exited"] + mb["rejected"]).all()
+        assert mb["inserted"][-1] == 20 and mb["exited"][-1] > 0
+        assert r.outlet_plane["outlet_x"] == pytest.approx(0.007, abs=1e-12)
+        assert (ev["position"][:, 0] > 0.007).all()
+        p2, v2 = r.section_surface(2)
+        assert not p2.any() and not v2.any()  # the chute: exactly still
+        v, _ = r.track_mesh
+        chute = v[r.track_sections == 2]
+        # its floor's lowest point: its end, 80 um + 2 mm tan 10 below section 1's floor
+        assert chute[:, 2].min() == pytest.approx(-8e-5 - 2e-3 * math.tan(math.radians(10)), abs=1e-12)

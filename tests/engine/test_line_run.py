@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from helpers import DECKS, vibrofeed
-from vibrofeed.line import section_from, section_mesh
+from vibrofeed.feeders.feeder import section_from
+from vibrofeed.line import section_mesh
 from vibrofeed.results.check import check_file
 from vibrofeed.results.reader import Result
 

@@ -30,8 +30,8 @@ import pytest
 
 from vibrofeed.decks import Deck
 from vibrofeed.engine.runner import run_deck
+from vibrofeed.feeders.feeder import section_from
 from vibrofeed.geometry import chip_template
-from vibrofeed.line import section_from
 from vibrofeed.results.reader import Result
 from vibrofeed.rotations import quaternion_matrices
 

@@ -371,6 +371,10 @@ class _Run:
             "target_error": self.target_error,  # stop once the feed rate is this precise (None: t_end)
             # extra -var values, the track mesh and the clump template (vibrofeed.geometry.Prepared)
             "prepared": prepared.to_spec() if prepared is not None else None,
+            # the feeder description the deck was generated from (recorded with the result)
+            "description": None if deck.description is None else {
+                "text": deck.description.source, "name": deck.description.name,
+                "path": str(deck.description.path.resolve())},
         }
         self.spec_path.write_text(json.dumps(spec))
 

@@ -365,17 +365,16 @@ def recorded_sections(lmp, spec: dict) -> int:
 def track_sections(track, variables: dict) -> np.ndarray | None:
     """(V,) the section (1-based) of each vertex of a line's track, or None when it cannot be
     told. The prepare hook writes section 1's mesh, then appends each further section's
-    (vibrofeed.line.further_meshes of the same parameters' feeder), each with its own
+    (vibrofeed.feeders.Feeder.further_meshes of the same parameters), each with its own
     vertices: the track's last vertices must be those meshes exactly, and only then are they
     theirs."""
     from ..feeders.feeder import Feeder
-    from ..line import further_meshes
 
     if track is None:
         return None
     vertices = track[0]
     try:
-        further = [m[0] for m in further_meshes(Feeder.from_values(variables))]
+        further = [m[0] for m in Feeder.from_values(variables).further_meshes()]
     except (ValueError, ArithmeticError):  # a bad value, or a dimension missing (0: a division by it)
         return None
     n1 = len(vertices) - sum(len(v) for v in further)
@@ -455,7 +454,7 @@ def open_writer(spec: dict, derived: dict, ranks: int, natoms: int, bulk, sectio
         engine_version=engine_version(spec["log"]), seed=spec.get("seed"),
         ranks=ranks, command=spec.get("command", ""), run_id=spec.get("run_id", ""),
         capacity_hint=max(natoms // (bulk.n_spheres if bulk else 1), 1), sections=sections,
-        target_error=spec.get("target_error"), rotating=turns,
+        target_error=spec.get("target_error"), rotating=turns, description=spec.get("description"),
         **({} if bulk is None else {"track": bulk.track, "outlet": bulk.outlet.attributes(),
                                     "body_template": bulk.template, "line": bulk.line,
                                     "track_sections": bulk.track_sections,

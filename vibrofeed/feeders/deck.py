@@ -27,6 +27,7 @@ import math
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 
+from ..mesh import write_stl
 from .feeder import Feeder
 
 FILES = ("line_derived.in", "line_meshes.in", "line_catch.in", "line_motion.in")
@@ -43,77 +44,60 @@ def _min(a: str, b: str) -> str:
 
 
 def line_files(feeder: Feeder) -> dict[str, str]:
-    """The four files (module docstring) for ``feeder``, a linear line of n >= 1 sections."""
-    n = len(feeder.linear_sections)
+    """The four files (module docstring) for ``feeder``, a line of n >= 1 sections; each
+    further element gives its own commands (its ``deck_commands``)."""
+    elements = feeder.elements
+    n = len(elements)
     head = f"# written by vibrofeed.feeders.deck for one run: a line of {n} section(s)\n"
     out = {name: head for name in FILES}
     if n == 1:
         out["line_meshes.in"] += _WALLS % (1, "track")
         return out
-    further = range(2, n + 1)
-    d = []
-    for k in further:
-        level = "+".join(f"v_s{j}_step" for j in range(2, k + 1))
-        d += [f"variable s{k}_omega equal 2*PI*v_s{k}_freq",
-              f"variable s{k}_phi equal v_s{k}_phase*PI/180",
-              f"variable s{k}_low equal -({level}+v_s{k}_width*tan(v_s{k}_cross_tilt*PI/180))"]
+    further = elements[1:]
+    pieces = [e.deck_commands() for e in further]
+    d = [line for p in pieces for line in p["derived"]]
     d += ["variable s1_peak equal v_omega*sqrt(v_amp_t^2+v_amp_n^2)"]
-    d += [f"variable s{k}_peak equal v_s{k}_omega*sqrt(v_s{k}_amp_t^2+v_s{k}_amp_n^2)" for k in further]
+    d += [line for p in pieces for line in p["peak"]]
     d += ["variable s1_catch equal -(v_amp_n+2*v_r_ext)-v_track_width*tan(v_cross_tilt*PI/180)"]
-    d += [f"variable s{k}_catch equal v_s{k}_low-(v_s{k}_amp_n+2*v_r_ext)" for k in further]
+    d += [line for p in pieces for line in p["catch"]]
     # the fastest and the lowest over the sections, pairwise (LIGGGHTS has no max())
     peak, catch = "v_s1_peak", "v_s1_catch"
-    for k in further:
-        if k < n:
-            d += [f"variable peak_1_{k} equal {_max(peak, f'v_s{k}_peak')}",
-                  f"variable catch_1_{k} equal {_min(catch, f'v_s{k}_catch')}"]
-            peak, catch = f"v_peak_1_{k}", f"v_catch_1_{k}"
-    lengths = "+".join(["v_track_length"] + [f"v_s{k}_length" for k in further])
+    for e in further[:-1]:
+        k = e.number
+        d += [f"variable peak_1_{k} equal {_max(peak, f'v_s{k}_peak')}",
+              f"variable catch_1_{k} equal {_min(catch, f'v_s{k}_catch')}"]
+        peak, catch = f"v_peak_1_{k}", f"v_catch_1_{k}"
+    lengths = "+".join(["v_track_length"] + [f"v_s{e.number}_length" for e in further])
     d += ["variable v_peak delete", f"variable v_peak equal {_max(peak, f'v_s{n}_peak')}",
           "variable outlet_x delete", f"variable outlet_x equal {lengths}",
           "variable catch_z delete", f"variable catch_z equal {_min(catch, f'v_s{n}_catch')}"]
     out["line_derived.in"] += "\n".join(d) + "\n"
 
-    m = [f"fix track_s{k} all mesh/surface file ${{mesh_dir}}/track_s{k}.stl type 2 "
-         f"move 0 0 $(v_s{k}_amp_n*sin(v_s{k}_phi))" for k in further]
+    m = [line for p in pieces for line in p["mesh"]]
     out["line_meshes.in"] += "\n".join(m) + "\n" + _WALLS % (
-        n, " ".join(["track"] + [f"track_s{k}" for k in further]))
+        n, " ".join(["track"] + [f"track_s{e.number}" for e in further]))
 
-    scale = "${s2_length}" if n == 2 else "$(" + "+".join(f"v_s{k}_length" for k in further) + ")"
+    scale = "${s2_length}" if n == 2 else "$(" + "+".join(f"v_s{e.number}_length" for e in further) + ")"
     out["line_catch.in"] += (
         'if "${driver} == 0" then &\n'
         f'  "fix reject_catch all mesh/surface file ${{mesh_dir}}/catch.stl type 2 scale {scale} &\n'
         '     move ${track_length} 0 ${catch_z}" &\n'
         '  "fix rejects all massflow/mesh mesh reject_catch vec_side 0 0 -1 count once file '
         'rejects.txt writeTime"\n')
-
-    mo = []
-    for k in further:
-        s = f"s{k}"
-        half = f"$(v_{s}_omega*v_dt_used/2)"
-        mo += [f"fix {s}_shake_t all move/mesh mesh track_{s} wiggle amplitude ${{{s}_amp_t}} 0 0 "
-               f"period $(1/v_{s}_freq)",
-               f"fix {s}_shake_n all move/mesh mesh track_{s} viblin axis 0 0 1 order 1 amplitude "
-               f"${{{s}_amp_n}} &\n     phase $(v_{s}_phi-PI/2) period $(1/v_{s}_freq)",
-               f"variable {s}_surface_x equal &\n"
-               f"$(v_{s}_amp_t*v_{s}_omega*v_dt_used/sin(v_{s}_omega*v_dt_used/2))&\n"
-               f"*sin(step*{half})*cos((step+1)*{half})",
-               f"variable {s}_surface_y equal 0",
-               f"variable {s}_surface_z equal &\n"
-               f"$(v_{s}_amp_n*sin(v_{s}_phi))&\n"
-               f"+$(v_{s}_amp_n*v_{s}_omega*v_dt_used/sin(v_{s}_omega*v_dt_used/2))&\n"
-               f"*sin(step*{half})*cos((step+1)*{half}+$(v_{s}_phi))",
-               f"variable {s}_surface_vx equal $(v_{s}_amp_t*v_{s}_omega)*cos($(v_{s}_omega)*time)",
-               f"variable {s}_surface_vy equal 0",
-               f"variable {s}_surface_vz equal "
-               f"$(v_{s}_amp_n*v_{s}_omega)*cos($(v_{s}_omega)*time+$(v_{s}_phi))"]
-    out["line_motion.in"] += "\n".join(mo) + "\n"
+    out["line_motion.in"] += "\n".join(line for p in pieces for line in p["motion"]) + "\n"
     return out
 
 
-def write_line_files(feeder: Feeder, folder: str | Path) -> None:
+def write_line_files(feeder: Feeder, folder: str | Path) -> list:
+    """Each further element's mesh at rest as ``track_s<k>.stl`` and the four files into
+    ``folder``; returns the further meshes (none for a single track)."""
+    folder = Path(folder)
+    meshes = feeder.further_meshes()
+    for e, mesh in zip(feeder.elements[1:], meshes):
+        write_stl(*mesh, folder / f"track_s{e.number}.stl", f"track_s{e.number}")
     for name, text in line_files(feeder).items():
-        (Path(folder) / name).write_text(text)
+        (folder / name).write_text(text)
+    return meshes
 
 
 def guard_lines(values: Mapping, names: Iterable[str]) -> list[str]:

@@ -24,10 +24,19 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import ParameterError
+from . import chute
 from .linear import KEYS, MAX_SECTIONS, deck_names
 
+
+def _kind_keys(kind: str, k: int) -> tuple[dict, dict]:
+    """(every key the kind knows, the keys element ``k`` of that kind takes -> deck name)."""
+    if kind == "chute":
+        known = {(key,): None for key in chute.KEYS}
+        return known, ({} if k == 1 else {(key,): chute.deck_name(k, key) for key in chute.KEYS})
+    return KEYS, deck_names(k)
+
 SUFFIX = ".toml"
-ELEMENT_KINDS = ("linear",)
+ELEMENT_KINDS = ("linear", "chute")
 # table -> {key: deck name}; the element's keys are vibrofeed.feeders.linear.KEYS
 TABLES: dict[str, dict[str, str]] = {
     "feeder": {"incline": "incline"},
@@ -59,6 +68,7 @@ class Description:
     name: str
     text: str
     sections: int
+    kinds: list[str] = field(default_factory=list)
     values: dict[str, str] = field(default_factory=dict)
     aliases: dict[str, str] = field(default_factory=dict)
     source: str = ""
@@ -87,11 +97,12 @@ def _value(path: Path, dotted: str, value) -> str:
     raise _fail(path, f"{dotted} = {value!r} must be a number")
 
 
-def aliases(sections: int) -> dict[str, str]:
-    """Every dotted name of a description of ``sections`` linear sections, and its deck name."""
+def aliases(kinds: list[str]) -> dict[str, str]:
+    """Every dotted name of a description whose elements are of ``kinds``, and its deck name."""
     out = {f"{table}.{key}": name for table, keys in TABLES.items() for key, name in keys.items()}
-    for k in range(1, sections + 1):
-        out.update({f"element.{k}." + ".".join(key): name for key, name in deck_names(k).items()})
+    for k, kind in enumerate(kinds, start=1):
+        out.update({f"element.{k}." + ".".join(key): name
+                    for key, name in _kind_keys(kind, k)[1].items()})
     return out
 
 
@@ -133,10 +144,11 @@ def read(path: str | os.PathLike, text: str | None = None) -> Description:
     for k, element in enumerate(elements, start=1):
         values.update(_element(path, k, element))
     values["sections"] = str(len(elements))
+    kinds = [e["kind"] for e in elements]
     feeder = data.get("feeder", {})
     return Description(path=path, name=feeder.get("name", path.stem),
-                       text=feeder.get("description", ""), sections=len(elements), values=values,
-                       aliases=aliases(len(elements)), source=text)
+                       text=feeder.get("description", ""), sections=len(elements), kinds=kinds,
+                       values=values, aliases=aliases(kinds), source=text)
 
 
 def _element(path: Path, k: int, element: dict) -> dict[str, str]:
@@ -144,34 +156,39 @@ def _element(path: Path, k: int, element: dict) -> dict[str, str]:
     where = f"element {k}"
     kind = element.get("kind")
     if kind not in ELEMENT_KINDS:
-        raise _fail(path, f"{where}: kind = {kind!r}: this version builds {', '.join(ELEMENT_KINDS)} "
-                          "elements (kind = \"linear\")")
-    names = deck_names(k)
-    tables = sorted({key[0] for key in KEYS if len(key) == 2})
-    out = {}
+        raise _fail(path, f"{where}: kind = {kind!r}: this version builds "
+                          f"{' and '.join(ELEMENT_KINDS)} elements")
+    if k == 1 and kind != "linear":
+        raise _fail(path, f"{where}: kind = {kind!r}: the first element is a linear section (the "
+                          "supply falls onto it)")
+    known, names = _kind_keys(kind, k)
+    singles = [key[0] for key in known if len(key) == 1]
+    tables = sorted({key[0] for key in known if len(key) == 2})
+    out = {f"s{k}_kind": str(chute.KIND_CODE)} if kind == "chute" else {}
     for key, value in element.items():
         if key == "kind":
             continue
         if isinstance(value, dict):
             if key not in tables:
-                raise _unknown(path, where, key, [key[0] for key in KEYS if len(key) == 1] + tables)
+                raise _unknown(path, where, key, singles + tables)
             for sub, x in value.items():
                 full = (key, sub)
-                if full not in KEYS:
-                    raise _unknown(path, f"{where}'s {key}", sub, [k[1] for k in KEYS if k[0] == key
+                if full not in known:
+                    raise _unknown(path, f"{where}'s {key}", sub, [k[1] for k in known if k[0] == key
                                                                     and len(k) == 2])
                 if full not in names:
                     raise _fail(path, f"{where}: {key}.{sub}: {_not_here(k, full)}")
                 out[names[full]] = _value(path, f"element.{k}.{key}.{sub}", x)
             continue
-        if (key,) not in KEYS:
-            raise _unknown(path, where, key, [key[0] for key in KEYS if len(key) == 1] + tables)
+        if (key,) not in known:
+            raise _unknown(path, where, key, singles + tables)
         if (key,) not in names:
             raise _fail(path, f"{where}: {key}: {_not_here(k, (key,))}")
         out[names[(key,)]] = _value(path, f"element.{k}.{key}", value)
-    for needed in (("length",), ("width",)):
-        if needed not in {tuple(n) for n in _given(element)}:
-            raise _fail(path, f"{where} has no {needed[0]}: every section states its own")
+    needed = ("length", "width", "slope") if kind == "chute" else ("length", "width")
+    for key in needed:
+        if (key,) not in set(_given(element)):
+            raise _fail(path, f"{where} has no {key}: every {kind} element states its own")
     return out
 
 
@@ -222,6 +239,14 @@ def deck_text(description: Description, template: str, variables: dict) -> str:
             _declaration("sections", str(n), "-", "linear sections of the line")]
     seconds = [v for v in variables.values() if v.name.startswith("s2_")]
     for k in range(2, n + 1):
+        if description.kinds[k - 1] == "chute":
+            out.append(_declaration(f"s{k}_kind", str(chute.KIND_CODE), "-",
+                                    f"element {k}'s kind: {chute.KIND_CODE} a chute"))
+            for suffix, unit, text in chute.KEYS.values():
+                name = f"s{k}_{suffix}"
+                default = variables[f"s2_{suffix}"].default if f"s2_{suffix}" in variables else "0"
+                out.append(_declaration(name, values.get(name, default), unit, text))
+            continue
         for v in seconds:
             name = f"s{k}_" + v.name[3:]
             text = v.description.replace("section 2", f"section {k}").replace(
@@ -233,20 +258,17 @@ def deck_text(description: Description, template: str, variables: dict) -> str:
 
 
 def _header(description: Description, n: int) -> list[str]:
-    said = " ".join(description.text.split())
-    words = [f"# vibrofeed deck: {description.name}",
-             "# vibrofeed prepare: vibrofeed.geometry:prepare_bulk_feeder",
-             "#",
-             f"# Generated by vibrofeed from the feeder description {description.path.name}",
-             f"# (docs/feeders.md): a line of {n} linear section(s). The commands are",
-             "# decks/bulk_feeder.liggghts's (its header says what they do); the tunables",
-             "# hold the description's numbers."]
-    if said:
-        words += ["#"] + ["# " + line for line in _wrap(said, 78)]
-    words += ["#", "# Run by hand: `vibrofeed prepare FEEDER.toml -o DIR` writes this deck, the",
-              "# meshes and the generated includes into DIR and prints the liggghts line.",
-              "#", "# Units: SI (m, kg, s, Pa, J/m^2); angles in degrees."]
-    return words
+    said = " ".join(description.text.split()) or f"A feeder line of {n} linear section(s)."
+    return [f"# vibrofeed deck: {description.name}",
+            "# vibrofeed prepare: vibrofeed.geometry:prepare_bulk_feeder",
+            f"# vibrofeed generated from: {description.path.name}",
+            "#", *("# " + line for line in _wrap(said, 78)), "#",
+            f"# {n} linear section(s), generated from the feeder description named above",
+            "# (docs/feeders.md). The commands are decks/bulk_feeder.liggghts's (its",
+            "# header says what they do); the tunables hold the description's numbers.",
+            "#", "# Run by hand: `vibrofeed prepare FEEDER.toml -o DIR` writes this deck, the",
+            "# meshes and the generated includes into DIR and prints the liggghts line.",
+            "#", "# Units: SI (m, kg, s, Pa, J/m^2); angles in degrees."]
 
 
 def _wrap(text: str, width: int) -> list[str]:

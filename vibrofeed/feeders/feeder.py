@@ -21,6 +21,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ParameterError
+from .chute import KIND_CODE as CHUTE
+from .chute import Chute
 from .joints import Joint
 from .linear import MAX_SECTIONS, LinearSection
 from .records import Part, number
@@ -82,9 +84,16 @@ class Feeder:
             raise ParameterError(f"sections={n:g} must be a whole number from 1 to {MAX_SECTIONS}")
         elements, x0, level = [], 0.0, 0.0
         for k in range(1, int(n) + 1):
-            s = LinearSection.from_values(values, k, x0, level, part)
+            kind = number(values, f"s{k}_kind", 0.0) if k > 1 else 0.0
+            if kind == CHUTE:
+                s = Chute.from_values(values, k, x0, level)
+            elif kind == 0:
+                s = LinearSection.from_values(values, k, x0, level, part)
+            else:
+                raise ParameterError(f"s{k}_kind={kind:g} must be 0 (a linear section) or "
+                                     f"{CHUTE} (a chute)")
             elements.append(s)
-            x0, level = s.x1, s.level
+            x0, level = s.x1, s.exit_level
         return cls(part, tuple(elements), bool(recirculate), values)
 
     # ---------------------------------------------------------------- what the analyses ask
@@ -99,7 +108,7 @@ class Feeder:
         the track's frame, a bowl's path coordinate (vibrofeed.bowl.path_coordinate)."""
         out = []
         for e in self.elements:
-            out.extend(e.bounds if isinstance(e, BowlElement) else [(e.x0, e.x1)])
+            out.extend(e.bounds)
         return out
 
     @property
@@ -121,9 +130,14 @@ class Feeder:
 
     @property
     def is_line(self) -> bool:
-        """A line of more than one driven section (its joints are checked, its rejects counted
-        per section, its further sections' motion recorded)."""
-        return sum(isinstance(e, LinearSection) for e in self.elements) > 1
+        """A line of more than one section (its joints are checked, its rejects counted per
+        section, its further sections' motion recorded)."""
+        return len(self.line_elements) > 1
+
+    @property
+    def line_elements(self) -> list:
+        """The elements of a line (every element but a bowl), in conveying order."""
+        return [e for e in self.elements if not isinstance(e, BowlElement)]
 
     @property
     def linear_sections(self) -> list[LinearSection]:
@@ -131,8 +145,8 @@ class Feeder:
 
     @property
     def joints(self) -> list[Joint]:
-        """The joints between consecutive linear sections."""
-        s = self.linear_sections
+        """The joints between consecutive elements of a line."""
+        s = self.line_elements
         return [Joint(a, b) for a, b in zip(s[:-1], s[1:])]
 
     @property
@@ -147,23 +161,31 @@ class Feeder:
                 if b.wiper is not None:
                     out.append(Station(1, "wiper", *(float(b.arc_length(t)) for t in b.wiper)))
                 continue
-            if e.side_drop is not None:
+            if getattr(e, "side_drop", None) is not None:
                 d = e.side_drop
                 out.append(Station(e.number, "side_drop", e.x0 + d.start * e.length,
                                    e.x0 + d.end * e.length))
-            if e.wiper is not None:
+            if getattr(e, "wiper", None) is not None:
                 a = e.x0 + e.wiper.at * e.length
                 out.append(Station(e.number, "wiper", a, a + e.wiper.length))
         return out
 
-    def section_values(self, k: int) -> dict:
+    def further_meshes(self) -> list:
+        """The meshes at rest of a line's elements after the first (none for a single track),
+        as the prepare hook appends them to the first section's."""
+        return [e.mesh() for e in self.elements[1:] if not isinstance(e, BowlElement)]
+
+    def section_values(self, k: int) -> dict | None:
         """The parameters with section ``k``'s drive (1-based) as the deck's ``freq``,
         ``amp_t``, ``amp_n``, ``phase`` and ``waveform``: what a model of one part alone on
-        that section takes (a further section runs a sine)."""
+        that section takes (a further section runs a sine); None for an undriven one (a
+        chute)."""
         values = dict(self.values or {})
         if k == 1 or not self.is_line:
             return values
-        d = self.linear_sections[k - 1].drive
+        if not isinstance(self.elements[k - 1], LinearSection):
+            return None  # (a chute: no vibration to model)
+        d = self.elements[k - 1].drive
         return {**values, "freq": d.freq, "amp_t": d.amp_t, "amp_n": d.amp_n, "phase": d.phase,
                 "waveform": 0}
 
@@ -181,14 +203,15 @@ class Feeder:
                 raise ParameterError("recirculate=1: a single track has no rejects to return; "
                                      "a line (sections >= 2) has")
             return
-        for s in self.linear_sections[1:]:
-            s.check(self.part, last=s is self.linear_sections[-1])
+        further = self.line_elements[1:]
+        for s in further:
+            s.check(self.part, last=s is further[-1])
         for j in self.joints:
             j.check(self.part)
         if number(p, "hamaker", 0.0) > 0 or number(p, "air_viscosity", 0.0) > 0:
             raise ParameterError("hamaker and air_viscosity act on section 1's floor only: a line "
                                  "(sections >= 2) runs without them in this version")
-        if self.linear_sections[0].drive.waveform != 0:
+        if self.elements[0].drive.waveform != 0:
             raise ParameterError("a line (sections >= 2) drives its sections with sines (waveform=0) "
                                  "in this version")
 
@@ -199,3 +222,10 @@ def _is_number(value) -> bool:
     except (TypeError, ValueError):
         return False
     return True
+
+
+def section_from(values: Mapping, k: int = 2):
+    """Section ``k``'s (>= 2) mesh geometry (vibrofeed.line.Section) from the deck's
+    parameters (numbers or their strings), even where ``sections`` says fewer."""
+    sections = max(k, int(float(values.get("sections", 1))))
+    return Feeder.from_values({**values, "sections": sections}).elements[k - 1].mesh_section()

@@ -13,7 +13,6 @@ import math
 from dataclasses import dataclass
 
 from ..errors import ParameterError
-from .linear import LinearSection
 from .records import Part
 
 
@@ -23,8 +22,8 @@ class Joint:
     the step down at rest at its least and most across a's exit [m], and how far the floors
     move apart normal (``dz``) and along (``dx``) [m]."""
 
-    a: LinearSection
-    b: LinearSection
+    a: object  # an element (vibrofeed.feeders: a LinearSection, a Chute)
+    b: object
 
     @property
     def at(self) -> float:
@@ -36,7 +35,7 @@ class Joint:
         floors are planes tilted down towards -y, so the step is linear in y and its extremes
         lie at the exit's two ends."""
         e = self.a.exit_width / 2
-        steps = [float(self.a.floor_z(y) - self.b.floor_z(y)) for y in (-e, e)]
+        steps = [float(self.a.exit_z(y) - self.b.entry_z(y)) for y in (-e, e)]
         return min(steps), max(steps)
 
     @property

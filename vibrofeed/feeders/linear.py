@@ -22,6 +22,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 from ..errors import ParameterError
+from ..line import Section, section_mesh
 from .records import Drive, Gate, Part, SideDrop, Wiper, number
 
 # The wiper's bar along the track, in part sizes (vibrofeed.line's WIPER_LENGTH).
@@ -133,6 +134,81 @@ class LinearSection:
     def lowest(self) -> float:
         """The floor's lowest point at rest (at the reference wall) [m]."""
         return self.floor_z(-self.width / 2)
+
+    def entry_z(self, y):
+        """The floor's height at rest where parts come onto it, at ``y`` [m]."""
+        return self.floor_z(y)
+
+    def exit_z(self, y):
+        """The floor's height at rest where parts leave it, at ``y`` [m]."""
+        return self.floor_z(y)
+
+    @property
+    def exit_level(self) -> float:
+        """How far below the first section's floor this one ends, at its high edge [m]."""
+        return self.level
+
+    @property
+    def catch_floor(self) -> float:
+        """The floor's lowest point at rest anywhere on it [m] (the catch plane lies below)."""
+        return self.lowest
+
+    @property
+    def bounds(self) -> list[tuple[float, float]]:
+        return [(self.x0, self.x1)]
+
+    def mesh_section(self) -> Section:
+        """The section as vibrofeed.line meshes it (a further section of a line)."""
+        drop, wiper = self.side_drop, self.wiper
+        return Section(
+            x0=self.x0, length=self.length, width=self.width, wall_height=self.wall_height,
+            step=self.level, cross_tilt=self.cross_tilt, drop_from=drop.start if drop else 0.0,
+            drop_to=drop.end if drop else 0.0, drop_width=drop.width if drop else 0.0,
+            wiper_height=wiper.height if wiper else 0.0, wiper_at=wiper.at if wiper else 0.5,
+            wiper_length=wiper.length if wiper else 0.0)
+
+    def mesh(self):
+        """The mesh at rest of a further section (vertices (V, 3) [m], triangles (T, 3))."""
+        return section_mesh(self.mesh_section())
+
+    def deck_commands(self) -> dict[str, list[str]]:
+        """A further section's commands in the deck (vibrofeed.feeders.deck): ``derived``
+        (its angular frequency, phase, lowest floor, peak speed, catch plane), ``mesh`` (its
+        mesh placed where its sine puts it at t = 0) and ``motion`` (its movers and recorded
+        motion, s<k>_surface_*)."""
+        k, s = self.number, f"s{self.number}"
+        level = "+".join(f"v_s{j}_step" for j in range(2, k + 1))
+        half = f"$(v_{s}_omega*v_dt_used/2)"
+        return {
+            "derived": [f"variable {s}_omega equal 2*PI*v_{s}_freq",
+                        f"variable {s}_phi equal v_{s}_phase*PI/180",
+                        f"variable {s}_low equal -({level}+v_{s}_width*tan(v_{s}_cross_tilt*PI/180))"],
+            "peak": [f"variable {s}_peak equal v_{s}_omega*sqrt(v_{s}_amp_t^2+v_{s}_amp_n^2)"],
+            "catch": [f"variable {s}_catch equal v_{s}_low-(v_{s}_amp_n+2*v_r_ext)"],
+            "mesh": [f"fix track_{s} all mesh/surface file ${{mesh_dir}}/track_{s}.stl type 2 "
+                     f"move 0 0 $(v_{s}_amp_n*sin(v_{s}_phi))"],
+            "motion": [
+                f"fix {s}_shake_t all move/mesh mesh track_{s} wiggle amplitude ${{{s}_amp_t}} 0 0 "
+                f"period $(1/v_{s}_freq)",
+                f"fix {s}_shake_n all move/mesh mesh track_{s} viblin axis 0 0 1 order 1 amplitude "
+                f"${{{s}_amp_n}} &\n     phase $(v_{s}_phi-PI/2) period $(1/v_{s}_freq)",
+                f"variable {s}_surface_x equal &\n"
+                f"$(v_{s}_amp_t*v_{s}_omega*v_dt_used/sin(v_{s}_omega*v_dt_used/2))&\n"
+                f"*sin(step*{half})*cos((step+1)*{half})",
+                f"variable {s}_surface_y equal 0",
+                f"variable {s}_surface_z equal &\n"
+                f"$(v_{s}_amp_n*sin(v_{s}_phi))&\n"
+                f"+$(v_{s}_amp_n*v_{s}_omega*v_dt_used/sin(v_{s}_omega*v_dt_used/2))&\n"
+                f"*sin(step*{half})*cos((step+1)*{half}+$(v_{s}_phi))",
+                f"variable {s}_surface_vx equal $(v_{s}_amp_t*v_{s}_omega)*cos($(v_{s}_omega)*time)",
+                f"variable {s}_surface_vy equal 0",
+                f"variable {s}_surface_vz equal "
+                f"$(v_{s}_amp_n*v_{s}_omega)*cos($(v_{s}_omega)*time+$(v_{s}_phi))"],
+        }
+
+    def deck_names(self, drive: bool = True) -> list[str]:
+        """The deck's names of this section's numbers (``drive``: with its drive's)."""
+        return [name for key, name in deck_names(self.number).items() if drive or key[0] != "drive"]
 
     def name(self, key: tuple[str, ...]) -> str:
         """The deck name of ``key`` on this section (for messages)."""

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 import h5py
 import numpy as np
 
+from ..feeders.chute import KIND_CODE as CHUTE
 from ..models.constants import G
 from . import layout as L
 from .reader import _text
@@ -540,9 +541,16 @@ class _Physics:
             motion = [self.f.get(f"{L.surface_path(k)}/{e}/value") for e in ("position", "velocity")]
             if any(not isinstance(m, h5py.Dataset) or m.shape != (len(step), 3) for m in motion):
                 continue  # missing or misshapen: reported with the layout
+            where = L.surface_path(k)
+            if self.p.get(f"s{k}_kind") == CHUTE:  # an undriven chute (vibrofeed.feeders.chute): still
+                zero = np.zeros((len(step), 3))
+                for element, got in zip(("position", "velocity"), motion):
+                    self.against_drive(f"{where}/{element}/value", f"section {k}'s {element} (a chute, "
+                                       "which does not move)", got[()], zero, DRIVE_ATOL[element],
+                                       "m" if element == "position" else "m/s", time)
+                continue
             names = [f"s{k}_{n}" for n in L.SECTION_DRIVE]
             missing = [n for n in names if n not in self.p]
-            where = L.surface_path(k)
             if missing:
                 self.c.error(where, f"section {k}'s drive ({', '.join(missing)}) is not among the "
                                     "recorded parameters: its motion cannot be verified")

@@ -216,6 +216,13 @@ class Result:
         return found
 
     @property
+    def description(self) -> str | None:
+        """The feeder description (TOML text, docs/feeders.md) the run's deck was generated
+        from, or None for a run of a deck."""
+        found = self.file[L.PARAMETERS].get("description")
+        return None if found is None else _text(found[()])
+
+    @property
     def stop_reason(self) -> str:
         """Why the engine ended the run (``"t_end"``, ``"target error 0.03 reached: ..."``:
         see :func:`.layout.stopped_early`); '' when unrecorded (before format 1.5, or a run

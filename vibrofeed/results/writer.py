@@ -188,7 +188,7 @@ class ResultWriter:
                  max_delay: float = 0.25, track=None, body_template=None,
                  outlet: Mapping | None = None, line: bool = False, sections: int = 1,
                  track_sections=None, returns: bool = False, target_error: float | None = None,
-                 rotating: bool = False):
+                 rotating: bool = False, description: Mapping | None = None):
         if returns and not line:
             raise ValueError("returns without a line: only a feeder line has rejects to return")
         self.path = str(path)
@@ -219,6 +219,10 @@ class ResultWriter:
                                derived, engine_version, seed, ranks, command, run_id)
         if target_error is not None:
             f[L.RUN].attrs["target_error"] = float(target_error)
+        if description is not None:  # the feeder description the deck was generated from
+            d = f[L.PARAMETERS].create_dataset("description", data=description["text"],
+                                               dtype=h5py.string_dtype())
+            d.attrs["name"], d.attrs["path"] = description["name"], description["path"]
         self._create_time_series(f)
         # Dataset handles, looked up once.
         self._values = {name: f[L.PARTS][name]["value"] for name in L.PART_ELEMENTS}

@@ -14,8 +14,9 @@ from vibrofeed.decks import Deck
 from vibrofeed.engine.outlet import LineOutlet, gravity_vector
 from vibrofeed.errors import ParameterError
 from vibrofeed.feeders import Feeder
+from vibrofeed.feeders.feeder import section_from
 from vibrofeed.geometry import prepare_bulk_feeder, track_mesh
-from vibrofeed.line import Section, combined, section_from, section_mesh
+from vibrofeed.line import Section, combined, section_mesh
 from vibrofeed.parameters import resolve
 
 L1, W1 = 0.01, 1.2e-3

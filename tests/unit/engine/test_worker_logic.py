@@ -30,7 +30,8 @@ from vibrofeed.engine.worker import (
     track_sections,
 )
 from vibrofeed.errors import DeckError
-from vibrofeed.line import section_from, section_mesh
+from vibrofeed.feeders.feeder import section_from
+from vibrofeed.line import section_mesh
 from vibrofeed.parameters import resolve
 
 

@@ -111,8 +111,8 @@ def test_a_joint_that_does_not_step_down_is_refused_naming_the_element(tmp_path)
     (('kind = "linear"\nlength = 0.004', 'kind = "linear"\nstep = 1e-5\nlength = 0.004'),
      "element 1: step: the first section has no joint before it to step down at"),
     (('kind = "linear"\nlength = 0.003', 'kind = "spiral"\nlength = 0.003'),
-     "element 2: kind = 'spiral': this version builds linear elements"),
-    (("length = 0.003\n", ""), "element 2 has no length: every section states its own"),
+     "element 2: kind = 'spiral': this version builds linear and chute elements"),
+    (("length = 0.003\n", ""), "element 2 has no length: every linear element states its own"),
     (("[[element]]", "[[elements]]"), "unknown key 'elements' in the description (did you mean 'element'?)"),
     (("size = 3e-4", "size = 3e-4\n[[element"), "f.toml: not valid TOML"),
 ])

@@ -76,8 +76,10 @@ def test_tooling_stations_where_the_numbers_put_them():
     stations = Feeder.from_values(THREE).stations
     assert [(s.section, s.kind) for s in stations] == [(2, "side_drop"), (2, "wiper")]
     drop, wiper = stations
-    assert (drop.start, drop.end) == (pytest.approx(5e-3), pytest.approx(7e-3))  # 4 mm + 0.2 .. 0.6 of 5
-    assert wiper.start == pytest.approx(8e-3) and wiper.end - wiper.start == pytest.approx(3e-4)
+    # 4 mm + 0.2 .. 0.6 of 5 mm
+    assert (drop.start, drop.end) == (pytest.approx(5e-3, abs=1e-15), pytest.approx(7e-3, abs=1e-15))
+    assert wiper.start == pytest.approx(8e-3, abs=1e-15)
+    assert wiper.end - wiper.start == pytest.approx(3e-4, abs=1e-15)
 
 
 def test_section_values_give_each_sections_drive_as_the_first_ones_names():

@@ -471,7 +471,7 @@ def test_line_tooling_at_the_exact_ends_of_each_stretch():
     # the bounds are inclusive: a reject exactly at the side drop's widened ends or at the
     # wiper's reach and bar end belongs to that tool
     from vibrofeed.feeders import Feeder
-    from vibrofeed.line import section_from
+    from vibrofeed.feeders.feeder import section_from
 
     values = {"sections": 2, "track_length": JOINT, "s2_length": S2_LENGTH, "s2_width": 4.2e-4,
               "s2_drop_from": 0.2, "s2_drop_to": 0.6, "s2_drop_width": 2e-4,
