@@ -26,6 +26,7 @@ from pathlib import Path
 from ..errors import ParameterError
 from . import chute
 from .linear import KEYS, MAX_SECTIONS, deck_names
+from .records import shape_code
 
 
 def _kind_keys(kind: str, k: int) -> tuple[dict, dict]:
@@ -92,8 +93,11 @@ def _value(path: Path, dotted: str, value) -> str:
         if isinstance(value, float) and not math.isfinite(value):
             raise _fail(path, f"{dotted} = {value} is not finite")
         return repr(value) if isinstance(value, float) else str(value)
-    if isinstance(value, str) and dotted == "parts.shape":
-        return value
+    if isinstance(value, str) and dotted == "parts.shape":  # the deck's code: LIGGGHTS compares numbers
+        try:
+            return str(shape_code(value))
+        except ParameterError as exc:
+            raise _fail(path, f"parts.{exc}".replace("parameter ", "")) from None
     raise _fail(path, f"{dotted} = {value!r} must be a number")
 
 

@@ -79,6 +79,8 @@ def test_the_generated_deck_declares_every_sections_tunables_and_the_bulk_feeder
     assert [c.text for c in deck.commands if not c.text.startswith("variable")][3:] == \
         [c.text for c in bulk.commands if not c.text.startswith("variable")][3:]
     assert deck.tunables["s3_amp_t"].default == "0.00026" and deck.tunables["s3_amp_t"].unit == "m"
+    # a shape's name is written as the deck's code: the deck's refusals compare it as a number
+    assert deck.tunables["shape"].default == "0"
 
 
 def test_dotted_names_set_the_decks_own(tmp_path):
@@ -106,6 +108,7 @@ def test_a_joint_that_does_not_step_down_is_refused_naming_the_element(tmp_path)
     (("amp_t = 1e-4", "ampt = 1e-4"), "unknown key 'ampt' in element 2's drive (did you mean 'amp_t'?)"),
     (("[parts]", "[part]"), "unknown key 'part' in the description (did you mean 'parts'?)"),
     (("size = 3e-4", "size = \"big\""), "f.toml: parts.size = 'big' must be a number"),
+    (("size = 3e-4", "size = 3e-4\nshape = \"cube\""), "f.toml: parts.shape=cube must be sphere, chip or disc"),
     (("step = 5e-5", "step = 5e-5\nside_drop = { from = 0.2, to = 0.5, wdith = 4e-4 }"),
      "unknown key 'wdith' in element 2's side_drop (did you mean 'width'?)"),
     (('kind = "linear"\nlength = 0.004', 'kind = "linear"\nstep = 1e-5\nlength = 0.004'),

@@ -1,0 +1,100 @@
+"""Benchmark of feeder descriptions: their generated deck against today's deck, and
+`vibrofeed run` against plain `liggghts -in` of the generated deck, side by side.
+
+    .venv/bin/python benchmarks/bench_feeders.py [--pairs 5] [--t-end 0.3]
+
+The feeder is the demo line (feeders/demo_line.toml, the parameters of `vibrofeed demo`),
+run for --t-end seconds of vibration on one rank. Each comparison runs its two commands in
+turn, A B A B ..., after one warm-up pair, as whole processes; it prints each command's
+median wall time and the median of the pairs' ratios A/B (a ratio pair by pair holds when
+the machine's speed drifts), as a Markdown table for BENCHMARKS.md:
+
+* described vs deck: `vibrofeed run feeders/demo_line.toml` against `vibrofeed run
+  bulk_feeder` with the demo's parameters (the same commands and values: the description
+  costs its reading and the deck's generation);
+* vibrofeed vs by hand: `vibrofeed run` of the generated deck against `liggghts -in` of it
+  on the geometry `vibrofeed prepare` wrote (a text dump every output_dt).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shlex
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "benchmarks"))
+from bench_foundation import machine  # noqa: E402
+
+VIBROFEED = [sys.executable, "-m", "vibrofeed.cli"]
+
+
+def wall(command: list[str], cwd: Path) -> float:
+    t0 = time.monotonic()
+    done = subprocess.run(command, cwd=cwd, capture_output=True, text=True)
+    seconds = time.monotonic() - t0
+    if done.returncode != 0:
+        sys.exit(f"{shlex.join(command)} failed ({done.returncode}):\n{done.stderr[-3000:]}")
+    return seconds
+
+
+def paired(a: list[str], b: list[str], pairs: int, cwd: Path) -> tuple[float, float, float, float, float]:
+    """(median A s, median B s, median A/B, min A/B, max A/B) over ``pairs`` alternated pairs
+    after a warm-up pair."""
+    wall(a, cwd), wall(b, cwd)
+    ta, tb = [], []
+    for _ in range(pairs):
+        ta.append(wall(a, cwd))
+        tb.append(wall(b, cwd))
+    ratios = [x / y for x, y in zip(ta, tb)]
+    return (statistics.median(ta), statistics.median(tb), statistics.median(ratios), min(ratios),
+            max(ratios))
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--pairs", type=int, default=5)
+    ap.add_argument("--t-end", type=float, default=0.3)
+    args = ap.parse_args()
+    sys.path.insert(0, str(ROOT))
+    from vibrofeed.cli.demo import CASES
+
+    os.environ.setdefault("OMPI_ALLOW_RUN_AS_ROOT", "1")
+    os.environ.setdefault("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+    _, deck, given = CASES["line"]
+    t_end = f"t_end={args.t_end:g}"
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        os.environ["XDG_CACHE_HOME"] = str(tmp / "cache")
+        described = VIBROFEED + ["run", str(ROOT / "feeders" / "demo_line.toml"), "-q", "-o", "a.h5",
+                                 "-p", t_end]
+        by_deck = VIBROFEED + ["run", deck, "-q", "-o", "b.h5", "-p", t_end]
+        for name, value in given.items():
+            if name != "t_end":
+                by_deck += ["-p", f"{name}={value}"]
+        rows = [("`vibrofeed run feeders/demo_line.toml` / `vibrofeed run bulk_feeder -p ...`",
+                 paired(described, by_deck, args.pairs, tmp))]
+        line = subprocess.run(VIBROFEED + ["prepare", str(ROOT / "feeders" / "demo_line.toml"), "-o",
+                                           str(tmp / "prep"), "-p", t_end],
+                              check=True, capture_output=True, text=True).stdout.strip().splitlines()[-1]
+        generated = shlex.split(line)[2]
+        hand = shlex.split(line) + ["-log", "none", "-nocite", "-var", "dump_file", str(tmp / "d.dump")]
+        driver = VIBROFEED + ["run", generated, "-q", "-o", "c.h5", "-p", t_end]
+        rows.append(("`vibrofeed run` / `liggghts -in` of the generated deck", paired(driver, hand, args.pairs,
+                                                                                   tmp / "prep")))
+    print(f"Machine: {machine()}; the demo line, {args.t_end:g} s of vibration, 1 rank, "
+          f"{args.pairs} alternated pairs after a warm-up pair\n")
+    print("| A / B | A (median) | B (median) | A/B median (min .. max) |")
+    print("|---|---|---|---|")
+    for what, (a, b, r, lo, hi) in rows:
+        print(f"| {what} | {a:.2f} s | {b:.2f} s | {r:.3f} ({lo:.3f} .. {hi:.3f}) |")
+
+
+if __name__ == "__main__":
+    main()
