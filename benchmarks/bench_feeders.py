@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import resource
 import shlex
 import statistics
 import subprocess
@@ -35,26 +36,32 @@ from bench_foundation import machine  # noqa: E402
 VIBROFEED = [sys.executable, "-m", "vibrofeed.cli"]
 
 
-def wall(command: list[str], cwd: Path) -> float:
+def timed(command: list[str], cwd: Path) -> tuple[float, float]:
+    """(wall s, CPU s: user + system of the process and every child it waited for)."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.monotonic()
     done = subprocess.run(command, cwd=cwd, capture_output=True, text=True)
     seconds = time.monotonic() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if done.returncode != 0:
         sys.exit(f"{shlex.join(command)} failed ({done.returncode}):\n{done.stderr[-3000:]}")
-    return seconds
+    return seconds, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
 
-def paired(a: list[str], b: list[str], pairs: int, cwd: Path) -> tuple[float, float, float, float, float]:
-    """(median A s, median B s, median A/B, min A/B, max A/B) over ``pairs`` alternated pairs
-    after a warm-up pair."""
-    wall(a, cwd), wall(b, cwd)
+def paired(a: list[str], b: list[str], pairs: int, cwd: Path) -> dict:
+    """Medians of A's and B's wall and CPU seconds and of the pairs' ratios A/B (with their
+    least and most) over ``pairs`` alternated pairs after a warm-up pair."""
+    timed(a, cwd), timed(b, cwd)
     ta, tb = [], []
     for _ in range(pairs):
-        ta.append(wall(a, cwd))
-        tb.append(wall(b, cwd))
-    ratios = [x / y for x, y in zip(ta, tb)]
-    return (statistics.median(ta), statistics.median(tb), statistics.median(ratios), min(ratios),
-            max(ratios))
+        ta.append(timed(a, cwd))
+        tb.append(timed(b, cwd))
+    out = {}
+    for i, what in enumerate(("wall", "cpu")):
+        ratios = [x[i] / y[i] for x, y in zip(ta, tb)]
+        out[what] = (statistics.median(x[i] for x in ta), statistics.median(y[i] for y in tb),
+                     statistics.median(ratios), min(ratios), max(ratios))
+    return out
 
 
 def main() -> None:
@@ -84,16 +91,18 @@ def main() -> None:
                                            str(tmp / "prep"), "-p", t_end],
                               check=True, capture_output=True, text=True).stdout.strip().splitlines()[-1]
         generated = shlex.split(line)[2]
-        hand = shlex.split(line) + ["-log", "none", "-nocite", "-var", "dump_file", str(tmp / "d.dump")]
+        hand = shlex.split(line) + ["-log", "none", "-nocite", "-var", "dump_file",
+                                    str(tmp / "d.dump")]
         driver = VIBROFEED + ["run", generated, "-q", "-o", "c.h5", "-p", t_end]
-        rows.append(("`vibrofeed run` / `liggghts -in` of the generated deck", paired(driver, hand, args.pairs,
-                                                                                   tmp / "prep")))
+        rows.append(("`vibrofeed run` / `liggghts -in` of the generated deck",
+                     paired(driver, hand, args.pairs, tmp / "prep")))
     print(f"Machine: {machine()}; the demo line, {args.t_end:g} s of vibration, 1 rank, "
           f"{args.pairs} alternated pairs after a warm-up pair\n")
-    print("| A / B | A (median) | B (median) | A/B median (min .. max) |")
-    print("|---|---|---|---|")
-    for what, (a, b, r, lo, hi) in rows:
-        print(f"| {what} | {a:.2f} s | {b:.2f} s | {r:.3f} ({lo:.3f} .. {hi:.3f}) |")
+    print("| A / B | time | A (median) | B (median) | A/B median (min .. max) |")
+    print("|---|---|---|---|---|")
+    for what, figures in rows:
+        for kind, (a, b, r, lo, hi) in figures.items():
+            print(f"| {what} | {kind} | {a:.2f} s | {b:.2f} s | {r:.3f} ({lo:.3f} .. {hi:.3f}) |")
 
 
 if __name__ == "__main__":
