@@ -29,6 +29,7 @@ import math
 
 import numpy as np
 
+from ..feeders.feeder import section_index
 from ..results import layout as L
 from .path import BLOCK_VALUES, along, feeder_of
 
@@ -58,15 +59,6 @@ def section_bounds(parameters, edge: float) -> list[tuple[float, float]]:
     feeder = feeder_of(parameters)
     bounds = feeder.bounds if feeder is not None else [(0.0, edge)]
     return bounds[:-1] + [(bounds[-1][0], edge)]
-
-
-def section_index(track_x, joints, edge: float) -> np.ndarray:
-    """Which section (0-based) a part at ``track_x`` is over; -1 beyond the outlet edge
-    (falling) or for NaN (no part)."""
-    x = np.asarray(track_x, dtype=float)
-    which = np.searchsorted(np.asarray(joints, dtype=float), x, side="right")
-    off = ~(x <= edge) if math.isfinite(edge) else np.isnan(x)
-    return np.where(off, -1, which)
 
 
 def _left_at(ids, gone_ids, gone_times) -> np.ndarray:

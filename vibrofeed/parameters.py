@@ -331,13 +331,14 @@ def _check_relations(p: Mapping[str, float]) -> None:
 def _check_feeder(p: Mapping[str, float]) -> None:
     """A line's sections and joints, and its rejects' return (vibrofeed.feeders: the rules
     live there, the deck repeats none of them)."""
+    if "part_size" in p and "track_width" in p and "bowl_diameter" not in p:
+        Feeder.from_values(p).check()  # (recirculate and return_delay among its checks)
+        return
     recirculate = p.get("recirculate", 0.0)
     if recirculate not in (0, 1):
         raise ParameterError(f"recirculate={recirculate:g} must be 0 (rejects removed) or 1 "
                              "(returned to the inlet)")
-    if "part_size" in p and "track_width" in p and "bowl_diameter" not in p:
-        Feeder.from_values(p).check()
-    elif p.get("return_delay", 0.0) < 0:
+    if p.get("return_delay", 0.0) < 0:
         raise ParameterError(f"return_delay={p['return_delay']:g} s must be >= 0")
 
 

@@ -54,6 +54,7 @@ class Chute:
     """Element ``number`` (>= 2): a declining chute (module docstring)."""
 
     kind = "chute"
+    moves = False  # (it stands still: its recorded motion is zero)
     number: int
     x0: float
     length: float
@@ -108,8 +109,8 @@ class Chute:
         return self.level + self.drop
 
     @property
-    def catch_floor(self) -> float:
-        """The floor's lowest point (its end, at the reference wall) [m]."""
+    def lowest(self) -> float:
+        """The floor's lowest point at rest (its end, at the reference wall) [m]."""
         return float(self.floor_z(self.x1, -self.width / 2))
 
     @property

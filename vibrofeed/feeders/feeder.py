@@ -15,6 +15,7 @@ the outlet edge is (:attr:`Feeder.path_end`), which section a part is over
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 
@@ -80,7 +81,7 @@ class Feeder:
             numbers = {k: number(values, k) for k in values if _is_number(values[k])}
             return cls(part, (BowlElement(bowl_from(numbers)),), bool(recirculate), values)
         n = number(values, "sections", 1.0)
-        if n != int(n) or not 1 <= n <= MAX_SECTIONS:
+        if not (1 <= n <= MAX_SECTIONS and n == int(n)):  # (NaN fails the first test)
             raise ParameterError(f"sections={n:g} must be a whole number from 1 to {MAX_SECTIONS}")
         elements, x0, level = [], 0.0, 0.0
         for k in range(1, int(n) + 1):
@@ -124,9 +125,7 @@ class Feeder:
     def section_at(self, s) -> np.ndarray:
         """Which section (0-based) a part at path coordinate ``s`` is over; -1 beyond the
         outlet edge (falling) or for NaN (no part)."""
-        s = np.asarray(s, dtype=float)
-        which = np.searchsorted(np.asarray(self.joint_positions, dtype=float), s, side="right")
-        return np.where(s <= self.path_end, which, -1)
+        return section_index(s, self.joint_positions, self.path_end)
 
     @property
     def is_line(self) -> bool:
@@ -175,6 +174,10 @@ class Feeder:
         as the prepare hook appends them to the first section's."""
         return [e.mesh() for e in self.elements[1:] if not isinstance(e, BowlElement)]
 
+    def moves(self, k: int) -> bool:
+        """Whether section ``k`` (1-based) is driven (a chute stands still)."""
+        return self.line_elements[k - 1].moves
+
     def section_values(self, k: int) -> dict | None:
         """The parameters with section ``k``'s drive (1-based) as the deck's ``freq``,
         ``amp_t``, ``amp_n``, ``phase`` and ``waveform``: what a model of one part alone on
@@ -214,6 +217,16 @@ class Feeder:
         if self.elements[0].drive.waveform != 0:
             raise ParameterError("a line (sections >= 2) drives its sections with sines (waveform=0) "
                                  "in this version")
+
+
+def section_index(s, joints, edge: float) -> np.ndarray:
+    """Which section (0-based) a part at path coordinate ``s`` is over, the sections handing
+    over at ``joints``; -1 beyond the outlet ``edge`` (falling) or for NaN (no part); with an
+    infinite edge nothing is beyond it."""
+    s = np.asarray(s, dtype=float)
+    which = np.searchsorted(np.asarray(joints, dtype=float), s, side="right")
+    off = ~(s <= edge) if math.isfinite(edge) else np.isnan(s)
+    return np.where(off, -1, which)
 
 
 def _is_number(value) -> bool:

@@ -22,11 +22,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 from ..errors import ParameterError
-from ..line import Section, section_mesh
+from ..line import WIPER_LENGTH, Section, section_mesh
 from .records import Drive, Gate, Part, SideDrop, Wiper, number
-
-# The wiper's bar along the track, in part sizes (vibrofeed.line's WIPER_LENGTH).
-WIPER_LENGTH = 1.0
 
 # description key (table, key) -> (section 1's deck name, later sections' suffix); None:
 # that section has no such number (a gate on section 1 only, a step, side drop and wiper
@@ -73,6 +70,7 @@ class LinearSection:
     """Section ``number`` (1-based) of a line (module docstring)."""
 
     kind = "linear"
+    moves = True  # (driven: its motion is recorded and checked against its sine)
     number: int
     x0: float
     length: float
@@ -147,11 +145,6 @@ class LinearSection:
     def exit_level(self) -> float:
         """How far below the first section's floor this one ends, at its high edge [m]."""
         return self.level
-
-    @property
-    def catch_floor(self) -> float:
-        """The floor's lowest point at rest anywhere on it [m] (the catch plane lies below)."""
-        return self.lowest
 
     @property
     def bounds(self) -> list[tuple[float, float]]:

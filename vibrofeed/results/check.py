@@ -9,7 +9,8 @@ from dataclasses import dataclass
 import h5py
 import numpy as np
 
-from ..feeders.chute import KIND_CODE as CHUTE
+from ..errors import ParameterError
+from ..feeders.feeder import Feeder
 from ..models.constants import G
 from . import layout as L
 from .reader import _text
@@ -537,12 +538,17 @@ class _Physics:
             return
         step, time = step[()], time[()]
         dt = self.time_step(step, time)
+        try:  # the feeder the parameters describe, to ask which sections are driven
+            feeder = Feeder.from_values(self.p)
+        except (ParameterError, KeyError):
+            feeder = None  # (not a feeder's vocabulary: every section is taken as driven)
         for k in range(2, self.c.sections + 1):
             motion = [self.f.get(f"{L.surface_path(k)}/{e}/value") for e in ("position", "velocity")]
             if any(not isinstance(m, h5py.Dataset) or m.shape != (len(step), 3) for m in motion):
                 continue  # missing or misshapen: reported with the layout
             where = L.surface_path(k)
-            if self.p.get(f"s{k}_kind") == CHUTE:  # an undriven chute (vibrofeed.feeders.chute): still
+            if feeder is not None and k <= len(feeder.line_elements) and not feeder.moves(k):
+                # an undriven element (a chute) stands still
                 zero = np.zeros((len(step), 3))
                 for element, got in zip(("position", "velocity"), motion):
                     self.against_drive(f"{where}/{element}/value", f"section {k}'s {element} (a chute, "

@@ -38,7 +38,7 @@ def test_the_chute_descends_from_its_step_by_its_slope():
     assert c.exit_z(6e-4) == pytest.approx(-8e-5 - 3e-3 * TAN[5], rel=1e-12)
     assert c.exit_level == pytest.approx(8e-5 + 3e-3 * TAN[5], rel=1e-12)
     # its lowest point: the end, at the reference wall, 1.2 mm tan 10 lower again
-    assert c.catch_floor == pytest.approx(-8e-5 - 3e-3 * TAN[5] - 1.2e-3 * TAN[10], rel=1e-12)
+    assert c.lowest == pytest.approx(-8e-5 - 3e-3 * TAN[5] - 1.2e-3 * TAN[10], rel=1e-12)
 
 
 def test_a_section_after_the_chute_starts_below_its_end():
