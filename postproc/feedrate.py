@@ -112,7 +112,6 @@ from .path import (  # noqa: F401  (outlet_x: imported from here)
     bowl_of,
     falls,
     feeder_of,
-    is_bowl,
     outlet_x,
     path_end,
 )
@@ -326,12 +325,13 @@ def dilute_limit(parameters) -> tuple[float | None, str]:
     missing = [name for name in MODEL_NEEDS if name not in parameters]
     if missing:
         return None, f"the result lacks {', '.join(missing)}"
-    if is_bowl(parameters):  # the bowl's drive as the helix's centre line sees it
+    b = bowl_of(parameters)
+    if b is not None:  # the bowl's drive as the helix's centre line sees it
         from ..bowl import track_drive
 
         drive = track_drive(float(parameters["amp_t"]), float(parameters["amp_n"]),
                             float(parameters["phase"]), float(parameters["freq"]),
-                            float(parameters["helix_angle"]), bowl_of(parameters).r_mid)
+                            float(parameters["helix_angle"]), b.r_mid)
         parameters = {**parameters, "amp_t": drive.amp_t, "amp_n": drive.amp_n,
                       "phase": drive.phase, "incline": drive.incline}
     try:
@@ -555,7 +555,8 @@ class FeedRate(AnalysisBase):
         ev = outlet_events(result, t_lo, t_hi)
         times = ev["time"]
         r.event_times, r.n_events = times, len(times)
-        if is_bowl(result.parameters):  # parts the track lost back into the bowl (the bed's rejects)
+        bowl = bowl_of(result.parameters)
+        if bowl is not None:  # parts the track lost back into the bowl (the bed's rejects)
             r.fell_times, _, r.fell_where = falls(result, frames)
         fed = is_fed(result.parameters)
         t_a, t_b, width, counts = steady_window(times, t_lo, t_hi, freq, self.start, self.end, fed)
@@ -582,7 +583,7 @@ class FeedRate(AnalysisBase):
             r.mass_per_s, r.mass_per_s_err = batch_rate(times, r.event_mass, t_a, t_b, freq,
                                                         self.batches)
         self._velocities(frames, t_a, t_b)
-        if is_bowl(result.parameters):  # the falls in the window
+        if bowl is not None:  # the falls in the window
             fell_times = r.fell_times
             n, span = int(((fell_times >= t_a) & (fell_times < t_b)).sum()), t_b - t_a
             r.fell = n
@@ -596,7 +597,7 @@ class FeedRate(AnalysisBase):
             r.model_velocity, r.model_note = dilute_limit(result.parameters)
             r.velocity_ratio = velocity_ratio(r.mean_velocity, r.model_velocity)
             for k, sec in enumerate(r.get("sections") or (), 1):  # each section's own drive
-                if is_bowl(result.parameters):  # the helix's dilute limit; the chute's own model
+                if bowl is not None and k <= 2:  # the helix's dilute limit; the chute's own model
                     sec["model_speed"], sec["model_note"] = ((r.model_velocity, r.model_note) if k == 1
                                                              else chute_model(result.parameters))
                 else:
@@ -683,8 +684,8 @@ class FeedRate(AnalysisBase):
         r.profile_edges, r.profile_x, r.profile_count = edges, 0.5 * (edges[1:] + edges[:-1]), count
         r.profile_velocity_err = profile_error(which, v, interval, self.bins, self.batches)
         # a bowl's profile is also one in height: each bin's centre-line floor height
-        r.profile_height = (bowl_of(self.result.parameters).height_at(r.profile_x)
-                            if is_bowl(self.result.parameters) else None)
+        feeder = feeder_of(self.result.parameters)
+        r.profile_height = feeder.height_at(r.profile_x) if feeder is not None else None
 
     def _mass_balance(self, frames: np.ndarray) -> None:
         balance = self.result.mass_balance
@@ -703,11 +704,9 @@ class FeedRate(AnalysisBase):
         r, result = self.results, self.result
         edge = path_end(result)
         bounds = section_bounds(result.parameters, edge)
-        bowl = is_bowl(result.parameters)
-        # a bowl's rejects are the parts fallen off its helix (its chute is walled), where they
-        # left it along the path
-        rejects = ({"time": r.fell_times, "section": np.ones(len(r.fell_times), dtype=np.int64),
-                    "where": r.fell_where} if bowl else result.rejects)
+        feeder = feeder_of(result.parameters)
+        bowl = feeder is not None and feeder.bowl is not None
+        rejects = self._rejects(feeder)
         crossings, counts = self._bed_pass(frames)
         inside = (self.times >= t_a - 1e-12) & (self.times <= t_b + 1e-12)
         window, window_t = frames[inside], self.times[inside]
@@ -739,14 +738,32 @@ class FeedRate(AnalysisBase):
                  "joint_crossings": crossings}
         r.bed_trends = trends
         r.unsteady = unsteady(trends)
-        if is_line(result.parameters):
-            r.sections = sections
-            r.rejects_by_tooling = self._rejects_by_tooling(rejects, span)
-        elif bowl:
-            for sec, name in zip(sections, BOWL_SECTIONS):
+        if bowl:  # named: the helix, the chute, then its exit line's elements
+            names = BOWL_SECTIONS + tuple(f"element {e.number}" for e in feeder.elements[1:])
+            for sec, name in zip(sections, names):
                 sec["name"] = name
+        if bowl or is_line(result.parameters):
             r.sections = sections
             r.rejects_by_tooling = self._rejects_by_tooling(rejects, span)
+
+    def _rejects(self, feeder) -> dict:
+        """Every reject: ``time``, ``section`` (1-based, along the path) and ``where`` (its path
+        coordinate [m]): a bowl's falls back into it, where they left its track, and the parts
+        a line (or a bowl's exit line) lost over a side, where they crossed the catch plane
+        (empty for a single track)."""
+        r, line = self.results, self.result.rejects
+        shift = feeder.path_shift if feeder is not None else 0.0
+        time = [np.asarray(line["time"], dtype=float)]
+        section = [np.asarray(line["section"], dtype=np.int64)]
+        where = [np.asarray(line["position"][:, self.axis], dtype=float) + shift]
+        if feeder is not None and feeder.bowl is not None:
+            fell = np.asarray(r.fell_where, dtype=float)
+            time.append(np.asarray(r.fell_times, dtype=float))
+            section.append((feeder.section_at(fell) + 1).astype(np.int64))
+            where.append(fell)
+        time, section, where = np.concatenate(time), np.concatenate(section), np.concatenate(where)
+        order = np.argsort(time, kind="stable")
+        return {"time": time[order], "section": section[order], "where": where[order]}
 
     def _section(self, k: int, lo: float, hi: float, v, interval, window_t, n, flux: tuple,
                  rejects: dict, span: tuple) -> dict:
@@ -781,10 +798,7 @@ class FeedRate(AnalysisBase):
         t_lo, t_hi = float(self.times[0]), float(self.times[-1])
         run = (rejects["time"] > t_lo) & (rejects["time"] <= t_hi)
         stations = feeder_of(result.parameters).stations
-        if "where" in rejects:  # a bowl's falls, where they left the helix
-            which = tooling(rejects["where"], 1, stations, size)
-        else:
-            which = tooling(rejects["position"][:, self.axis], rejects["section"], stations, size)
+        which = tooling(rejects["where"], rejects["section"], stations, size)
         has = {kind: any(st.kind == kind for st in stations) for kind in ("side_drop", "wiper")}
         out = {}
         for k, name in enumerate(TOOLING):

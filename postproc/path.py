@@ -2,12 +2,12 @@
 
 A linear track (and a feeder line): x along the track in the track's frame, the part's x
 minus the surface's recorded displacement, from the back wall to the outlet edge
-(:func:`outlet_x`). A bowl (decks/bowl_feeder.liggghts; its parameters name a
-``bowl_diameter``): the arc length along the helical track's centre line from its start,
-then along the chute (:func:`vibrofeed.bowl.path_coordinate`), of the part's centre in the
-bowl's frame (the recorded lift and rotation undone); NaN for a part that is not on the
-track (in the pile on the bottom, falling). The outlet edge is then the path's end, the
-helix's length plus the chute's.
+(:func:`outlet_x`). A feeder that starts with a bowl (vibrofeed.feeders.Feeder.bowl): the
+arc length along the helical track's centre line from its start, then along the chute
+(:func:`vibrofeed.bowl.path_coordinate`), of the part's centre in the bowl's frame (the
+recorded lift and rotation undone), then on along its exit line, if it has one
+(:meth:`vibrofeed.feeders.Feeder.line_coordinate`); NaN for a part that is not on the
+track (in the pile on the bottom, falling). The outlet edge is then the path's end.
 
 :func:`along` gives both the coordinate and what a speed is measured on: a linear track's
 raw x (over whole periods the surface's displacement cancels), a bowl's path coordinate.
@@ -35,13 +35,10 @@ def feeder_of(parameters):
         return None
 
 
-def is_bowl(parameters) -> bool:
-    return "bowl_diameter" in parameters
-
-
 def bowl_of(parameters):
-    """A bowl result's geometry (vibrofeed.bowl.Bowl), as its feeder holds it."""
-    return feeder_of(parameters).elements[0].bowl
+    """The bowl (vibrofeed.bowl.Bowl) a result's feeder starts with, or None."""
+    feeder = feeder_of(parameters)
+    return feeder.bowl if feeder is not None else None
 
 
 def outlet_x(result) -> float:
@@ -55,8 +52,9 @@ def outlet_x(result) -> float:
 
 def path_end(result) -> float:
     """The outlet edge's coordinate along the path [m] (a linear track: :func:`outlet_x`)."""
-    if is_bowl(result.parameters):
-        return feeder_of(result.parameters).path_end
+    feeder = feeder_of(result.parameters)
+    if feeder is not None and feeder.bowl is not None:
+        return feeder.path_end
     return outlet_x(result)
 
 
@@ -68,7 +66,9 @@ def along(result, frames, axis: int = 0, position=None) -> tuple[np.ndarray, np.
     Frame's present ones), instead of every slot's read again."""
     if position is None:
         position = result.read("position", frames=frames)
-    if not is_bowl(result.parameters):
+    feeder = feeder_of(result.parameters)
+    b = feeder.bowl if feeder is not None else None
+    if b is None:
         x = position[..., axis]
         return x - result.read("surface_position", frames=frames)[:, axis][:, None], x
     from ..bowl import path_coordinate
@@ -79,7 +79,9 @@ def along(result, frames, axis: int = 0, position=None) -> tuple[np.ndarray, np.
     rest = np.stack([c * position[..., 0] - s * position[..., 1],
                      s * position[..., 0] + c * position[..., 1],
                      position[..., 2] - lift[:, 2][:, None]], axis=-1)
-    coordinate = path_coordinate(bowl_of(result.parameters), rest)
+    coordinate = path_coordinate(b, rest)
+    if feeder.is_line:  # its exit line, in its own frame at rest (its amplitudes are far below a part)
+        coordinate = np.where(np.isnan(coordinate), feeder.line_coordinate(position), coordinate)
     return coordinate, coordinate
 
 
@@ -91,11 +93,12 @@ def falls(result, frames) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     inside the bowl's wall (not leaving over the chute's end); its time is the later frame's.
     A part picked up again and falling again counts again. Empty for a linear track."""
     frames = np.asarray(frames, dtype=np.int64)
-    if not is_bowl(result.parameters) or len(frames) < 2:
+    b = bowl_of(result.parameters)
+    if b is None or len(frames) < 2:
         return np.empty(0), np.empty(0, dtype=np.int64), np.empty(0)
     from ..results import layout as L
 
-    radius = bowl_of(result.parameters).radius
+    radius = b.radius
     times, ids_out, where = [], [], []
     # (blocks overlap by one frame, so each consecutive pair is seen once)
     per_block = max(2, BLOCK_VALUES // max(4 * result.n_slots, 1))

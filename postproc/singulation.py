@@ -59,7 +59,7 @@ from .feedrate import (
     too_few_exits,
     values_at,
 )
-from .path import along, is_bowl, outlet_x, path_end
+from .path import along, feeder_of, outlet_x, path_end
 
 SUMMARY_KEYS = ("cv_interarrival", "doubles_rate", "singulated_fraction", "mean_gap", "cluster_sizes",
                 "n_arrivals", "n_doubles", "doubles_per_s", "mean_interarrival", "edge_velocity",
@@ -221,9 +221,9 @@ class Singulation(AnalysisBase):
             return radius, radius
         direction = np.zeros(3)
         direction[self.axis] = 1.0
-        if is_bowl(self.result.parameters):
-            a = math.radians(float(self.result.parameters["helix_angle"]))
-            direction = np.array([math.cos(a), 0.0, math.sin(a)])
+        feeder = feeder_of(self.result.parameters)
+        if feeder is not None and self.axis == 0:  # the last element's own direction
+            direction = feeder.exit_direction
         return along_extents(orientation, self.result.body_template, direction)
 
     def _mean_radius(self, event_radii: np.ndarray, frames: np.ndarray) -> float:

@@ -278,7 +278,7 @@ class Deck:
         from .feeders import description as fd
 
         described = fd.read(path)
-        template = read_text(decks_dir() / f"bulk_feeder{DECK_SUFFIX}")
+        template = read_text(decks_dir() / f"{described.template}{DECK_SUFFIX}")
         text = fd.deck_text(described, template, cls.parse_variables(template))
         deck_path = fd.write_deck(text, fd.slug(described.name), folder)
         deck = cls(deck_path, include_dir=decks_dir())

@@ -272,6 +272,14 @@ def prepare_bowl_feeder(values: Mapping[str, str], folder: str | Path) -> Prepar
     lines, template = _part_files(values, folder, "prepare_bowl_feeder", numbers["shape"],
                                   numbers["part_size"], numbers["part_thickness"])
     lines += write_bowl({k: str(v) for k, v in numbers.items()}, folder)
+    # an exit line (sections >= 2): its elements and joints checked, their meshes and the
+    # deck's line files written, a run by hand held to their values, as for a line
+    feeder = Feeder.from_values(values)
+    feeder.check()
+    lines += guard_lines(values, ["sections"] + [n for e in feeder.elements[1:] for n in e.deck_names()])
     (folder / "prepared.in").write_text("".join(lines))
-    return Prepared(variables={"mesh_dir": str(folder.resolve())}, track=bowl_mesh(bowl_from(numbers)),
-                    body_template=template)
+    track = bowl_mesh(bowl_from(numbers))
+    further = write_line_files(feeder, folder)
+    if further:
+        track = combined(track, *further)
+    return Prepared(variables={"mesh_dir": str(folder.resolve())}, track=track, body_template=template)

@@ -254,7 +254,7 @@ class BulkFrames:
         # feeders' vocabulary, run as a single track)
         self.feeder = Feeder.from_values(variables) if "part_size" in variables else None
         self.line = self.feeder is not None and self.feeder.is_line
-        self.outlet = (LineOutlet(*where, [b[0] for b in self.feeder.bounds]) if self.line
+        self.outlet = (LineOutlet(*where, self.feeder.catch_x) if self.line
                        else Outlet(*where))
         # recirculation (a line's rejects back to the inlet): the driver's, never by hand
         self.returns = None

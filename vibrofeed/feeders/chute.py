@@ -98,6 +98,16 @@ class Chute:
         return (-self.level - (np.asarray(x, dtype=float) - self.x0) * math.tan(math.radians(self.slope))
                 - (self.width / 2 - np.asarray(y, dtype=float)) * math.tan(math.radians(self.cross_tilt)))
 
+    @property
+    def exit_direction(self) -> tuple[float, float, float]:
+        """+x, descending at its slope."""
+        a = math.radians(self.slope)
+        return math.cos(a), 0.0, -math.sin(a)
+
+    def floor_at(self, x, y):
+        """The floor's height at rest over (``x``, ``y``) [m]."""
+        return self.floor_z(x, y)
+
     def entry_z(self, y):
         return self.floor_z(self.x0, y)
 

@@ -1,11 +1,14 @@
-"""What a line's deck is given for one run: its further sections as LIGGGHTS commands.
+"""What a feeder's deck is given for one run: its further elements as LIGGGHTS commands.
 
 decks/bulk_feeder.liggghts runs one section, or a line of any number of them: at four
 places it includes a file written for the run (``${mesh_dir}/line_*.in``) that declares
 sections 2 ... n. For a single track the files hold no command (its run is exactly the
-single track's). Section k's numbers are the deck's ``s<k>_*`` tunables, so each file is
-an ordinary piece of a deck a user can read; for two sections the commands are, to the
-character, those the deck held for its section 2 before lines of more sections existed.
+single track's). decks/bowl_feeder.liggghts includes the same four: a bowl's exit line
+(elements 2 ... n after the bowl, in the frame at its chute's end, :data:`FIRST`); a bowl
+alone gets the wall contact only, the command its deck held. Section k's numbers are the
+deck's ``s<k>_*`` tunables, so each file is an ordinary piece of a deck a user can read; for
+two sections the commands are, to the character, those the deck held for its section 2
+before lines of more sections existed.
 
 * ``line_derived.in``: each section's angular frequency, phase, lowest floor, peak speed
   and catch plane; the deck's ``v_peak`` (the fastest surface: the contact speed and dt),
@@ -43,22 +46,40 @@ def _min(a: str, b: str) -> str:
     return f"({a}+{b}-abs({a}-{b}))/2"
 
 
+# What the deck calls the first element's: its mesh, its peak surface speed and its catch plane
+# (LIGGGHTS has no max()/min(): the line files combine them pairwise), where the further
+# elements start along x, and where the rejects' catch face lies (x y). A bowl's are its
+# deck's own, taken by value ($()) because line_derived.in redefines v_peak and catch_z; its
+# further elements' catch planes are in the exit line's frame, whose floor lies above the
+# bowl's bottom (BowlElement.line_origin): below their floors in the deck's frame too.
+FIRST = {
+    "linear": {"mesh": "track", "peak": "v_omega*sqrt(v_amp_t^2+v_amp_n^2)",
+               "catch": "-(v_amp_n+2*v_r_ext)-v_track_width*tan(v_cross_tilt*PI/180)",
+               "start": "v_track_length", "at": "${track_length} 0"},
+    "bowl": {"mesh": "bowl", "peak": "$(v_v_peak)", "catch": "$(v_catch_z)",
+             "start": "v_bowl_outlet_x", "at": "${bowl_outlet_x} $(-v_bowl_r_mid)"},
+}
+
+
 def line_files(feeder: Feeder) -> dict[str, str]:
     """The four files (module docstring) for ``feeder``, a line of n >= 1 sections; each
     further element gives its own commands (its ``deck_commands``)."""
     elements = feeder.elements
     n = len(elements)
-    head = f"# written by vibrofeed.feeders.deck for one run: a line of {n} section(s)\n"
+    first = FIRST[elements[0].kind]
+    what = f"a bowl and {n - 1} element(s) after it" if elements[0].kind == "bowl" else \
+        f"a line of {n} section(s)"
+    head = f"# written by vibrofeed.feeders.deck for one run: {what}\n"
     out = {name: head for name in FILES}
     if n == 1:
-        out["line_meshes.in"] += _WALLS % (1, "track")
+        out["line_meshes.in"] += _WALLS % (1, first["mesh"])
         return out
     further = elements[1:]
     pieces = [e.deck_commands() for e in further]
     d = [line for p in pieces for line in p["derived"]]
-    d += ["variable s1_peak equal v_omega*sqrt(v_amp_t^2+v_amp_n^2)"]
+    d += [f"variable s1_peak equal {first['peak']}"]
     d += [line for p in pieces for line in p["peak"]]
-    d += ["variable s1_catch equal -(v_amp_n+2*v_r_ext)-v_track_width*tan(v_cross_tilt*PI/180)"]
+    d += [f"variable s1_catch equal {first['catch']}"]
     d += [line for p in pieces for line in p["catch"]]
     # the fastest and the lowest over the sections, pairwise (LIGGGHTS has no max())
     peak, catch = "v_s1_peak", "v_s1_catch"
@@ -67,7 +88,7 @@ def line_files(feeder: Feeder) -> dict[str, str]:
         d += [f"variable peak_1_{k} equal {_max(peak, f'v_s{k}_peak')}",
               f"variable catch_1_{k} equal {_min(catch, f'v_s{k}_catch')}"]
         peak, catch = f"v_peak_1_{k}", f"v_catch_1_{k}"
-    lengths = "+".join(["v_track_length"] + [f"v_s{e.number}_length" for e in further])
+    lengths = "+".join([first["start"]] + [f"v_s{e.number}_length" for e in further])
     d += ["variable v_peak delete", f"variable v_peak equal {_max(peak, f'v_s{n}_peak')}",
           "variable outlet_x delete", f"variable outlet_x equal {lengths}",
           "variable catch_z delete", f"variable catch_z equal {_min(catch, f'v_s{n}_catch')}"]
@@ -75,13 +96,13 @@ def line_files(feeder: Feeder) -> dict[str, str]:
 
     m = [line for p in pieces for line in p["mesh"]]
     out["line_meshes.in"] += "\n".join(m) + "\n" + _WALLS % (
-        n, " ".join(["track"] + [f"track_s{e.number}" for e in further]))
+        n, " ".join([first["mesh"]] + [f"track_s{e.number}" for e in further]))
 
     scale = "${s2_length}" if n == 2 else "$(" + "+".join(f"v_s{e.number}_length" for e in further) + ")"
     out["line_catch.in"] += (
         'if "${driver} == 0" then &\n'
         f'  "fix reject_catch all mesh/surface file ${{mesh_dir}}/catch.stl type 2 scale {scale} &\n'
-        '     move ${track_length} 0 ${catch_z}" &\n'
+        f'     move {first["at"]} ${{catch_z}}" &\n'
         '  "fix rejects all massflow/mesh mesh reject_catch vec_side 0 0 -1 count once file '
         'rejects.txt writeTime"\n')
     out["line_motion.in"] += "\n".join(line for p in pieces for line in p["motion"]) + "\n"

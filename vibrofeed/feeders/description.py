@@ -6,9 +6,10 @@ below (an unknown or misspelled key is a one-line error naming its table and the
 was probably meant to be), and its numbers become the deck's parameters
 (:attr:`Description.values`). Each number also has a dotted name (``element.3.drive.amp_n``,
 ``parts.size``: :attr:`Description.aliases`) that ``-p``, sweeps and studies take beside the
-deck's own name (``s3_amp_n``). :func:`deck_text` writes the deck that runs it:
-decks/bulk_feeder.liggghts with the description's numbers as its defaults and every
-further section's tunables declared, so that ``liggghts -in`` runs it as it runs the
+deck's own name (``s3_amp_n``). :func:`deck_text` writes the deck that runs it: the
+project deck of its first element (decks/bulk_feeder.liggghts for a linear section,
+decks/bowl_feeder.liggghts for a bowl) with the description's numbers as its defaults and
+every further element's tunables declared, so that ``liggghts -in`` runs it as it runs the
 project's decks.
 """
 
@@ -24,20 +25,24 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import ParameterError
-from . import chute
+from . import bowl, chute
 from .linear import KEYS, MAX_SECTIONS, deck_names
 from .records import shape_code
 
 
 def _kind_keys(kind: str, k: int) -> tuple[dict, dict]:
     """(every key the kind knows, the keys element ``k`` of that kind takes -> deck name)."""
+    if kind == "bowl":
+        return bowl.KEYS, (dict(bowl.KEYS) if k == 1 else {})
     if kind == "chute":
         known = {(key,): None for key in chute.KEYS}
         return known, ({} if k == 1 else {(key,): chute.deck_name(k, key) for key in chute.KEYS})
     return KEYS, deck_names(k)
 
 SUFFIX = ".toml"
-ELEMENT_KINDS = ("linear", "chute")
+ELEMENT_KINDS = ("bowl", "linear", "chute")
+# The deck a description becomes: the project deck its first element's kind runs on.
+TEMPLATES = {"linear": "bulk_feeder", "bowl": "bowl_feeder"}
 # table -> {key: deck name}; the element's keys are vibrofeed.feeders.linear.KEYS
 TABLES: dict[str, dict[str, str]] = {
     "feeder": {"incline": "incline"},
@@ -49,7 +54,7 @@ TABLES: dict[str, dict[str, str]] = {
               "hamaker": "hamaker", "roughness": "roughness", "air_viscosity": "air_viscosity"},
     "surface": {"youngs": "youngs_track", "poisson": "poisson_track"},
     "supply": {k: k for k in ("n_parts", "fill_from", "fill_to", "inlet_rate", "inlet_batch",
-                              "recirculate", "return_delay")},
+                              "recirculate", "return_delay", "n_track")},
     "run": {k: k for k in ("t_end", "t_settle", "output_dt", "dt", "dt_unchecked", "seed")},
 }
 TEXT_KEYS = {"feeder": ("name", "description")}  # words, not numbers
@@ -70,6 +75,11 @@ class Description:
     text: str
     sections: int
     kinds: list[str] = field(default_factory=list)
+
+    @property
+    def template(self) -> str:
+        """The project deck the description's deck is made from (its first element's kind)."""
+        return TEMPLATES[self.kinds[0]]
     values: dict[str, str] = field(default_factory=dict)
     aliases: dict[str, str] = field(default_factory=dict)
     source: str = ""
@@ -161,10 +171,13 @@ def _element(path: Path, k: int, element: dict) -> dict[str, str]:
     kind = element.get("kind")
     if kind not in ELEMENT_KINDS:
         raise _fail(path, f"{where}: kind = {kind!r}: this version builds "
-                          f"{' and '.join(ELEMENT_KINDS)} elements")
-    if k == 1 and kind != "linear":
-        raise _fail(path, f"{where}: kind = {kind!r}: the first element is a linear section (the "
-                          "supply falls onto it)")
+                          f"{', '.join(ELEMENT_KINDS[:-1])} and {ELEMENT_KINDS[-1]} elements")
+    if k == 1 and kind not in TEMPLATES:
+        raise _fail(path, f"{where}: kind = {kind!r}: the first element is a linear section or a "
+                          "bowl (the supply falls onto it)")
+    if k > 1 and kind == "bowl":
+        raise _fail(path, f"{where}: kind = 'bowl': a bowl is the first element (the supply's "
+                          "store); elements after it are its exit line")
     known, names = _kind_keys(kind, k)
     singles = [key[0] for key in known if len(key) == 1]
     tables = sorted({key[0] for key in known if len(key) == 2})
@@ -189,7 +202,7 @@ def _element(path: Path, k: int, element: dict) -> dict[str, str]:
         if (key,) not in names:
             raise _fail(path, f"{where}: {key}: {_not_here(k, (key,))}")
         out[names[(key,)]] = _value(path, f"element.{k}.{key}", value)
-    needed = ("length", "width", "slope") if kind == "chute" else ("length", "width")
+    needed = {"chute": ("length", "width", "slope"), "bowl": bowl.NEEDED}.get(kind, ("length", "width"))
     for key in needed:
         if (key,) not in set(_given(element)):
             raise _fail(path, f"{where} has no {key}: every {kind} element states its own")
@@ -221,7 +234,8 @@ def _declaration(name: str, value: str, unit: str, text: str) -> str:
 
 
 def deck_text(description: Description, template: str, variables: dict) -> str:
-    """The deck that runs ``description``: ``template`` (decks/bulk_feeder.liggghts, whose
+    """The deck that runs ``description``: ``template`` (the project deck of its first element,
+    :attr:`Description.template`: decks/bulk_feeder.liggghts or bowl_feeder.liggghts, whose
     tunables are ``variables``: vibrofeed.decks.Variable by name) with a header of its own,
     the description's numbers as the tunables' defaults and each further section's tunables
     (section 2's, numbered) declared."""
@@ -229,18 +243,26 @@ def deck_text(description: Description, template: str, variables: dict) -> str:
     try:
         _, _, c = lines.index(_TUNABLES), lines.index(_LINE), lines.index(_REFUSALS)
     except ValueError:
-        raise ParameterError("decks/bulk_feeder.liggghts lacks the block markers a feeder "
+        raise ParameterError(f"decks/{description.template}.liggghts lacks the block markers a feeder "
                              "description's deck is made from") from None
     values = description.values
     n = description.sections
+    further = re.compile(r"^s(\d+)_")
+    # a number the template has no tunable for (a bowl's inlet) would be dropped silently
+    by_name = {name: dotted for dotted, name in description.aliases.items()}
+    for name in values:
+        if name not in variables and name != "sections" and not further.match(name):
+            raise _fail(description.path, f"{by_name.get(name, name)}: a feeder whose first element "
+                                          f"is a {description.kinds[0]} has no such number "
+                                          f"({description.template} does not declare {name})")
     out = [_TUNABLES]
     for v in variables.values():
         if re.match(r"^s2_", v.name) or v.name == "sections":
             continue
         out.append(_declaration(v.name, values.get(v.name, v.default), v.unit, v.description))
-    out += ["", _LINE, f"# {n} linear section(s) (the description's elements, in conveying order);",
-            "# section 1's numbers are the tunables above, section k's the s<k>_* below.",
-            _declaration("sections", str(n), "-", "linear sections of the line")]
+    out += ["", _LINE, f"# {n} element(s) (the description's, in conveying order); element 1's",
+            "# numbers are the tunables above, element k's the s<k>_* below.",
+            _declaration("sections", str(n), "-", "elements of the feeder")]
     seconds = [v for v in variables.values() if v.name.startswith("s2_")]
     for k in range(2, n + 1):
         if description.kinds[k - 1] == "chute":
@@ -257,19 +279,21 @@ def deck_text(description: Description, template: str, variables: dict) -> str:
                 "section 1's exit", f"section {k - 1}'s exit")
             out.append(_declaration(name, values.get(name, v.default), v.unit, text))
     body = lines[c:]
-    header = _header(description, n)
+    header = _header(description, n, template)
     return "\n".join(header + [""] + out + [""] + body) + "\n"
 
 
-def _header(description: Description, n: int) -> list[str]:
-    said = " ".join(description.text.split()) or f"A feeder line of {n} linear section(s)."
-    return [f"# vibrofeed deck: {description.name}",
-            "# vibrofeed prepare: vibrofeed.geometry:prepare_bulk_feeder",
+def _header(description: Description, n: int, template: str) -> list[str]:
+    kinds = ", ".join(description.kinds)
+    said = " ".join(description.text.split()) or f"A feeder of {n} element(s): {kinds}."
+    hook = next((line for line in template.splitlines() if line.startswith("# vibrofeed prepare:")),
+                "# vibrofeed prepare: vibrofeed.geometry:prepare_bulk_feeder")
+    return [f"# vibrofeed deck: {description.name}", hook,
             f"# vibrofeed generated from: {description.path.name}",
             "#", *("# " + line for line in _wrap(said, 78)), "#",
-            f"# {n} linear section(s), generated from the feeder description named above",
-            "# (docs/feeders.md). The commands are decks/bulk_feeder.liggghts's (its",
-            "# header says what they do); the tunables hold the description's numbers.",
+            f"# {n} element(s) ({kinds}), generated from the feeder description named",
+            f"# above (docs/feeders.md). The commands are decks/{description.template}.liggghts's",
+            "# (its header says what they do); the tunables hold the description's numbers.",
             "#", "# Run by hand: `vibrofeed prepare FEEDER.toml -o DIR` writes this deck, the",
             "# meshes and the generated includes into DIR and prints the liggghts line.",
             "#", "# Units: SI (m, kg, s, Pa, J/m^2); angles in degrees."]

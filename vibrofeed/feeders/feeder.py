@@ -22,26 +22,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ParameterError
+from .bowl import BowlElement
 from .chute import KIND_CODE as CHUTE
 from .chute import Chute
 from .joints import Joint
 from .linear import MAX_SECTIONS, LinearSection
-from .records import Part, number
-
-
-@dataclass(frozen=True)
-class BowlElement:
-    """Today's vibratory bowl (vibrofeed.bowl): a helical track up its wall, then a straight
-    chute through the wall to the outlet edge. Along the path it has two sections, the
-    helix and the chute; ``bowl`` is its geometry (vibrofeed.bowl.Bowl)."""
-
-    kind = "bowl"
-    bowl: object
-
-    @property
-    def bounds(self) -> list[tuple[float, float]]:
-        helix = self.bowl.length
-        return [(0.0, helix), (helix, helix + self.bowl.chute_length)]
+from .records import Drive, Part, number
 
 
 @dataclass(frozen=True)
@@ -79,12 +65,16 @@ class Feeder:
             from ..bowl import bowl_from
 
             numbers = {k: number(values, k) for k in values if _is_number(values[k])}
-            return cls(part, (BowlElement(bowl_from(numbers)),), bool(recirculate), values)
+            drive = Drive(freq=number(values, "freq", 0.0), amp_t=number(values, "amp_t", 0.0),
+                          amp_n=number(values, "amp_n", 0.0), phase=number(values, "phase", 0.0))
+            first = BowlElement(bowl_from(numbers), drive)
+        else:
+            first = None
         n = number(values, "sections", 1.0)
         if not (1 <= n <= MAX_SECTIONS and n == int(n)):  # (NaN fails the first test)
             raise ParameterError(f"sections={n:g} must be a whole number from 1 to {MAX_SECTIONS}")
-        elements, x0, level = [], 0.0, 0.0
-        for k in range(1, int(n) + 1):
+        elements, x0, level = ([first], first.x1, 0.0) if first else ([], 0.0, 0.0)
+        for k in range(len(elements) + 1, int(n) + 1):
             kind = number(values, f"s{k}_kind", 0.0) if k > 1 else 0.0
             if kind == CHUTE:
                 s = Chute.from_values(values, k, x0, level)
@@ -99,6 +89,27 @@ class Feeder:
 
     # ---------------------------------------------------------------- what the analyses ask
     @property
+    def bowl(self):
+        """The bowl's geometry (vibrofeed.bowl.Bowl) of a feeder that starts with one, else None."""
+        first = self.elements[0]
+        return first.bowl if isinstance(first, BowlElement) else None
+
+    @property
+    def line_origin(self) -> tuple[float, float, float]:
+        """Where the frame of the elements after the first lies in the deck's [m] (a line's:
+        the deck's own; after a bowl, at its chute's end: BowlElement.line_origin)."""
+        first = self.elements[0]
+        return first.line_origin if isinstance(first, BowlElement) else (0.0, 0.0, 0.0)
+
+    @property
+    def path_shift(self) -> float:
+        """What the path coordinate adds to an x of the line's frame [m]: 0 for a line (its
+        path coordinate is x), a bowl's path length less its outlet edge's x for its exit
+        line (the path runs on from the chute's end)."""
+        b = self.bowl
+        return b.length + b.chute_length - b.outlet_x if b is not None else 0.0
+
+    @property
     def sections(self) -> int:
         """How many sections the path has (a line's elements; a bowl's helix and chute)."""
         return len(self.bounds)
@@ -106,10 +117,22 @@ class Feeder:
     @property
     def bounds(self) -> list[tuple[float, float]]:
         """(start, end) of each section along the path [m], in conveying order: a line's x in
-        the track's frame, a bowl's path coordinate (vibrofeed.bowl.path_coordinate)."""
+        the track's frame, a bowl's path coordinate (vibrofeed.bowl.path_coordinate), then an
+        exit line's x shifted on from the bowl's path end (:attr:`path_shift`)."""
         out = []
         for e in self.elements:
-            out.extend(e.bounds)
+            shift = 0.0 if isinstance(e, BowlElement) else self.path_shift
+            out.extend((a + shift, b + shift) for a, b in e.bounds)
+        return out
+
+    @property
+    def catch_x(self) -> list[float]:
+        """Where each section along the path starts in the deck's x [m], for the rejects a
+        catch plane sorts by x: a line's bounds; a bowl's helix from -inf, its chute from
+        the slot (x = 0, the chute runs along +x from the helix's end), its exit line's."""
+        out = []
+        for e in self.elements:
+            out += [-math.inf, 0.0] if isinstance(e, BowlElement) else [a for a, _ in e.bounds]
         return out
 
     @property
@@ -127,15 +150,64 @@ class Feeder:
         outlet edge (falling) or for NaN (no part)."""
         return section_index(s, self.joint_positions, self.path_end)
 
+    def line_coordinate(self, points) -> np.ndarray:
+        """Where points (..., 3) of the deck's frame are along the path over the elements after
+        a bowl (its exit line): x plus :attr:`path_shift` over one of them (between its
+        entry and its end, within its walls, above its floor by less than its walls' height
+        and a part), NaN elsewhere; all NaN for a feeder without a bowl (a line's coordinate
+        is its x: vibrofeed.postproc.path)."""
+        p = np.asarray(points, dtype=float)
+        out = np.full(p.shape[:-1], np.nan)
+        if self.bowl is None:
+            return out
+        ox, oy, oz = self.line_origin
+        x, y, z = p[..., 0] - ox, p[..., 1] - oy, p[..., 2] - oz
+        for e in self.elements[1:]:
+            over = (x >= e.x0) & (x <= e.x1) & (np.abs(y) <= e.width / 2)
+            floor = e.floor_at(x, y)
+            over &= (z >= floor - self.part.tallest) & (z < floor + e.wall_height + self.part.size)
+            out = np.where(over & np.isnan(out), x + self.path_shift, out)
+        return out
+
+    def height_at(self, s):
+        """A bowl's floor height on the centre line at path coordinate ``s`` [m] (the profile in
+        height: up the helix and the chute, then its exit line's floors); None for a feeder
+        without a bowl (its path is level or its own track's frame)."""
+        b = self.bowl
+        if b is None:
+            return None
+        s = np.asarray(s, dtype=float)
+        h = b.height_at(np.minimum(s, b.length + b.chute_length))
+        oz, shift = self.line_origin[2], self.path_shift
+        for e in self.elements[1:]:
+            h = np.where(s >= e.x0 + shift, oz + e.floor_at(s - shift, 0.0), h)
+        return h
+
+    @property
+    def exit_direction(self) -> np.ndarray:
+        """The unit vector along which parts leave over the outlet edge (the last element's)."""
+        return np.asarray(self.elements[-1].exit_direction, dtype=float)
+
+    def element_at_x(self, x) -> np.ndarray:
+        """Which element (0-based) holds the deck's ``x`` [m]: the last one starting at or before
+        it (a bowl from -inf; beyond the outlet edge, the last element)."""
+        starts = [-math.inf] + [e.x0 + self.line_origin[0] for e in self.elements[1:]]
+        return np.searchsorted(np.asarray(starts), np.asarray(x, dtype=float), side="right") - 1
+
+    def element_of(self, k: int):
+        """The element path section ``k`` (1-based) belongs to."""
+        owners = [e for e in self.elements for _ in e.bounds]
+        return owners[k - 1]
+
     @property
     def is_line(self) -> bool:
-        """A line of more than one section (its joints are checked, its rejects counted per
-        section, its further sections' motion recorded)."""
-        return len(self.line_elements) > 1
+        """A feeder of more than one element (its joints are checked, its rejects counted per
+        section, its further elements' motion recorded)."""
+        return len(self.elements) > 1
 
     @property
     def line_elements(self) -> list:
-        """The elements of a line (every element but a bowl), in conveying order."""
+        """The elements after a bowl or the whole line, in conveying order."""
         return [e for e in self.elements if not isinstance(e, BowlElement)]
 
     @property
@@ -144,14 +216,16 @@ class Feeder:
 
     @property
     def joints(self) -> list[Joint]:
-        """The joints between consecutive elements of a line."""
-        s = self.line_elements
+        """The joints between consecutive elements."""
+        s = self.elements
         return [Joint(a, b) for a, b in zip(s[:-1], s[1:])]
 
     @property
     def stations(self) -> list[Station]:
-        """The side drops and wipers along the path, in conveying order of sections."""
+        """The side drops and wipers along the path, in conveying order of sections; each
+        on the path section (1-based) it lies on."""
         out = []
+        shift = self.path_shift
         for e in self.elements:
             if isinstance(e, BowlElement):
                 b = e.bowl
@@ -160,37 +234,45 @@ class Feeder:
                 if b.wiper is not None:
                     out.append(Station(1, "wiper", *(float(b.arc_length(t)) for t in b.wiper)))
                 continue
+            k = int(self.section_at(e.x0 + shift)) + 1
             if getattr(e, "side_drop", None) is not None:
                 d = e.side_drop
-                out.append(Station(e.number, "side_drop", e.x0 + d.start * e.length,
-                                   e.x0 + d.end * e.length))
+                out.append(Station(k, "side_drop", e.x0 + d.start * e.length + shift,
+                                   e.x0 + d.end * e.length + shift))
             if getattr(e, "wiper", None) is not None:
-                a = e.x0 + e.wiper.at * e.length
-                out.append(Station(e.number, "wiper", a, a + e.wiper.length))
+                a = e.x0 + e.wiper.at * e.length + shift
+                out.append(Station(k, "wiper", a, a + e.wiper.length))
         return out
 
     def further_meshes(self) -> list:
-        """The meshes at rest of a line's elements after the first (none for a single track),
-        as the prepare hook appends them to the first section's."""
-        return [e.mesh() for e in self.elements[1:] if not isinstance(e, BowlElement)]
+        """The meshes at rest of the elements after the first (none for a single track or a
+        bowl alone), in the deck's frame, as the prepare hook appends them to the first's."""
+        origin = np.asarray(self.line_origin)
+        return [(v + origin, t) for v, t in (e.mesh() for e in self.elements[1:])]
 
     def moves(self, k: int) -> bool:
-        """Whether section ``k`` (1-based) is driven (a chute stands still)."""
-        return self.line_elements[k - 1].moves
+        """Whether element ``k`` (1-based) is driven (a chute stands still)."""
+        return self.elements[k - 1].moves
 
     def section_values(self, k: int) -> dict | None:
-        """The parameters with section ``k``'s drive (1-based) as the deck's ``freq``,
+        """The parameters with path section ``k``'s drive (1-based) as the deck's ``freq``,
         ``amp_t``, ``amp_n``, ``phase`` and ``waveform``: what a model of one part alone on
         that section takes (a further section runs a sine); None for an undriven one (a
-        chute)."""
+        chute). A bowl's sections take the bowl's parameters (its drive seen from the helix:
+        vibrofeed.bowl.track_drive)."""
         values = dict(self.values or {})
-        if k == 1 or not self.is_line:
+        e = self.element_of(k)
+        if e is self.elements[0]:
             return values
-        if not isinstance(self.elements[k - 1], LinearSection):
+        if not isinstance(e, LinearSection):
             return None  # (a chute: no vibration to model)
-        d = self.elements[k - 1].drive
-        return {**values, "freq": d.freq, "amp_t": d.amp_t, "amp_n": d.amp_n, "phase": d.phase,
-                "waveform": 0}
+        d = e.drive
+        out = {**values, "freq": d.freq, "amp_t": d.amp_t, "amp_n": d.amp_n, "phase": d.phase,
+               "waveform": 0}
+        if self.bowl is not None:  # after a bowl: a part alone on a level linear section
+            del out["bowl_diameter"]
+            out["incline"] = 0.0
+        return out
 
     # ---------------------------------------------------------------- checks
     def check(self) -> None:
@@ -206,7 +288,10 @@ class Feeder:
                 raise ParameterError("recirculate=1: a single track has no rejects to return; "
                                      "a line (sections >= 2) has")
             return
-        further = self.line_elements[1:]
+        further = self.elements[1:]
+        if self.recirculate and self.bowl is not None:
+            raise ParameterError("recirculate=1: a bowl returns its rejects itself (they fall back "
+                                 "into it); its exit line's rejects are removed")
         for s in further:
             s.check(self.part, last=s is further[-1])
         for j in self.joints:

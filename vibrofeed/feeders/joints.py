@@ -22,7 +22,7 @@ class Joint:
     the step down at rest at its least and most across a's exit [m], and how far the floors
     move apart normal (``dz``) and along (``dx``) [m]."""
 
-    a: object  # an element (vibrofeed.feeders: a LinearSection, a Chute)
+    a: object  # an element (vibrofeed.feeders: a LinearSection, a Chute, a bowl)
     b: object
 
     @property
@@ -47,11 +47,15 @@ class Joint:
         """One-line ParameterError naming b's parameter when the joint is not sound."""
         a, b = self.a, self.b
         step = b.name(("step",))
-        if b.width < a.exit_width:
+        sway = getattr(a, "sway", 0.0)  # (a bowl's chute end also moves across)
+        if b.width < a.exit_width + 2 * sway:
+            exit_ = (f"the bowl's chute ({a.exit_width:g} m, swaying {sway:.3g} m either way with "
+                     "the torsion)" if sway else f"section {a.number}'s exit ({a.exit_width:g} m)")
+            hint = ("widen it or shorten chute_length" if sway
+                    else f"narrow section {a.number} with its gate")
             raise ParameterError(
-                f"{b.name(('width',))}={b.width:g} m is narrower than section {a.number}'s exit "
-                f"({a.exit_width:g} m): the sections do not join (parts would fall at the joint); "
-                f"narrow section {a.number} with its gate")
+                f"{b.name(('width',))}={b.width:g} m is narrower than {exit_}: the elements do not "
+                f"join (parts would fall at the joint); {hint}")
         dz, dx = self.motion
         low, high = self.steps
         tilted = not math.isclose(low, high, rel_tol=0, abs_tol=1e-15)

@@ -21,6 +21,8 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 
+import numpy as np
+
 from ..errors import ParameterError
 from ..line import WIPER_LENGTH, Section, section_mesh
 from .records import Drive, Gate, Part, SideDrop, Wiper, number
@@ -132,6 +134,12 @@ class LinearSection:
     def lowest(self) -> float:
         """The floor's lowest point at rest (at the reference wall) [m]."""
         return self.floor_z(-self.width / 2)
+
+    exit_direction = (1.0, 0.0, 0.0)  # (level along x)
+
+    def floor_at(self, x, y):
+        """The floor's height at rest over (``x``, ``y``) [m] (level along x)."""
+        return self.floor_z(y) + 0.0 * np.asarray(x, dtype=float)
 
     def entry_z(self, y):
         """The floor's height at rest where parts come onto it, at ``y`` [m]."""

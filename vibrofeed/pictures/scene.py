@@ -311,17 +311,19 @@ def track_mesh(result, frame: FrameData):
     if rows is None:
         return None
     vertices, triangles = result.track_mesh
-    return (_turned(np.asarray(vertices, dtype=float), frame.surface_angle)
+    return (_turned(np.asarray(vertices, dtype=float), frame.surface_angle, rows == 0)
             + frame.sections_position[rows], np.asarray(triangles))
 
 
-def _turned(points: np.ndarray, angle: float) -> np.ndarray:
-    """``points`` (V, 3) turned by ``angle`` [rad] about the z axis through the origin."""
+def _turned(points: np.ndarray, angle: float, which=None) -> np.ndarray:
+    """``points`` (V, 3) turned by ``angle`` [rad] about the z axis through the origin (only
+    those ``which`` says: section 1's, the bowl, not an exit line's)."""
     if angle == 0.0:
         return points
     c, s = np.cos(angle), np.sin(angle)
-    return np.column_stack([c * points[:, 0] - s * points[:, 1], s * points[:, 0] + c * points[:, 1],
-                            points[:, 2]])
+    turned = np.column_stack([c * points[:, 0] - s * points[:, 1], s * points[:, 0] + c * points[:, 1],
+                              points[:, 2]])
+    return turned if which is None else np.where(np.asarray(which)[:, None], turned, points)
 
 
 def track_velocity(result, frame: FrameData) -> np.ndarray | None:
@@ -333,19 +335,22 @@ def track_velocity(result, frame: FrameData) -> np.ndarray | None:
     velocity = frame.sections_velocity[rows]
     if frame.surface_rate:
         placed = _turned(np.asarray(result.track_mesh[0], dtype=float), frame.surface_angle)
-        velocity = velocity + frame.surface_rate * np.column_stack(
+        turning = (rows == 0)[:, None]  # (the bowl's; an exit line's sections do not turn)
+        velocity = velocity + turning * frame.surface_rate * np.column_stack(
             [-placed[:, 1], placed[:, 0], np.zeros(len(placed))])
     return velocity
 
 
 def part_sections(result, frame: FrameData) -> np.ndarray:
-    """(N,) each part's row in :attr:`FrameData.sections_velocity`: the section whose stretch
-    of track holds its x (a line's section 2 from the joint at ``track_length`` on, the parts
-    past the outlet edge included); 0 for a single track."""
+    """(N,) each part's row in :attr:`FrameData.sections_velocity`: the element whose stretch
+    of track holds its x (vibrofeed.feeders.Feeder.element_at_x: the parts past the outlet
+    edge the last one's); 0 for a single track."""
+    from ..postproc.path import feeder_of
+
     rows = np.zeros(len(frame), dtype=np.int64)
-    if len(frame.sections_velocity) > 1:
-        joint = float(result.parameters.get("track_length", np.inf))
-        rows[frame.position[:, 0] >= joint] = 1
+    feeder = feeder_of(result.parameters) if len(frame.sections_velocity) > 1 else None
+    if feeder is not None:
+        rows = np.clip(feeder.element_at_x(frame.position[:, 0]), 0, len(frame.sections_velocity) - 1)
     return rows
 
 

@@ -495,7 +495,8 @@ def test_prepare_bowl_feeder_writes_its_files_again_and_again_into_a_new_folder(
     for _ in range(2):  # a new folder with its parents, then the same folder again (a rerun)
         p = prepare_bowl_feeder(BOWL_VALUES, folder)
     names = sorted(f.name for f in folder.iterdir())
-    assert names == ["bowl.stl", "catch.stl", "chip.multisphere", "disc.multisphere", "prepared.in"]
+    assert names == ["bowl.stl", "catch.stl", "chip.multisphere", "disc.multisphere", "line_catch.in",
+                     "line_derived.in", "line_meshes.in", "line_motion.in", "prepared.in"]
     text = (folder / "prepared.in").read_text()
     assert text.startswith("# written by vibrofeed.geometry.prepare_bowl_feeder for one run\n")
     assert seed_lines(text) == [f"variable seed_{k} equal {s}" for k, s in

@@ -1,0 +1,108 @@
+"""A vibratory bowl as the first element of a feeder: today's bowl (vibrofeed.bowl), and the
+frame an exit line after it is built in.
+
+Its numbers in the deck's vocabulary are decks/bowl_feeder.liggghts's own names
+(:data:`KEYS` maps a description's keys to them); an exit line's elements are the deck's
+``s<k>_*`` from k = 2, as a line's further sections.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from .records import Drive
+
+# description key (table, key) -> the bowl deck's name
+KEYS: dict[tuple[str, ...], str] = {
+    ("diameter",): "bowl_diameter",
+    ("width",): "track_width",
+    ("wall_height",): "wall_height",
+    ("cross_tilt",): "cross_tilt",
+    ("helix_angle",): "helix_angle",
+    ("turns",): "turns",
+    ("cone_angle",): "cone_angle",
+    ("lip_height",): "lip_height",
+    ("chute_length",): "chute_length",
+    ("drive", "freq"): "freq",
+    ("drive", "amp_t"): "amp_t",
+    ("drive", "amp_n"): "amp_n",
+    ("drive", "phase"): "phase",
+    ("side_drop", "from"): "drop_from",
+    ("side_drop", "to"): "drop_to",
+    ("side_drop", "width"): "drop_width",
+    ("wiper", "height"): "wiper_height",
+    ("wiper", "at"): "wiper_at",
+}
+# A description's bowl must state these (the rest have the deck's defaults).
+NEEDED = ("diameter", "width", "turns", "helix_angle")
+
+
+@dataclass(frozen=True)
+class BowlElement:
+    """Today's vibratory bowl (vibrofeed.bowl): a helical track up its wall, then a straight
+    chute through the wall to the outlet edge. Along the path it has two sections, the
+    helix and the chute; ``bowl`` is its geometry (vibrofeed.bowl.Bowl), ``drive`` its
+    torsion and lift (the stroke along the track at its centre line, the lift).
+
+    A bowl may hand its parts to an exit line (elements 2, 3 ... after it): the line's frame
+    is the bowl's moved to the chute's end (:attr:`line_origin`), so that the line runs on
+    along +x from the outlet edge, centred on the chute's centre line, its floors' heights
+    counted from the chute's floor at its end at the high (inner) edge. Seen from there the
+    chute's end is an exit as a linear section's: its width, its floor tilted down towards
+    the wall, the torsion's stroke along it; the torsion also sways it across (:attr:`sway`)."""
+
+    kind = "bowl"
+    moves = True
+    number = 1
+    bowl: object
+    drive: Drive = Drive(freq=0.0, amp_t=0.0, amp_n=0.0)
+
+    @property
+    def bounds(self) -> list[tuple[float, float]]:
+        helix = self.bowl.length
+        return [(0.0, helix), (helix, helix + self.bowl.chute_length)]
+
+    # the chute's end as the exit of an element (vibrofeed.feeders.joints), in the line's frame
+    @property
+    def x1(self) -> float:
+        return self.bowl.outlet_x
+
+    @property
+    def exit_width(self) -> float:
+        return self.bowl.track_width
+
+    def exit_z(self, y):
+        return -(self.bowl.track_width / 2 - y) * math.tan(math.radians(self.bowl.cross_tilt))
+
+    @property
+    def exit_level(self) -> float:
+        return 0.0
+
+    @property
+    def exit_direction(self) -> tuple[float, float, float]:
+        """The chute's direction: +x, rising at the helix angle."""
+        a = math.radians(self.bowl.helix_angle)
+        return math.cos(a), 0.0, math.sin(a)
+
+    @property
+    def sway(self) -> float:
+        """How far the torsion moves the chute's end across [m]: the turn's amplitude
+        amp_t / r_mid times the end's distance from the axis along x."""
+        return self.drive.amp_t / self.bowl.r_mid * self.bowl.outlet_x
+
+    @property
+    def line_origin(self) -> tuple[float, float, float]:
+        """Where an exit line's frame lies in the bowl's [m]: x unchanged (the line starts at
+        the outlet edge x), y on the chute's centre line, z the chute's floor at its end at
+        its high edge (the chute rises at the helix angle, its floor tilts down outwards)."""
+        b = self.bowl
+        rise = b.chute_length * math.sin(math.radians(b.helix_angle))
+        return 0.0, -b.r_mid, b.end_z + rise + b.track_width / 2 * math.tan(math.radians(b.cross_tilt))
+
+    def name(self, key: tuple[str, ...]) -> str:
+        """The deck name of ``key`` on the bowl (for messages)."""
+        return KEYS.get(key, ".".join(key))
+
+    def deck_names(self, drive: bool = True) -> list[str]:
+        return []  # (a bowl's geometry is held by its own prepared.in lines, vibrofeed.bowl)
