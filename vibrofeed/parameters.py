@@ -194,13 +194,17 @@ NAMED_VALUES: dict[str, dict[str, str]] = {
 
 
 def parse_assignments(items) -> dict[str, str]:
-    """``["freq=50", "amp_n=2e-4"]`` -> ``{"freq": "50", "amp_n": "2e-4"}``."""
+    """``["freq=50", "amp_n=2e-4"]`` -> ``{"freq": "50", "amp_n": "2e-4"}``. A name given
+    twice with two values is refused: which one was meant is not for vibrofeed to guess."""
     out = {}
     for item in items or ():
         name, sep, value = item.partition("=")
         name, value = name.strip(), value.strip()
         if not sep or not name or not value:
             raise ParameterError(f"parameter {item!r} is not of the form name=value")
+        if out.get(name, value) != value:
+            raise ParameterError(f"parameter {name} given twice, as -p {name}={out[name]} and "
+                                 f"-p {name}={value}; give it once")
         out[name] = value
     return out
 
