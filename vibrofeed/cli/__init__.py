@@ -24,7 +24,7 @@ import os
 import sys
 import warnings
 
-from .. import __version__, interrupt
+from .. import __version__, environment, interrupt
 from ..errors import VibrofeedError
 
 # name -> (module, one-line help), in the order `vibrofeed --help` lists them.
@@ -161,7 +161,11 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"unrecognized option {unknown}")
     args = parser.parse_args(argv)
     args.__dict__.pop("_given_options", None)
-    debug = bool(os.environ.get("VIBROFEED_DEBUG"))
+    try:  # the documented environment variables: one that means nothing stops the command now
+        debug = environment.debug()
+        environment.check()
+    except VibrofeedError as exc:
+        return fail(str(exc), exc.exit_code)
     interrupt.install()  # SIGTERM ends a command as Ctrl-C does
     try:
         return args.func(args)

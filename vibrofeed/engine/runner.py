@@ -32,7 +32,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .. import __version__, interrupt
+from .. import __version__, environment, interrupt
 from ..decks import Deck
 from ..disk import mount_point
 from ..errors import EngineError, OutputError, RunError, UsageError
@@ -96,17 +96,19 @@ def abort_shim() -> Path | None:
     ``error->one`` (e.g. a mesh file that cannot be opened) is lost in an
     unflushed buffer; runs still work.
     """
-    env = os.environ.get("VIBROFEED_ABORT_SHIM")
-    path = Path(env) if env else Path(__file__).resolve().parent / "libvibrofeed_abortflush.so"
+    given = environment.abort_shim()  # (one that does not exist is refused)
+    if given is not None:
+        return given
+    path = Path(__file__).resolve().parent / "libvibrofeed_abortflush.so"
     return path if path.is_file() else None
 
 
 def max_ranks() -> int:
     """The most MPI ranks a run may ask for here: RANKS_PER_CORE per core this
     process may use, or the tasks of a Slurm allocation, or VIBROFEED_MAX_RANKS."""
-    env = os.environ.get("VIBROFEED_MAX_RANKS")
-    if env and env.isdigit() and int(env) > 0:
-        return int(env)
+    given = environment.max_ranks()  # (one that is no number of ranks is refused)
+    if given is not None:
+        return given
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
     slurm = os.environ.get("SLURM_NTASKS", "")
     return max(RANKS_PER_CORE * cores, int(slurm) if slurm.isdigit() else 0)
