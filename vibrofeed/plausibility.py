@@ -105,6 +105,27 @@ def advice(p: Mapping[str, float], given: Collection[str] = ()) -> list[str]:
     return out
 
 
+# The analysis commands' options take SI units as the run's parameters do: beyond these a
+# value is almost always one in other units (a gap in um typed as metres, a mass in grams).
+OPTION_PLAUSIBLE = {
+    "m": (0.1, "is longer than a feeder's gaps and parts: a length in mm or µm? ({option} is in "
+               "metres)"),
+    "s": (10.0, "is longer than a feeder's parts arrive apart: a time in ms? ({option} is in seconds)"),
+    "kg": (1.0, "is heavier than a part a finger grasps: a mass in g? ({option} is in kg)"),
+    "-": (MU_PLAUSIBLE_MAX, "exceeds the friction of solids (0.05 to 1.5)"),
+}
+
+
+def option_advice(option: str, x: float | None, unit: str) -> str | None:
+    """One line when the value ``x`` of a command's ``option`` (in ``unit``: m, s, kg, or -
+    for a friction coefficient) is beyond what it can mean in that unit, else None."""
+    limit, why = OPTION_PLAUSIBLE[unit]
+    if x is None or not x > limit:
+        return None
+    shown = f"{x:g} {unit}" if unit != "-" else f"{x:g}"
+    return f"{option} {shown} {why.format(option=option)}"
+
+
 def _without_effect(p: Mapping[str, float], given: Collection[str]) -> list[str]:
     """The given parameters that the others make idle."""
     idle = {}
