@@ -82,6 +82,7 @@ def _integer(lo=None, choices=None):
         if lo is not None and x < lo:
             return f"must be >= {lo}"
         return None
+    check.integer = True  # (the engine reads such a value as a whole number: engine_text)
     return check
 
 
@@ -209,6 +210,24 @@ def parse_assignments(items) -> dict[str, str]:
     return out
 
 
+# A number as C's atof and LIGGGHTS' numeric() read it the way Python's float() does: ASCII
+# digits, one point, an exponent. Python also reads what they read otherwise or not at all:
+# other scripts' digits ("５０": LIGGGHTS reads 0), underscores ("1_000": atof reads 1),
+# surrounding blanks; an integer parameter ("1e2", "5.0") is no integer to LIGGGHTS.
+_PLAIN_NUMBER = re.compile(r"[+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?")
+_PLAIN_INTEGER = re.compile(r"[+-]?[0-9]+")
+
+
+def engine_text(text: str, x: float, integer: bool = False) -> str:
+    """The value ``text`` (which Python read as ``x``) in a form LIGGGHTS reads as the same
+    number: ``text`` itself when plain, else the number Python read (a whole number for an
+    ``integer`` parameter), so that the engine never runs with another value than the one
+    checked."""
+    if integer:
+        return text if _PLAIN_INTEGER.fullmatch(text) else str(int(x))
+    return text if _PLAIN_NUMBER.fullmatch(text) else repr(x)
+
+
 # Hints for a refused value that is a unit slip: name -> (test, hint).
 UNIT_SLIPS: dict[str, tuple[Callable[[float], bool], str]] = {
     "youngs": (lambda x: 0 < x < 1e4, "a modulus in GPa? (moduli are in Pa: silicon 1.3e11)"),
@@ -265,6 +284,7 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
             slip = UNIT_SLIPS.get(name)
             hint = f"; {slip[1]}" if slip and slip[0](x) else ""
             raise ParameterError(f"parameter {name}={value}{unit} {problem}{hint}")
+        values[name] = engine_text(value, x, getattr(rule, "integer", False))
     declared = max((int(m[1]) for n in tunables if (m := re.match(r"^s(\d)_length$", n))), default=1)
     if numbers.get("sections", 1) > declared:
         raise ParameterError(
