@@ -366,6 +366,37 @@ def _check_feeder(p: Mapping[str, float]) -> None:
         raise ParameterError(f"return_delay={p['return_delay']:g} s must be >= 0")
 
 
+def circumscribed_radius(p: Mapping[str, float]) -> float:
+    """A bulk feeder's part's circumscribed radius [m], as decks/include/part_shape.liggghts
+    takes it (r_ext): a sphere's with its size spread, a chip's corner sphere, a disc's rim."""
+    size, shape = p["part_size"], int(p.get("shape", 0))
+    if shape == 0:
+        return size / 2 * (1 + p.get("size_spread", 0.0))
+    if shape == 1:
+        thickness = p.get("part_thickness", size)
+        return (size - thickness) / math.sqrt(2) + thickness / 2
+    return size / 2
+
+
+def _check_insertion(p: Mapping[str, float]) -> None:
+    """The bulk feeder inserts its parts whole (LIGGGHTS' all_in) into blocks between the
+    walls, 5 % of a part size in from each (decks/bulk_feeder.liggghts, regions inlet and
+    fill): a track no wider than that and a part leaves them no volume, and LIGGGHTS stops
+    with 'Unable to calculate region volume'."""
+    if "bowl_diameter" in p or (p.get("n_parts", 1) <= 0 and p.get("inlet_rate", 0) <= 0):
+        return
+    across = 2 * circumscribed_radius(p) + 0.1 * p["part_size"]
+    if p["track_width"] <= across:
+        feeds = [f"the {what} ({n})" for n, what in (("inlet_rate", "inlet"), ("n_parts", "pre-fill"))
+                 if p.get(n, 0) > 0]
+        verb = "places" if len(feeds) == 1 else "place"
+        raise ParameterError(
+            f"track_width={p['track_width']:g} m leaves no room to insert a part of part_size="
+            f"{p['part_size']:g} m: {' and '.join(feeds)} {verb} each part whole between the walls, "
+            f"5 % of a part in from each, so the track must be wider than {across:.3g} m; widen the "
+            "track or use smaller parts")
+
+
 # Random loose packing of a settled pre-fill, to tell whether it stays between the walls.
 FILL_PACKING = 0.6
 
@@ -415,6 +446,7 @@ def _check_bulk_feeder(p: Mapping[str, float]) -> None:
     if p["track_width"] < widest:
         raise ParameterError(f"track_width={p['track_width']:g} m is narrower than a part "
                              f"({widest:g} m across)")
+    _check_insertion(p)
     gate = p.get("gate_width", 0.0)
     length = p.get("track_length", math.inf)
     if gate > 0:
