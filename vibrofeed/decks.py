@@ -63,9 +63,11 @@ def decks_dir() -> Path:
     ``vibrofeed/_decks`` (package data, see pyproject.toml); in a source
     checkout (an editable install) it is ``decks/`` itself.
     """
-    env = os.environ.get("VIBROFEED_DECKS")
-    if env:
-        return Path(env)
+    from . import environment
+
+    given = environment.decks_dir()  # (a folder that does not exist is refused)
+    if given is not None:
+        return given
     here = Path(__file__).resolve().parent
     installed = here / "_decks"
     return installed if installed.is_dir() else here.parent / "decks"

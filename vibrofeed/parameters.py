@@ -82,6 +82,7 @@ def _integer(lo=None, choices=None):
         if lo is not None and x < lo:
             return f"must be >= {lo}"
         return None
+    check.integer = True  # (the engine reads such a value as a whole number: engine_text)
     return check
 
 
@@ -194,15 +195,37 @@ NAMED_VALUES: dict[str, dict[str, str]] = {
 
 
 def parse_assignments(items) -> dict[str, str]:
-    """``["freq=50", "amp_n=2e-4"]`` -> ``{"freq": "50", "amp_n": "2e-4"}``."""
+    """``["freq=50", "amp_n=2e-4"]`` -> ``{"freq": "50", "amp_n": "2e-4"}``. A name given
+    twice with two values is refused: which one was meant is not for vibrofeed to guess."""
     out = {}
     for item in items or ():
         name, sep, value = item.partition("=")
         name, value = name.strip(), value.strip()
         if not sep or not name or not value:
             raise ParameterError(f"parameter {item!r} is not of the form name=value")
+        if out.get(name, value) != value:
+            raise ParameterError(f"parameter {name} given twice, as -p {name}={out[name]} and "
+                                 f"-p {name}={value}; give it once")
         out[name] = value
     return out
+
+
+# A number as C's atof and LIGGGHTS' numeric() read it the way Python's float() does: ASCII
+# digits, one point, an exponent. Python also reads what they read otherwise or not at all:
+# other scripts' digits ("５０": LIGGGHTS reads 0), underscores ("1_000": atof reads 1),
+# surrounding blanks; an integer parameter ("1e2", "5.0") is no integer to LIGGGHTS.
+_PLAIN_NUMBER = re.compile(r"[+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?")
+_PLAIN_INTEGER = re.compile(r"[+-]?[0-9]+")
+
+
+def engine_text(text: str, x: float, integer: bool = False) -> str:
+    """The value ``text`` (which Python read as ``x``) in a form LIGGGHTS reads as the same
+    number: ``text`` itself when plain, else the number Python read (a whole number for an
+    ``integer`` parameter), so that the engine never runs with another value than the one
+    checked."""
+    if integer:
+        return text if _PLAIN_INTEGER.fullmatch(text) else str(int(x))
+    return text if _PLAIN_NUMBER.fullmatch(text) else repr(x)
 
 
 # Hints for a refused value that is a unit slip: name -> (test, hint).
@@ -261,6 +284,7 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
             slip = UNIT_SLIPS.get(name)
             hint = f"; {slip[1]}" if slip and slip[0](x) else ""
             raise ParameterError(f"parameter {name}={value}{unit} {problem}{hint}")
+        values[name] = engine_text(value, x, getattr(rule, "integer", False))
     declared = max((int(m[1]) for n in tunables if (m := re.match(r"^s(\d)_length$", n))), default=1)
     if numbers.get("sections", 1) > declared:
         raise ParameterError(
@@ -342,6 +366,37 @@ def _check_feeder(p: Mapping[str, float]) -> None:
         raise ParameterError(f"return_delay={p['return_delay']:g} s must be >= 0")
 
 
+def circumscribed_radius(p: Mapping[str, float]) -> float:
+    """A bulk feeder's part's circumscribed radius [m], as decks/include/part_shape.liggghts
+    takes it (r_ext): a sphere's with its size spread, a chip's corner sphere, a disc's rim."""
+    size, shape = p["part_size"], int(p.get("shape", 0))
+    if shape == 0:
+        return size / 2 * (1 + p.get("size_spread", 0.0))
+    if shape == 1:
+        thickness = p.get("part_thickness", size)
+        return (size - thickness) / math.sqrt(2) + thickness / 2
+    return size / 2
+
+
+def _check_insertion(p: Mapping[str, float]) -> None:
+    """The bulk feeder inserts its parts whole (LIGGGHTS' all_in) into blocks between the
+    walls, 5 % of a part size in from each (decks/bulk_feeder.liggghts, regions inlet and
+    fill): a track no wider than that and a part leaves them no volume, and LIGGGHTS stops
+    with 'Unable to calculate region volume'."""
+    if "bowl_diameter" in p or (p.get("n_parts", 1) <= 0 and p.get("inlet_rate", 0) <= 0):
+        return
+    across = 2 * circumscribed_radius(p) + 0.1 * p["part_size"]
+    if p["track_width"] <= across:
+        feeds = [f"the {what} ({n})" for n, what in (("inlet_rate", "inlet"), ("n_parts", "pre-fill"))
+                 if p.get(n, 0) > 0]
+        verb = "places" if len(feeds) == 1 else "place"
+        raise ParameterError(
+            f"track_width={p['track_width']:g} m leaves no room to insert a part of part_size="
+            f"{p['part_size']:g} m: {' and '.join(feeds)} {verb} each part whole between the walls, "
+            f"5 % of a part in from each, so the track must be wider than {across:.3g} m; widen the "
+            "track or use smaller parts")
+
+
 # Random loose packing of a settled pre-fill, to tell whether it stays between the walls.
 FILL_PACKING = 0.6
 
@@ -391,6 +446,7 @@ def _check_bulk_feeder(p: Mapping[str, float]) -> None:
     if p["track_width"] < widest:
         raise ParameterError(f"track_width={p['track_width']:g} m is narrower than a part "
                              f"({widest:g} m across)")
+    _check_insertion(p)
     gate = p.get("gate_width", 0.0)
     length = p.get("track_length", math.inf)
     if gate > 0:

@@ -16,6 +16,7 @@ naming the parameter (:func:`vibrofeed.parameters.resolve` issues them as
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Collection, Mapping
 
 # Solids span about 500 (polymer foams excepted) to 22 590 kg/m³ (osmium).
@@ -104,14 +105,42 @@ def advice(p: Mapping[str, float], given: Collection[str] = ()) -> list[str]:
     return out
 
 
+# The analysis commands' options take SI units as the run's parameters do: beyond these a
+# value is almost always one in other units (a gap in um typed as metres, a mass in grams).
+OPTION_PLAUSIBLE = {
+    "m": (0.1, "is longer than a feeder's gaps and parts: a length in mm or µm? ({option} is in "
+               "metres)"),
+    "s": (10.0, "is longer than a feeder's parts arrive apart: a time in ms? ({option} is in seconds)"),
+    "kg": (1.0, "is heavier than a part a finger grasps: a mass in g? ({option} is in kg)"),
+    "-": (MU_PLAUSIBLE_MAX, "exceeds the friction of solids (0.05 to 1.5)"),
+}
+
+
+def option_advice(option: str, x: float | None, unit: str) -> str | None:
+    """One line when the value ``x`` of a command's ``option`` (in ``unit``: m, s, kg, or -
+    for a friction coefficient) is beyond what it can mean in that unit, else None."""
+    limit, why = OPTION_PLAUSIBLE[unit]
+    if x is None or not x > limit:
+        return None
+    shown = f"{x:g} {unit}" if unit != "-" else f"{x:g}"
+    return f"{option} {shown} {why.format(option=option)}"
+
+
 def _without_effect(p: Mapping[str, float], given: Collection[str]) -> list[str]:
     """The given parameters that the others make idle."""
     idle = {}
     waveform = int(p.get("waveform", 0))
     if "duty" in p and waveform not in (2, 3):
         idle["duty"] = f"applies to waveforms 2 and 3 (stick-slip, Coulomb pump), not waveform={waveform}"
-    for phase, amp_t, amp_n in (("phase", "amp_t", "amp_n"), ("s2_phase", "s2_amp_t", "s2_amp_n")):
-        if phase in p and waveform == 0 and (p.get(amp_t, 1.0) == 0 or p.get(amp_n, 1.0) == 0):
+    if waveform in (2, 3, 4):  # (decks/include/surface_motion.liggghts: along x only; 0 says so)
+        for name in ("amp_n", "phase"):
+            if p.get(name, 0.0) != 0:
+                idle[name] = (f"shapes the motion normal to the track: waveform={waveform} moves it "
+                              "along the track only")
+    sections = [int(m[1]) for n in p if (m := re.match(r"^s(\d)_", n))]
+    for s in ("", *(f"s{k}_" for k in sorted(set(sections)))):
+        phase, amp_t, amp_n = f"{s}phase", f"{s}amp_t", f"{s}amp_n"
+        if phase in p and waveform in (0, 1) and (p.get(amp_t, 1.0) == 0 or p.get(amp_n, 1.0) == 0):
             idle[phase] = "shifts the normal motion against the tangential one: one of them is 0"
     if "part_size" in p and int(p.get("shape", 0)) == 0:
         idle["part_thickness"] = "applies to chips and discs (shape 1, 2), not to spheres"
@@ -127,14 +156,21 @@ def _without_effect(p: Mapping[str, float], given: Collection[str]) -> list[str]
             idle[name] = "shapes the surface forces: hamaker=0 and air_viscosity=0 turn them off"
     if p.get("dt", 0.0) == 0:
         idle["dt_unchecked"] = "allows a fixed dt beyond the contact's limits: dt=0 is automatic"
-    if p.get("s2_wiper_height", 1.0) == 0:
-        idle["s2_wiper_at"] = "places the wiper: s2_wiper_height=0 has none"
-    if p.get("s2_drop_to", 1.0) <= p.get("s2_drop_from", 0.0):  # (vibrofeed.line: no side drop)
-        for name in ("s2_drop_width", "s2_drop_from", "s2_drop_to"):
-            idle[name] = "shapes the side drop: s2_drop_to <= s2_drop_from has none"
-    if "sections" in p and int(p["sections"]) == 1:  # (last: no section 2 says it all)
+    if p.get("recirculate", 0.0) == 0:
+        idle["return_delay"] = "delays the rejects' return to the inlet: recirculate=0 removes them"
+    # a line's tooling, section by section; the bowl's on its helix (no prefix, vibrofeed.bowl)
+    tooled = [f"s{k}_" for k in sorted(set(sections))] + ([""] if "bowl_diameter" in p else [])
+    for s in tooled:
+        if p.get(f"{s}wiper_height", 1.0) == 0:
+            idle[f"{s}wiper_at"] = f"places the wiper: {s}wiper_height=0 has none"
+        drop_to = p.get(f"{s}drop_to", 1.0 if s else 0.0)  # (the bowl's drop_to=0: no side drop)
+        if drop_to <= p.get(f"{s}drop_from", 0.0):  # (vibrofeed.line: no side drop)
+            for name in (f"{s}drop_width", f"{s}drop_from", f"{s}drop_to"):
+                idle[name] = f"shapes the side drop: {s}drop_to <= {s}drop_from has none"
+    if "sections" in p:  # (last: no section k says it all)
         for name in p:
-            if name.startswith("s2_"):
-                idle[name] = "shapes a feeder line's section 2: sections=1 has none"
+            if (m := re.match(r"^s(\d)_", name)) and int(m[1]) > int(p["sections"]):
+                idle[name] = (f"shapes a feeder line's section {m[1]}: sections={int(p['sections'])} "
+                              "has none")
     return [f"parameter {name} has no effect: it {why}" for name, why in idle.items()
             if name in given and name in p]

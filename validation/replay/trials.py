@@ -72,7 +72,6 @@ carry the numbers; the table is for the six published trials):
 from __future__ import annotations
 
 import math
-import os
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -154,9 +153,12 @@ class Trial:
 
 def trials_dir() -> Path | None:
     """Directory of the measured trials, or None when it is not available."""
-    env = os.environ.get("VIBROFEED_TRIALS_DIR")
-    path = Path(env) if env else DEFAULT_TRIALS_DIR
-    return path if path.is_dir() else None
+    from vibrofeed import environment
+
+    given = environment.trials_dir()  # (a folder that does not exist is refused)
+    if given is not None:
+        return given
+    return DEFAULT_TRIALS_DIR if DEFAULT_TRIALS_DIR.is_dir() else None
 
 
 def _number(field_text: str) -> float:

@@ -24,7 +24,7 @@ import os
 import sys
 import warnings
 
-from .. import __version__, interrupt
+from .. import __version__, environment, interrupt
 from ..errors import VibrofeedError
 
 # name -> (module, one-line help), in the order `vibrofeed --help` lists them.
@@ -90,6 +90,36 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"vibrofeed: error: {where}{message} (see {self.prog} --help)\n")
 
 
+class _StoreOnce(argparse._StoreAction):
+    """An option that takes a value: given twice with two values, it is refused (argparse
+    would keep the last without a word)."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        given = namespace.__dict__.setdefault("_given_options", {})
+        if self.dest in given and given[self.dest][1] != values:
+            first, text = given[self.dest][0], given[self.dest][2]
+            parser.error(f"{first} given twice, as {first} {text} and {option_string} "
+                         f"{self._text(values)}; give it once")
+        given[self.dest] = (option_string, values, self._text(values))
+        super().__call__(parser, namespace, values, option_string)
+
+    @staticmethod
+    def _text(values) -> str:
+        """The value as the user wrote it (a number read as 1.0 shows as 1; --size as WxH)."""
+        if isinstance(values, list):
+            return " ".join(map(_StoreOnce._text, values))
+        if isinstance(values, tuple):
+            return "x".join(map(_StoreOnce._text, values))
+        return f"{values:g}" if isinstance(values, float) else str(values)
+
+
+def _once(parser: argparse.ArgumentParser) -> None:
+    """Make every option of ``parser`` that stores a value one that may be given once."""
+    for action in parser._actions:
+        if type(action) is argparse._StoreAction and action.option_strings:
+            action.__class__ = _StoreOnce
+
+
 def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
     """The parser, with the arguments of the requested command only (or of all
     commands when ``argv`` is None, for documentation and tests)."""
@@ -106,6 +136,7 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
         module = importlib.import_module(module_name)
         p = sub.add_parser(name, help=help_text, description=module.DESCRIPTION)
         module.add_arguments(p)
+        _once(p)
         p.set_defaults(func=module.run)
     return parser
 
@@ -129,7 +160,12 @@ def main(argv: list[str] | None = None) -> int:
     if unknown is not None:
         parser.error(f"unrecognized option {unknown}")
     args = parser.parse_args(argv)
-    debug = bool(os.environ.get("VIBROFEED_DEBUG"))
+    args.__dict__.pop("_given_options", None)
+    try:  # the documented environment variables: one that means nothing stops the command now
+        debug = environment.debug()
+        environment.check()
+    except VibrofeedError as exc:
+        return fail(str(exc), exc.exit_code)
     interrupt.install()  # SIGTERM ends a command as Ctrl-C does
     try:
         return args.func(args)

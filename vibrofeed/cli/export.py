@@ -36,10 +36,12 @@ def run(args) -> int:
 
     from ..errors import UsageError
     from ..results.reader import Result
-    from .outputs import folder_destination, names_in, written
+    from .outputs import folder_destination, names_in, not_an_input, written
 
     folder_destination("-o", args.output, create=False, parents=True)
     stem = Path(args.result).stem
+    for name in [f"{stem}.h5md"] if args.format == "h5md-md" else [f"{stem}.pvd", f"{stem}_outlet.vtp"]:
+        not_an_input("-o", args.output, Path(args.output) / name, [args.result])
     names_in("-o", args.output, [f"{stem}.h5md"] if args.format == "h5md-md" else
              [f"{stem}.pvd", f"{stem}_outlet.vtp"])
     frames = Path(args.output) / stem  # the ParaView export's folder of per-frame files

@@ -56,6 +56,19 @@ def no_effect(option: str, why: str) -> None:
     print(f"vibrofeed: warning: {option} has no effect: {why}", file=sys.stderr)
 
 
+def slips(*options) -> None:
+    """One warning line per option whose value looks like a unit slip: ``(option, value,
+    unit)`` (:func:`vibrofeed.plausibility.option_advice`); the command goes on."""
+    import sys
+
+    from ..plausibility import option_advice
+
+    for option, value, unit in options:
+        line = option_advice(option, value, unit)
+        if line:
+            print(f"vibrofeed: warning: {line}", file=sys.stderr)
+
+
 def add_deck_arguments(p, param_help: str) -> None:
     """DECK and -p NAME=VALUE, shared by the commands that run or prepare a deck."""
     p.add_argument("deck", metavar="DECK",

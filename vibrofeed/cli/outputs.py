@@ -137,6 +137,22 @@ def names_in(option: str, folder, names) -> None:
             raise UsageError(f"{option} {folder}: {path} is {what}; the command writes a file there")
 
 
+def not_an_input(option: str | None, given, path, inputs) -> None:
+    """Refuse, before any work, a file the command would write at ``path`` that is one of the
+    files it reads (``inputs``): it would be replaced while read, or by what was made of it.
+    ``option``: the option that named ``path`` (None for a default name, said as such)."""
+    target = Path(path).expanduser().absolute()
+    for source in inputs:
+        source = Path(source).expanduser()
+        same = source.resolve() == target.resolve()
+        if not same and source.exists() and target.exists():
+            same = os.path.samefile(source, target)  # (a hard link)
+        if same:
+            said = f"{option} {given}" if option else f"the output {given} (the default: name it with -o)"
+            raise UsageError(f"{said}: writing {path} would replace {source}, which the command "
+                             "reads; give another output")
+
+
 # ----------------------------------------------------------------- whole files
 _PNG = b"\x89PNG\r\n\x1a\n"
 

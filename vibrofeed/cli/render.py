@@ -51,9 +51,10 @@ def run(args) -> int:
     from ..pictures.render import render
     from ..results.reader import Result
     from .options import no_effect
-    from .outputs import file_destination, replaced
+    from .outputs import file_destination, not_an_input, replaced
 
     output = file_destination("-o", args.output or f"{Path(args.result).stem}.png", (".png", ".mp4"))
+    not_an_input("-o" if args.output else None, output, output, [args.result])
     movie = output.suffix.lower() == ".mp4"
     # (given, not defaulted: the options of the other kind of output are named when set)
     if movie and args.frame is not None:

@@ -70,10 +70,11 @@ def _refuse_with_fit(args) -> None:
 def run(args) -> int:
     from ..models.constants import G
     from ..validation.replay.trials import read_trial
-    from .options import no_effect
+    from .options import no_effect, slips
     from .outputs import file_destination, folder_destination
 
     _refuse_with_fit(args)
+    slips(("--mass", args.mass, "kg"), ("--mu-s", args.mu_s, "-"), ("--mu-k", args.mu_k, "-"))
     for option, value in (("-o", args.output), ("-n", args.ranks)):
         if value is not None and args.engine == "model":
             no_effect(option, f"the model engine{' of --fit' if args.fit else ''} runs no LIGGGHTS; "

@@ -30,7 +30,7 @@ def add_arguments(p) -> None:
 
 def run(args) -> int:
     from ..decks import Deck
-    from ..engine.runner import run_deck
+    from ..engine.runner import check_output, run_deck
     from ..parameters import parse_assignments
     from ..run_progress import RunProgress
     from .outputs import file_destination, written
@@ -40,6 +40,7 @@ def run(args) -> int:
     deck = Deck.find(args.deck)
     params = parse_assignments(args.param)
     output = str(file_destination("-o", args.output or f"{deck.name}.h5", parents=True))
+    check_output(deck, output, "-o" if args.output else "output")
     progress = RunProgress(deck.name, enabled=False if args.quiet else None)
     warm = threading.Thread(target=importlib.import_module, args=("vibrofeed.run_summary",), daemon=True)
     warm.start()

@@ -4,7 +4,15 @@ from __future__ import annotations
 
 from ..values import fmt
 from .numbers import real, whole
-from .options import add_output_arguments, figures_written, plot_folder, print_figures, refuse, unmeasured
+from .options import (
+    add_output_arguments,
+    figures_written,
+    plot_folder,
+    print_figures,
+    refuse,
+    slips,
+    unmeasured,
+)
 
 DESCRIPTION = ("Singulation of a bulk-feeder result over the steady window: inter-arrival times at "
                "the outlet (coefficient of variation), doubles (parts closer than a gap, or touching), "
@@ -79,6 +87,8 @@ def run(args) -> int:
     from ..postproc.singulation import Singulation
     from ..results.reader import Result
 
+    slips(("--gap", args.gap, "s"), ("--gap-distance", args.gap_distance, "m"),
+          ("--tolerance", args.tolerance, "m"))
     folder = plot_folder(args.plot)
     with Result(args.result) as result:
         sg = Singulation(result, gap=args.gap, gap_distance=args.gap_distance,

@@ -20,6 +20,7 @@ from collections.abc import Iterable, Sequence
 
 import numpy as np
 
+from .. import environment
 from ..errors import LibraryNotFound
 
 LIBRARY_NAME = "libliggghts.so.3"
@@ -57,7 +58,7 @@ def _mpi_comm_type():
 
 def _load(path: str | None = None) -> ctypes.CDLL:
     """Load the library and declare the signatures of the functions we call."""
-    name = path or os.environ.get("VIBROFEED_LIGGGHTS_LIB") or LIBRARY_NAME
+    name = path or environment.liggghts_lib() or LIBRARY_NAME
     try:
         # RTLD_GLOBAL: LIGGGHTS' plugins and MPI need the symbols visible.
         lib = ctypes.CDLL(name, mode=ctypes.RTLD_GLOBAL)

@@ -32,7 +32,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .. import __version__, interrupt
+from .. import __version__, environment, interrupt
 from ..decks import Deck
 from ..disk import mount_point
 from ..errors import EngineError, OutputError, RunError, UsageError
@@ -96,17 +96,19 @@ def abort_shim() -> Path | None:
     ``error->one`` (e.g. a mesh file that cannot be opened) is lost in an
     unflushed buffer; runs still work.
     """
-    env = os.environ.get("VIBROFEED_ABORT_SHIM")
-    path = Path(env) if env else Path(__file__).resolve().parent / "libvibrofeed_abortflush.so"
+    given = environment.abort_shim()  # (one that does not exist is refused)
+    if given is not None:
+        return given
+    path = Path(__file__).resolve().parent / "libvibrofeed_abortflush.so"
     return path if path.is_file() else None
 
 
 def max_ranks() -> int:
     """The most MPI ranks a run may ask for here: RANKS_PER_CORE per core this
     process may use, or the tasks of a Slurm allocation, or VIBROFEED_MAX_RANKS."""
-    env = os.environ.get("VIBROFEED_MAX_RANKS")
-    if env and env.isdigit() and int(env) > 0:
-        return int(env)
+    given = environment.max_ranks()  # (one that is no number of ranks is refused)
+    if given is not None:
+        return given
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
     slurm = os.environ.get("SLURM_NTASKS", "")
     return max(RANKS_PER_CORE * cores, int(slurm) if slurm.isdigit() else 0)
@@ -218,6 +220,49 @@ def _with_parent_death_signal(cmd: list[str]) -> list[str]:
     return [setpriv, "--pdeathsig", "TERM", "--"] + cmd if setpriv else cmd
 
 
+def output_files(output) -> tuple[Path, Path, Path]:
+    """The files a run into ``output`` writes: the result, its unfinished ``OUT.part`` and
+    its log (``OUT.log``: the result's suffix replaced)."""
+    out = Path(output).expanduser().absolute()
+    log = out.with_suffix(".log") if out.suffix else out.with_name(out.name + ".log")
+    return out, out.with_name(out.name + ".part"), log
+
+
+def deck_inputs(deck: Deck) -> set[Path]:
+    """The files a run of ``deck`` reads: the deck, the files it includes, the files its
+    commands name under ``${deck_dir}`` (meshes) and the feeder description it came from."""
+    files = {deck.path, *(c.file for c in deck.commands if c.file is not None)}
+    for c in deck.commands:
+        for word in c.text.split():
+            if word.startswith("${deck_dir}/"):
+                files.add(deck.include_dir / word.removeprefix("${deck_dir}/"))
+    if deck.description is not None:
+        files.add(Path(deck.description.path))
+    return {f.resolve() for f in files}
+
+
+def check_output(deck: Deck, output, option: str = "output") -> None:
+    """Refuse, before anything runs, an ``output`` whose files (:func:`output_files`) would
+    pass for another's or replace an input: a name ending in ``.part`` (a complete result
+    would be left under the name of an unfinished one, which ``vibrofeed check`` fails), a
+    ``.log`` (the result and its log would be one file), and any of its files being one the
+    run reads (:func:`deck_inputs`)."""
+    out, part, log = output_files(output)
+    if out.name.endswith(".part"):
+        raise UsageError(f"{option} {output}: a name ending in .part is a run's unfinished result "
+                         f"(the run writes {part.name} until it completes); give the result's own "
+                         f"name, such as {out.name.removesuffix('.part')}")
+    if out == log:
+        raise UsageError(f"{option} {output}: the run writes its LIGGGHTS log as OUT.log, so the "
+                         "result and its log would be one file; give the result another suffix "
+                         "(.h5)")
+    inputs = deck_inputs(deck)
+    for what, path in (("the result", out), ("its unfinished result", part), ("its log", log)):
+        if path.resolve() in inputs:
+            raise UsageError(f"{option} {output}: {what} would replace {path.name}, which the run "
+                             f"reads (deck {deck.name}); give another output name")
+
+
 def _prepare_output(output) -> tuple[Path, Path, Path]:
     out = Path(output).expanduser().resolve()
     if out.is_dir():
@@ -296,6 +341,7 @@ def run_deck(deck: Deck, params: Mapping[str, str], output, *, ranks: int = 1,
     check_ranks(ranks)
     target_error = check_target_error(target_error, deck)
     values = resolve(deck, params)
+    check_output(deck, output)
     rid = run_id(deck, values, before_run, schedule, target_error)
     out, part, log = _prepare_output(output)
     if reuse:

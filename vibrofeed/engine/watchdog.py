@@ -12,19 +12,17 @@ steps may legitimately stand still, so only the first test applies there.
 
 from __future__ import annotations
 
-import os
+from ..environment import stall_seconds
 
 FLOOR_SECONDS = 60.0
 SLOWEST_FACTOR = 10.0
 
 
 def floor_seconds() -> float:
-    """The floor: ``VIBROFEED_STALL_SECONDS`` if set to a positive number, else FLOOR_SECONDS."""
-    try:
-        value = float(os.environ.get("VIBROFEED_STALL_SECONDS", ""))
-    except ValueError:
-        return FLOOR_SECONDS
-    return value if value > 0 else FLOOR_SECONDS
+    """The floor: ``VIBROFEED_STALL_SECONDS`` if set (a positive number, else refused:
+    :mod:`vibrofeed.environment`), else FLOOR_SECONDS."""
+    value = stall_seconds()
+    return FLOOR_SECONDS if value is None else value
 
 
 class Watchdog:

@@ -322,8 +322,16 @@ def test_bulk_relations_at_and_past_their_edges():
         assert "exceeds part_size" in bulk_problem(shape=shape, part_thickness=up(0.1))
         assert "applies to spheres only" in bulk_problem(shape=shape, size_spread=0.25)
     assert bulk_problem(part_thickness=0.2) is None
-    # the track is at least a part wide (spheres: the largest of the spread)
-    assert bulk_problem(track_width=0.125, size_spread=0.25, n_parts=1) is None
+    # the track is at least a part wide (spheres: the largest of the spread), and wider than
+    # the blocks the parts are inserted into whole, 5 % of a part in from each wall, need
+    assert bulk_problem(track_width=up(0.135), size_spread=0.25, n_parts=1) is None
+    assert "leaves no room to insert a part" in bulk_problem(track_width=0.135, size_spread=0.25, n_parts=1)
+    edge = 2 * 0.05 + 0.1 * 0.1  # a sphere's diameter and 5 % of it from each wall
+    assert "the inlet (inlet_rate) places each part whole" in bulk_problem(track_width=edge, n_parts=0,
+                                                                            inlet_rate=5.0)
+    assert bulk_problem(track_width=up(edge), n_parts=0, inlet_rate=5.0) is None
+    assert bulk_problem(track_width=0.11, n_parts=0, inlet_rate=0.0) \
+        == "n_parts=0 and inlet_rate=0: no part would ever be fed; set n_parts (pre-fill) or inlet_rate"
     assert "narrower than a part (0.125 m across)" in bulk_problem(
         track_width=down(0.125), size_spread=0.25, n_parts=1)
     assert "narrower than a part (0.1 m across)" in bulk_problem(shape=1, track_width=down(0.1),

@@ -4,7 +4,7 @@ import math
 
 import pytest
 
-from helpers import DECKS
+from helpers import DECKS, vibrofeed
 from vibrofeed.decks import Deck
 from vibrofeed.parameters import ParameterError, parse_assignments, resolve
 
@@ -211,3 +211,34 @@ def test_a_modulus_beyond_any_solid_with_a_fixed_dt_is_refused_in_one_line(deck)
     with pytest.raises(ParameterError, match=r"^dt=1e-07 s is \d+% of the Rayleigh time \(limit "
                                              r"20%\) and \d+% of the Hertz time \(limit 10%\): "):
         resolve(deck, {"youngs": "1e160", "dt": "1e-7"})
+
+
+# -- a value the engine would read otherwise than Python (issue 36) ----------------------------
+@pytest.mark.parametrize("deck, name, text, engine", [
+    ("single_part", "freq", "５０", "50.0"),          # full-width digits: LIGGGHTS reads 0
+    ("single_part", "freq", "٥٠", "50.0"),            # Arabic-Indic digits
+    ("single_part", "amp_n", "1_0e-5", "0.0001"),     # an underscore: C's atof stops at it
+    ("single_part", "t_end", "\u20030.1", "0.1"),     # a blank Python skips (an em space)
+    ("single_part", "seed", "1e2", "100"),            # an integer parameter in float notation
+    ("single_part", "seed", "7.0", "7"),
+    ("bulk_feeder", "n_parts", "2e1", "20"),
+    ("bulk_feeder", "sections", "２", "2"),
+])
+def test_a_value_the_engine_would_read_otherwise_reaches_it_as_python_read_it(deck, name, text, engine):
+    values = resolve(Deck.find(deck), {name: text})
+    assert values[name] == engine
+    assert float(values[name]) == float(text)
+
+
+@pytest.mark.parametrize("name, text", [("freq", "50"), ("amp_n", "1.5e-4"), ("amp_n", "2E-05"),
+                                        ("phase", "-30"), ("phase", "+.5"), ("t_end", "5."),
+                                        ("seed", "12"), ("seed", "+3")])
+def test_a_plain_value_reaches_the_engine_as_written(name, text):
+    # (the run id of an existing result hashes it: rewriting it would make every run new)
+    assert resolve(Deck.find("single_part"), {name: text})[name] == text
+
+
+def test_the_run_by_hand_gets_the_value_python_read(tmp_path):
+    proc = vibrofeed("prepare", "single_part", "-p", "freq=５０", "-o", tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert "-var freq 50.0" in proc.stdout and "５" not in proc.stdout

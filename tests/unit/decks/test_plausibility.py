@@ -12,7 +12,7 @@ from vibrofeed.decks import Deck
 from vibrofeed.parameters import ParameterError, ParameterWarning, resolve
 from vibrofeed.plausibility import advice
 
-SINGLE, BULK = Deck.find("single_part"), Deck.find("bulk_feeder")
+SINGLE, BULK, BOWL = Deck.find("single_part"), Deck.find("bulk_feeder"), Deck.find("bowl_feeder")
 LINE = {"sections": "2"}  # a feeder line with the deck's section 2
 STEP = {"s2_step": "1.5e-4"}  # a joint for drives of two frequencies (the floors part by 0.1 mm)
 
@@ -80,6 +80,18 @@ def said(deck, given) -> list[str]:
     (SINGLE, {"phase": "6.283185"}, "phase=6.28318 deg is 2 pi: an angle in radians?"),
     # the inlet's batches without an inlet (the deck's inlet_rate is 0)
     (BULK, {"inlet_batch": "5"}, "inlet_batch has no effect: it groups the inlet's parts: inlet_rate=0"),
+    # issue 36: a return delay without returns, the normal motion of a waveform along the track
+    (BULK, {"return_delay": "0.1"}, "return_delay has no effect: it delays the rejects' return to the "
+                                    "inlet: recirculate=0 removes them"),
+    (SINGLE, {"waveform": "2", "amp_n": "1e-4"}, "amp_n has no effect: it shapes the motion normal to "
+                                                 "the track: waveform=2 moves it along the track only"),
+    (BULK, {"waveform": "3", "phase": "30"}, "phase has no effect: it shapes the motion normal to the "
+                                             "track: waveform=3"),
+    (SINGLE, {"waveform": "1", "amp_n": "0", "phase": "30"}, "phase has no effect: it shifts the normal"),
+    # the bowl's tooling without its tool, as a line's section 2
+    (BOWL, {"drop_width": "4e-4"}, "drop_width has no effect: it shapes the side drop: drop_to <= "
+                                   "drop_from has none"),
+    (BOWL, {"wiper_at": "0.3"}, "wiper_at has no effect: it places the wiper: wiper_height=0 has none"),
 ])
 def test_an_implausible_value_is_named_with_its_likely_slip(deck, given, words):
     lines = said(deck, given)
@@ -107,6 +119,10 @@ def test_an_implausible_value_is_named_with_its_likely_slip(deck, given, words):
     # frequencies: only 2 pi x a multiple of 5 Hz reads as rad/s, not 2 pi x 3 Hz nor 15 pi
     (SINGLE, {"freq": "18.8496"}), (SINGLE, {"freq": "47.1239"}),
     (BULK, {"inlet_batch": "5", "inlet_rate": "1"}),
+    (BULK, {"recirculate": "1", "return_delay": "0.1", **LINE}),
+    (SINGLE, {"waveform": "2", "duty": "0.8", "amp_n": "0"}),  # a motion along the track, said so
+    (BOWL, {"drop_from": "0.2", "drop_to": "0.5", "drop_width": "4e-4"}),
+    (BOWL, {"wiper_height": "6e-4", "wiper_at": "0.3"}),
 ])
 def test_plausible_values_and_options_in_effect_say_nothing(deck, given):
     assert said(deck, given) == []
@@ -153,4 +169,18 @@ def test_the_command_line_prints_a_warning_as_one_line(tmp_path):
      "shapes the side drop: s2_drop_to <= s2_drop_from has none"),
 ])
 def test_a_parameter_the_deck_does_not_declare_takes_its_neutral_value(p, name, why):
+    assert advice(p, {name}) == [f"parameter {name} has no effect: it {why}"]
+
+
+@pytest.mark.parametrize("p, name, why", [
+    # a described line's sections past 2 as section 2: its tooling, and its absence
+    ({"sections": 3.0, "s3_wiper_height": 0.0, "s3_wiper_at": 0.3}, "s3_wiper_at",
+     "places the wiper: s3_wiper_height=0 has none"),
+    ({"sections": 3.0, "s3_drop_from": 0.5, "s3_drop_to": 0.2}, "s3_drop_from",
+     "shapes the side drop: s3_drop_to <= s3_drop_from has none"),
+    ({"sections": 2.0, "s3_freq": 80.0}, "s3_freq", "shapes a feeder line's section 3: sections=2 has none"),
+    ({"sections": 3.0, "s3_phase": 20.0, "s3_amp_n": 0.0}, "s3_phase",
+     "shifts the normal motion against the tangential one: one of them is 0"),
+])
+def test_a_further_sections_idle_parameters_are_named_as_section_2s(p, name, why):
     assert advice(p, {name}) == [f"parameter {name} has no effect: it {why}"]

@@ -109,11 +109,19 @@ def test_a_slurm_allocation_raises_the_limit_to_its_tasks(three_cores, monkeypat
     assert max_ranks() == limit
 
 
-@pytest.mark.parametrize("env, limit", [("7", 7), ("1", 1), ("100", 100), ("0", 12), ("-3", 12),
-                                        ("x", 12), ("", 12), ("2.5", 12)])
-def test_vibrofeed_max_ranks_overrides_only_when_a_positive_integer(three_cores, monkeypatch, env, limit):
+@pytest.mark.parametrize("env, limit", [("7", 7), ("1", 1), ("100", 100), ("", 12), (" ", 12)])
+def test_vibrofeed_max_ranks_overrides_when_set(three_cores, monkeypatch, env, limit):
     monkeypatch.setenv("VIBROFEED_MAX_RANKS", env)
     assert max_ranks() == limit
+
+
+@pytest.mark.parametrize("env", ["0", "-3", "x", "abc", "2.5", "４"])
+def test_vibrofeed_max_ranks_that_is_no_rank_count_is_refused(three_cores, monkeypatch, env):
+    monkeypatch.setenv("VIBROFEED_MAX_RANKS", env)
+    with pytest.raises(UsageError) as err:
+        max_ranks()
+    assert str(err.value) == (f"environment variable VIBROFEED_MAX_RANKS={env} must be a whole number "
+                              "of MPI ranks, at least 1; correct it or unset it")
 
 
 def test_vibrofeed_max_ranks_overrides_a_slurm_allocation(three_cores, monkeypatch):

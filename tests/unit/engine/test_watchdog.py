@@ -1,6 +1,9 @@
 """The runner's watchdog: when an engine worker counts as hung (engine/watchdog.py)."""
 
+import pytest
+
 from vibrofeed.engine.watchdog import SLOWEST_FACTOR, Watchdog, floor_seconds
+from vibrofeed.errors import UsageError
 
 
 def beat(w, t, step):
@@ -48,9 +51,17 @@ def test_messages_read_late_are_timed_by_the_worker():
 def test_the_floor_comes_from_the_environment(monkeypatch):
     monkeypatch.setenv("VIBROFEED_STALL_SECONDS", "2.5")
     assert floor_seconds() == 2.5
-    for bad in ("", "x", "-1", "0"):
-        monkeypatch.setenv("VIBROFEED_STALL_SECONDS", bad)
-        assert floor_seconds() == 60.0
+    monkeypatch.setenv("VIBROFEED_STALL_SECONDS", "")  # set to nothing: unset
+    assert floor_seconds() == 60.0
+
+
+@pytest.mark.parametrize("bad", ["x", "-1", "0", "nan", "inf", "６０"])
+def test_a_floor_that_means_nothing_is_refused_not_ignored(monkeypatch, bad):
+    monkeypatch.setenv("VIBROFEED_STALL_SECONDS", bad)
+    with pytest.raises(UsageError) as err:
+        floor_seconds()
+    assert str(err.value) == (f"environment variable VIBROFEED_STALL_SECONDS={bad} must be a number "
+                              "of seconds > 0; correct it or unset it")
 
 
 def test_the_floor_is_the_environments_unless_given(monkeypatch):
