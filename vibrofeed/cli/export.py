@@ -35,7 +35,7 @@ def run(args) -> int:
     from pathlib import Path
 
     from ..errors import UsageError
-    from ..results.reader import Result
+    from .options import open_result
     from .outputs import folder_destination, names_in, written
 
     folder_destination("-o", args.output, create=False, parents=True)
@@ -52,7 +52,7 @@ def run(args) -> int:
         return _h5md_md(args)
     from ..pictures.export import export
 
-    with Result(args.result, allow_incomplete=args.allow_incomplete) as result:
+    with open_result(args) as result:
         bar = None
         if not args.quiet and sys.stderr.isatty():
             from tqdm import tqdm
@@ -76,19 +76,28 @@ def _h5md_md(args) -> int:
 
     from ..errors import OutputError, UsageError
     from ..results.md_export import export_md
-    from ..results.reader import Result
+    from ..results.reader import unreadable
+    from .options import open_result
 
     if args.every < 1:
         raise UsageError(f"--every must be >= 1, got {args.every}")
     start = time.perf_counter()
     folder = Path(args.output)
     path = folder / (Path(args.result).stem + ".h5md")
-    with Result(args.result, allow_incomplete=args.allow_incomplete) as result:
-        try:
-            folder.mkdir(parents=True, exist_ok=True)
-            export_md(result, path, every=args.every)
-        except OSError as exc:
-            raise OutputError(f"cannot write {path}: {exc}") from exc
-        frames = len(range(0, result.n_frames, args.every))
+    created = not folder.exists()
+    try:
+        with open_result(args) as result:
+            try:
+                folder.mkdir(parents=True, exist_ok=True)
+                export_md(result, path, every=args.every)
+            except OSError as exc:  # (not the result's: an h5py error reading it names the result)
+                if unreadable(exc, result.path) is not None:
+                    raise
+                raise OutputError(f"cannot write {path}: {exc}") from exc
+            frames = len(range(0, result.n_frames, args.every))
+    except BaseException:
+        if created and folder.is_dir() and not any(folder.iterdir()):
+            folder.rmdir()  # a failed export leaves no folder it made
+        raise
     print(f"wrote {path} ({frames} frames, {time.perf_counter() - start:.1f} s)")
     return 0

@@ -13,7 +13,7 @@ from ..errors import ParameterError
 from ..feeders.feeder import Feeder
 from ..models.constants import G
 from . import layout as L
-from .reader import _text
+from .reader import DAMAGED, _reason, _text, damaged_object
 
 
 @dataclass(frozen=True)
@@ -759,18 +759,32 @@ def check_file(path, allow_incomplete: bool = False) -> Report:
     """Check a file; ``Report.ok`` is False if any error was found."""
     try:
         f = h5py.File(path, "r")
+    except FileNotFoundError:
+        return Report(str(path), [Problem("error", "", "no such file")])
     except OSError as exc:
-        return Report(str(path), [Problem("error", "", f"cannot open as HDF5: {exc}")])
+        return Report(str(path), [Problem("error", "", f"cannot open as HDF5: {_reason(exc)}")])
     with f:
-        c = _Checker(f, allow_incomplete)
-        c.h5md()
-        parts = c.particles()
-        c.surface()
-        status = c.parameters()
-        events = c.outlet()
-        c.mass_balance(events, status, c.outlet(L.REJECTS))
-        c.track()
-        if str(path).endswith(".part") and status == L.STATUS_COMPLETE:  # FORMAT.md: never both
-            (c.warn if allow_incomplete else c.error)(L.RUN, "a .part file says 'complete': never renamed")
-        _Physics(c).run()
+        c, parts, status = None, 0, ""
+        try:
+            c = _Checker(f, allow_incomplete)
+            c.h5md()
+            parts = c.particles()
+            c.surface()
+            status = c.parameters()
+            events = c.outlet()
+            c.mass_balance(events, status, c.outlet(L.REJECTS))
+            c.track()
+            if str(path).endswith(".part") and status == L.STATUS_COMPLETE:  # FORMAT.md: never both
+                (c.warn if allow_incomplete else c.error)(L.RUN,
+                                                          "a .part file says 'complete': never renamed")
+            _Physics(c).run()
+        except Exception as exc:  # a damaged file: this file fails, the others are still checked
+            found = damaged_object(exc, str(path))
+            if found is None:
+                raise
+            where, reason = found
+            damage = Problem("error", where.lstrip("/"), f"cannot read ({reason}): {DAMAGED}")
+            if c is None:
+                return Report(str(path), [damage])
+            c.problems.append(damage)
         return Report(str(path), c.problems, frames=c.frames, parts=parts, status=status)
