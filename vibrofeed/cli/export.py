@@ -11,7 +11,9 @@ DESCRIPTION = ("Write a result as a ParaView time series: DIR/RUN.pvd referencin
                "triangles and the track mesh at the frame's position (DIR/RUN/*.vtp); outlet "
                "events, if any, in DIR/RUN_outlet.vtp. Open the .pvd in ParaView as it is. "
                "--format h5md-md writes DIR/RUN.h5md instead: H5MD that MDAnalysis, znh5md and "
-               "pyh5md read (lengths in nm, the parts present first at each frame; FORMAT.md).")
+               "pyh5md read (lengths in nm, the parts present first at each frame, then padding "
+               "rows of id -1: keep id >= 0; znh5md reads it with variable_shape=False, MDAnalysis "
+               "takes masses from the file: docs/commands.md, 'Reading an h5md-md export').")
 
 
 def add_arguments(p) -> None:

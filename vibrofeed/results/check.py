@@ -137,6 +137,23 @@ class _Checker:
             self.error(f"{path}/time", "not monotonically increasing")
         return value
 
+    def box_pbc(self, box, periodic: list) -> None:
+        """box/pbc, when present: a time series with the positions' step, saying at every
+        frame what `boundary` says (for readers that take the periodicity from it)."""
+        where = f"{L.PARTS}/box/pbc"
+        value = box["pbc"].get("value") if isinstance(box["pbc"], h5py.Group) else None
+        if not isinstance(value, h5py.Dataset) or value.ndim != 2 or value.shape[1:] != (3,) \
+                or value.dtype.kind != "b":
+            self.error(where, "must be a time series of 3 booleans per frame")
+            return
+        step, step0 = box["pbc"].get("step"), self.f.get(f"{L.PARTS}/position/step")
+        if step0 is not None and (step is None or len(step) != len(step0) or len(value) != len(step0)
+                                  or not np.array_equal(step[()], step0[()])):
+            self.error(where, "must be sampled with the positions (their step)")
+        elif not (value[()] == np.array(periodic)).all():
+            axes = ", ".join(f"{a} {'periodic' if p else 'none'}" for a, p in zip("xyz", periodic))
+            self.error(where, f"disagrees with the box's boundary ({axes})")
+
     def particles(self):
         if not self.need(L.PARTS, h5py.Group):
             return 0
@@ -148,6 +165,8 @@ class _Checker:
             if len(boundary) != 3 or any(b not in ("none", "periodic") for b in boundary):
                 self.error(f"{L.PARTS}/box",
                            f"attribute 'boundary' must be 3 of none/periodic, got {boundary}")
+            elif "pbc" in box:  # (optional: files before it have none)
+                self.box_pbc(box, [b == "periodic" for b in boundary])
         values = {}
         for name, (_, comps, unit) in L.PART_ELEMENTS.items():
             v = self.time_series(f"{L.PARTS}/{name}", comps, unit, n_parts=True)
