@@ -60,6 +60,7 @@ def _reason(exc: BaseException) -> str:
     """HDF5's own words for an h5py error, without h5py's wrapping: "Can't synchronously
     read data (wrong B-tree signature)" -> "wrong B-tree signature"."""
     text = str(exc.args[0]) if isinstance(exc, KeyError) and exc.args else str(exc)
+    text = text.splitlines()[0] if text else ""  # (HDF5 may add its stack of errors, one a line)
     while (m := re.fullmatch(r"[^(]*\((.*)\)", text.strip())) is not None:
         text = m.group(1)
     return text.strip() or type(exc).__name__
