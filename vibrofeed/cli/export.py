@@ -11,7 +11,9 @@ DESCRIPTION = ("Write a result as a ParaView time series: DIR/RUN.pvd referencin
                "triangles and the track mesh at the frame's position (DIR/RUN/*.vtp); outlet "
                "events, if any, in DIR/RUN_outlet.vtp. Open the .pvd in ParaView as it is. "
                "--format h5md-md writes DIR/RUN.h5md instead: H5MD that MDAnalysis, znh5md and "
-               "pyh5md read (lengths in nm, the parts present first at each frame; FORMAT.md).")
+               "pyh5md read (lengths in nm, the parts present first at each frame, then padding "
+               "rows of id -1: keep id >= 0; znh5md reads it with variable_shape=False, MDAnalysis "
+               "takes masses from the file: docs/commands.md, 'Reading an h5md-md export').")
 
 
 def add_arguments(p) -> None:
@@ -35,7 +37,7 @@ def run(args) -> int:
     from pathlib import Path
 
     from ..errors import UsageError
-    from ..results.reader import Result
+    from .options import open_result
     from .outputs import folder_destination, names_in, not_an_input, written
 
     folder_destination("-o", args.output, create=False, parents=True)
@@ -54,7 +56,7 @@ def run(args) -> int:
         return _h5md_md(args)
     from ..pictures.export import export
 
-    with Result(args.result, allow_incomplete=args.allow_incomplete) as result:
+    with open_result(args) as result:
         bar = None
         if not args.quiet and sys.stderr.isatty():
             from tqdm import tqdm
@@ -78,19 +80,28 @@ def _h5md_md(args) -> int:
 
     from ..errors import OutputError, UsageError
     from ..results.md_export import export_md
-    from ..results.reader import Result
+    from ..results.reader import unreadable
+    from .options import open_result
 
     if args.every < 1:
         raise UsageError(f"--every must be >= 1, got {args.every}")
     start = time.perf_counter()
     folder = Path(args.output)
     path = folder / (Path(args.result).stem + ".h5md")
-    with Result(args.result, allow_incomplete=args.allow_incomplete) as result:
-        try:
-            folder.mkdir(parents=True, exist_ok=True)
-            export_md(result, path, every=args.every)
-        except OSError as exc:
-            raise OutputError(f"cannot write {path}: {exc}") from exc
-        frames = len(range(0, result.n_frames, args.every))
+    created = not folder.exists()
+    try:
+        with open_result(args) as result:
+            try:
+                folder.mkdir(parents=True, exist_ok=True)
+                export_md(result, path, every=args.every)
+            except OSError as exc:  # (not the result's: an h5py error reading it names the result)
+                if unreadable(exc, result.path) is not None:
+                    raise
+                raise OutputError(f"cannot write {path}: {exc}") from exc
+            frames = len(range(0, result.n_frames, args.every))
+    except BaseException:
+        if created and folder.is_dir() and not any(folder.iterdir()):
+            folder.rmdir()  # a failed export leaves no folder it made
+        raise
     print(f"wrote {path} ({frames} frames, {time.perf_counter() - start:.1f} s)")
     return 0

@@ -128,3 +128,15 @@ def print_figures(summary: dict, figures: list, as_json: bool, table: Callable[[
         print(table(summary))
         for path in figures:
             print(f"figure: {path}")
+
+
+def open_result(args):
+    """``args.result`` opened for a command that takes ``--allow-incomplete``: a run that did
+    not complete is refused with a pointer to the option (the library's message names none)."""
+    from ..errors import IncompleteResult
+    from ..results.reader import Result
+
+    try:
+        return Result(args.result, allow_incomplete=args.allow_incomplete)
+    except IncompleteResult as exc:
+        raise IncompleteResult(f"{exc}; --allow-incomplete reads the frames it holds") from None

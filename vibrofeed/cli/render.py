@@ -49,8 +49,7 @@ def run(args) -> int:
 
     from ..errors import OutputError
     from ..pictures.render import render
-    from ..results.reader import Result
-    from .options import no_effect
+    from .options import no_effect, open_result
     from .outputs import file_destination, not_an_input, replaced
 
     output = file_destination("-o", args.output or f"{Path(args.result).stem}.png", (".png", ".mp4"))
@@ -65,7 +64,7 @@ def run(args) -> int:
     frame = -1 if args.frame is None else args.frame
     every = 1 if args.every is None else args.every
     fps = 25.0 if args.fps is None else args.fps
-    with Result(args.result, allow_incomplete=args.allow_incomplete) as result:
+    with open_result(args) as result:
         bar = None
         if movie and not args.quiet and sys.stderr.isatty():
             from tqdm import tqdm

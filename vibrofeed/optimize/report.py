@@ -39,9 +39,17 @@ def read(folder) -> tuple[dict, list[dict], object]:
     path = folder / STUDY_JSON
     if not path.is_file():
         raise UsageError(f"{folder}: no {STUDY_JSON}; not a study folder (the -o DIR of vibrofeed optimize)")
-    doc = json.loads(path.read_text())
+    try:
+        doc = json.loads(path.read_text())
+    except ValueError as exc:  # (not JSON, or not text)
+        where = f" at line {exc.lineno}" if isinstance(exc, json.JSONDecodeError) else ""
+        raise UsageError(f"{path}: not readable{where}: damaged, or not a file vibrofeed optimize "
+                         "wrote") from None
+    if not isinstance(doc, dict) or not isinstance(doc.get("spec_text"), str):
+        raise UsageError(f"{path}: holds no study (its spec_text): damaged, or not a file vibrofeed "
+                         "optimize wrote")
     rows, _ = S.read(folder, stem=STEM)
-    spec = parse(doc["spec_text"], doc.get("source", "study.toml"))  # as it ran, not as edited since
+    spec = parse(doc["spec_text"], str(doc.get("source", "study.toml")))  # as it ran, not as edited since
     return doc, rows, spec
 
 
@@ -59,7 +67,10 @@ def importances(folder, spec) -> dict:
 
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     storage = JournalStorage(JournalFileBackend(str(Path(folder) / JOURNAL)))
-    study = optuna.load_study(study_name="vibrofeed", storage=storage)
+    try:
+        study = optuna.load_study(study_name="vibrofeed", storage=storage)
+    except KeyError:  # an empty journal (a study stopped before its search began): nothing to rank
+        return {}
     done = [t for t in study.trials if t.state == optuna.trial.TrialState.COMPLETE
             and "ruled_out" not in t.user_attrs and t.constraints.get("measured", 0.0) <= 0]
     if len(done) < 4 or len(spec.variables) < 2:

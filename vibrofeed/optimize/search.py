@@ -444,8 +444,9 @@ def optimize(spec_path, output=None, workers: int = 1, budget: int | None = None
         except UsageError as exc:
             raise UsageError(f"{spec.where('target_error')}: {exc}") from None
     runs = budget if budget is not None else spec.budget["runs"]
-    if runs < 1 or runs >= CONFIRM_BASE:
-        raise UsageError(f"--budget {runs}: give 1 to {CONFIRM_BASE - 1} DEM runs")
+    if runs < 1 or runs >= CONFIRM_BASE:  # (named as the user gave it: the option or the file's key)
+        given = f"--budget {runs}" if budget is not None else f"{spec.where('budget', 'runs')}: runs = {runs}"
+        raise UsageError(f"{given}: give 1 to {CONFIRM_BASE - 1} DEM runs")
     folder = Path(output if output is not None else Path("results") / Path(spec_path).stem).absolute()
     _check_folder(folder, spec, resume)
     if comm is not None and workers > 1:
@@ -454,14 +455,33 @@ def optimize(spec_path, output=None, workers: int = 1, budget: int | None = None
     if comm is not None and groups < 1:
         raise UsageError(f"ranks_per_run = {spec.ranks_per_run} needs at least that many ranks; "
                          f"mpirun started {comm.Get_size()}")
+    fresh, made = not (folder / STUDY_JSON).is_file(), not folder.exists()
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "runs").mkdir(exist_ok=True)
     lock = F.lock(folder, "study")
     try:
         F.clear_leftovers(folder, "runs")
         return _run(spec, deck, folder, runs, workers, quiet, comm, out, spec_path)
+    except UsageError as exc:
+        if fresh and getattr(exc, "before_any_run", False):  # (still locked) nothing left behind:
+            _forget(folder, made)                             # the file corrected is not "another study"
+        raise
     finally:
         os.close(lock)
+
+
+def _forget(folder: Path, made: bool) -> None:
+    """Remove what a new study wrote into ``folder`` (empty before it, or made by it)."""
+    import shutil
+
+    if made:
+        shutil.rmtree(folder, ignore_errors=True)
+        return
+    for entry in folder.iterdir():
+        if entry.is_dir() and not entry.is_symlink():
+            shutil.rmtree(entry, ignore_errors=True)
+        else:
+            entry.unlink(missing_ok=True)
 
 
 def _check_folder(folder: Path, spec: StudySpec, resume: bool) -> None:
@@ -513,9 +533,11 @@ def _run(spec, deck, folder, runs, workers, quiet, comm, out, spec_path) -> int:
         st.say(f"screen: {counts['feasible']} of {counts['screened']} settings pass the checks and "
                f"models; {len(seeds)} seed the search")
         if not counts["feasible"]:
-            _write_json(folder, doc)
-            raise UsageError("no setting of the design space passes the checks and the models "
-                             f"({counts['reasons']}); widen the bounds or loosen [constraints]")
+            why = ", ".join(f"{name} rules out {n}" for name, n in counts["reasons"].items())
+            refused = UsageError(f"no setting of the design space passes the checks and the models "
+                                 f"({why}); widen the bounds or loosen [constraints]")
+            refused.before_any_run = True  # (a new study: optimize() removes what it wrote)
+            raise refused
     _write_json(folder, doc)
     ruled_before = doc.get("ruled_out", 0)
 

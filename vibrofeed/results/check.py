@@ -13,7 +13,7 @@ from ..errors import ParameterError
 from ..feeders.feeder import Feeder
 from ..models.constants import G
 from . import layout as L
-from .reader import _text
+from .reader import DAMAGED, _reason, _text, damaged_object
 
 
 @dataclass(frozen=True)
@@ -137,6 +137,23 @@ class _Checker:
             self.error(f"{path}/time", "not monotonically increasing")
         return value
 
+    def box_pbc(self, box, periodic: list) -> None:
+        """box/pbc, when present: a time series with the positions' step, saying at every
+        frame what `boundary` says (for readers that take the periodicity from it)."""
+        where = f"{L.PARTS}/box/pbc"
+        value = box["pbc"].get("value") if isinstance(box["pbc"], h5py.Group) else None
+        if not isinstance(value, h5py.Dataset) or value.ndim != 2 or value.shape[1:] != (3,) \
+                or value.dtype.kind != "b":
+            self.error(where, "must be a time series of 3 booleans per frame")
+            return
+        step, step0 = box["pbc"].get("step"), self.f.get(f"{L.PARTS}/position/step")
+        if step0 is not None and (step is None or len(step) != len(step0) or len(value) != len(step0)
+                                  or not np.array_equal(step[()], step0[()])):
+            self.error(where, "must be sampled with the positions (their step)")
+        elif not (value[()] == np.array(periodic)).all():
+            axes = ", ".join(f"{a} {'periodic' if p else 'none'}" for a, p in zip("xyz", periodic))
+            self.error(where, f"disagrees with the box's boundary ({axes})")
+
     def particles(self):
         if not self.need(L.PARTS, h5py.Group):
             return 0
@@ -148,6 +165,8 @@ class _Checker:
             if len(boundary) != 3 or any(b not in ("none", "periodic") for b in boundary):
                 self.error(f"{L.PARTS}/box",
                            f"attribute 'boundary' must be 3 of none/periodic, got {boundary}")
+            elif "pbc" in box:  # (optional: files before it have none)
+                self.box_pbc(box, [b == "periodic" for b in boundary])
         values = {}
         for name, (_, comps, unit) in L.PART_ELEMENTS.items():
             v = self.time_series(f"{L.PARTS}/{name}", comps, unit, n_parts=True)
@@ -759,18 +778,32 @@ def check_file(path, allow_incomplete: bool = False) -> Report:
     """Check a file; ``Report.ok`` is False if any error was found."""
     try:
         f = h5py.File(path, "r")
+    except FileNotFoundError:
+        return Report(str(path), [Problem("error", "", "no such file")])
     except OSError as exc:
-        return Report(str(path), [Problem("error", "", f"cannot open as HDF5: {exc}")])
+        return Report(str(path), [Problem("error", "", f"cannot open as HDF5: {_reason(exc)}")])
     with f:
-        c = _Checker(f, allow_incomplete)
-        c.h5md()
-        parts = c.particles()
-        c.surface()
-        status = c.parameters()
-        events = c.outlet()
-        c.mass_balance(events, status, c.outlet(L.REJECTS))
-        c.track()
-        if str(path).endswith(".part") and status == L.STATUS_COMPLETE:  # FORMAT.md: never both
-            (c.warn if allow_incomplete else c.error)(L.RUN, "a .part file says 'complete': never renamed")
-        _Physics(c).run()
+        c, parts, status = None, 0, ""
+        try:
+            c = _Checker(f, allow_incomplete)
+            c.h5md()
+            parts = c.particles()
+            c.surface()
+            status = c.parameters()
+            events = c.outlet()
+            c.mass_balance(events, status, c.outlet(L.REJECTS))
+            c.track()
+            if str(path).endswith(".part") and status == L.STATUS_COMPLETE:  # FORMAT.md: never both
+                (c.warn if allow_incomplete else c.error)(L.RUN,
+                                                          "a .part file says 'complete': never renamed")
+            _Physics(c).run()
+        except Exception as exc:  # a damaged file: this file fails, the others are still checked
+            found = damaged_object(exc, str(path))
+            if found is None:
+                raise
+            where, reason = found
+            damage = Problem("error", where.lstrip("/"), f"cannot read ({reason}): {DAMAGED}")
+            if c is None:
+                return Report(str(path), [damage])
+            c.problems.append(damage)
         return Report(str(path), c.problems, frames=c.frames, parts=parts, status=status)

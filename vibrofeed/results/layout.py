@@ -90,6 +90,10 @@ def outlet_path(f) -> str | None:
 # positions' step and time) because readers such as znh5md and ASE expect them.
 BOX_BOUNDARY = ("none", "none", "none")
 BOX_EDGES_PLACEHOLDER = (0.0, 0.0, 0.0)
+# box/pbc: the boundary as booleans (periodic or not) per axis, a time series sampled with the
+# positions. Not an H5MD item (H5MD allows others): znh5md takes the periodicity from it, and
+# without it reads the fixed-length `boundary` strings H5MD prescribes as periodic.
+BOX_PBC = tuple(b == "periodic" for b in BOX_BOUNDARY)
 
 # A feeder line's reject table: as the outlet's, plus the section a part fell from
 # (its position tells which tooling: the side drop's stretch, or before the wiper).

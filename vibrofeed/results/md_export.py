@@ -219,10 +219,8 @@ def _write(result, sink: _Sink, index: np.ndarray, n_rows: int, names: list[str]
         step[:] = result.read("step", frames=index)
         time[:] = result.read("time", frames=index)
         edges[:] = np.asarray(L.BOX_EDGES_PLACEHOLDER) * NM_PER_M
-        # Not an H5MD item (H5MD allows others): znh5md takes the periodicity from it, and
-        # misreads the fixed-length `boundary` strings H5MD prescribes as periodic.
         pbc = _time_series(box, "pbc", (len(index), 3), "?", False, None, step, time)[0]
-        pbc[:] = np.array([b == "periodic" for b in L.BOX_BOUNDARY])
+        pbc[:] = np.array(L.BOX_PBC)  # (as in the result: for znh5md)
         values = {}
         for name in names:
             source, _, unit, fill = ELEMENTS[name]

@@ -27,6 +27,7 @@ Files of format 1.2 and earlier, which kept the outlet table under
 
 from __future__ import annotations
 
+import os
 import re
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -53,6 +54,60 @@ def _text(value) -> str:
     if isinstance(value, np.ndarray) and value.shape == ():
         return _text(value[()])
     return str(value)
+
+
+def _reason(exc: BaseException) -> str:
+    """HDF5's own words for an h5py error, without h5py's wrapping: "Can't synchronously
+    read data (wrong B-tree signature)" -> "wrong B-tree signature"."""
+    text = str(exc.args[0]) if isinstance(exc, KeyError) and exc.args else str(exc)
+    text = text.splitlines()[0] if text else ""  # (HDF5 may add its stack of errors, one a line)
+    while (m := re.fullmatch(r"[^(]*\((.*)\)", text.strip())) is not None:
+        text = m.group(1)
+    return text.strip() or type(exc).__name__
+
+
+def unreadable(exc: BaseException, path: str) -> ResultError | None:
+    """The one-line error an h5py failure to read the file at ``path`` becomes, naming the
+    file and the object (a damaged or cut file: "wrong B-tree signature", "truncated file",
+    an object missing); None for any other exception (a bug, an output that cannot be
+    written: left as it is)."""
+    if isinstance(exc, ResultError):
+        return exc
+    found = damaged_object(exc, path)
+    if found is None:
+        return None
+    where, reason = found
+    return ResultError(f"{path}: cannot read {where} ({reason}): {DAMAGED}")
+
+
+DAMAGED = "the file is damaged or was not written whole"
+
+
+def damaged_object(exc: BaseException, path: str) -> tuple[str, str] | None:
+    """(HDF5 path, HDF5's reason) of the object of the file at ``path`` that h5py failed to
+    read when it raised ``exc``; None if ``exc`` is not such a failure. Whether it was reading
+    ``path`` is told by the h5py objects of the frames the exception went through."""
+    if not isinstance(exc, (OSError, RuntimeError, KeyError, ValueError)):
+        return None
+    if isinstance(exc, OSError) and exc.errno is not None:
+        return None  # the operating system's error (a full disk, a permission): not the file's content
+    where = None
+    target = os.path.abspath(path)
+    tb = exc.__traceback__
+    while tb is not None:
+        frame = tb.tb_frame
+        if frame.f_globals.get("__name__", "").startswith("h5py"):
+            for value in frame.f_locals.values():
+                if isinstance(value, h5py.HLObject):
+                    try:
+                        same = value.id.valid and os.path.abspath(value.file.filename) == target
+                        name = value.name
+                    except Exception:  # (an object of a damaged file may not say its name)
+                        same, name = False, None
+                    if same:
+                        where = name or "/"
+        tb = tb.tb_next
+    return None if where is None else (where, _reason(exc))
 
 
 def _normalise(sel, n: int):
@@ -148,20 +203,26 @@ class Result:
         self.path = str(path)
         try:
             self.file = h5py.File(self.path, "r")
+        except FileNotFoundError as exc:
+            raise ResultError(f"{self.path}: no such file") from exc
         except OSError as exc:
-            raise ResultError(f"{self.path}: cannot open as HDF5 ({exc})") from exc
-        for required in ("h5md", L.PARTS, L.SURFACE, L.RUN):
-            if required not in self.file:
-                self.file.close()
-                raise ResultError(f"{self.path}: not a vibrofeed result (no /{required})")
-        status = self.status
+            raise ResultError(f"{self.path}: cannot open as HDF5 ({_reason(exc)})") from exc
+        try:
+            for required in ("h5md", L.PARTS, L.SURFACE, L.RUN):
+                if required not in self.file:
+                    raise ResultError(f"{self.path}: not a vibrofeed result (no /{required})")
+            status, msg = self.status, self.message
+        except BaseException as exc:
+            damage = unreadable(exc, self.path)
+            self.file.close()
+            if damage is None:
+                raise
+            raise damage from exc
         if status != L.STATUS_COMPLETE and not allow_incomplete:
-            msg = self.message
             self.file.close()
             raise IncompleteResult(
-                f"{self.path}: run status is {status!r}"
-                + (f" ({msg})" if msg else "")
-                + "; open with allow_incomplete=True to read the frames it holds")
+                f"{self.path}: the run that wrote it did not complete (status {status}"
+                + (f": {msg}" if msg else "") + ")")
 
     @classmethod
     def borrow(cls, file: h5py.File, path=None) -> Result:
@@ -544,8 +605,11 @@ class Result:
     def __enter__(self):
         return self
 
-    def __exit__(self, *exc):
+    def __exit__(self, kind, exc, tb):
+        damage = unreadable(exc, self.path) if exc is not None else None  # (while the file is open)
         self.close()
+        if damage is not None:  # an h5py error reading this file: one line naming it
+            raise damage from exc
 
     def __repr__(self) -> str:
         return (f"Result({self.path!r}, deck={self.deck_name!r}, frames={self.n_frames}, "

@@ -232,6 +232,7 @@ class ResultWriter:
         self._rotation = ({name: f[L.SURFACE][name]["value"] for name in L.ROTATION_ELEMENTS}
                           if self.rotating else None)
         self._edges = f[L.PARTS]["box/edges/value"]
+        self._pbc = f[L.PARTS]["box/pbc/value"]
         self._step = f[L.PARTS]["position/step"]
         self._time = f[L.PARTS]["position/time"]
         self._counts: dict = {}  # mass-balance value datasets, once created
@@ -343,6 +344,9 @@ class ResultWriter:
         set_unit(edges.create_dataset("value", shape=(0, 3), maxshape=(None, 3), dtype="f8",
                                       chunks=(max(cf, 256), 3)), "m")
         self._step_time(edges, step, time)
+        pbc = box.create_group("pbc")  # (layout.BOX_PBC: for znh5md)
+        pbc.create_dataset("value", shape=(0, 3), maxshape=(None, 3), dtype="?", chunks=(max(cf, 256), 3))
+        self._step_time(pbc, step, time)
 
         # each section's motion: H5MD time series sampled with the parts (hard-linked step, time)
         for k in range(1, self.sections + 1):
@@ -567,6 +571,7 @@ class ResultWriter:
             self._append(self._rotation["angle"], k0, np.array([f[7][0] for f in self._pending]))
             self._append(self._rotation["angular_velocity"], k0, np.array([f[7][1] for f in self._pending]))
         self._append(self._edges, k0, np.tile(L.BOX_EDGES_PLACEHOLDER, (n, 1)))
+        self._append(self._pbc, k0, np.tile(L.BOX_PBC, (n, 1)))
         # step/time last: a frame counts once its step is there.
         self._append(self._time, k0, np.array([f[1] for f in self._pending], dtype="f8"))
         self._append(self._step, k0, np.array([f[0] for f in self._pending], dtype="i8"))

@@ -312,8 +312,18 @@ def read(folder, stem: str = STEM) -> tuple[list[dict], dict]:
         rows, meta = _read_snapshot(h5_path)
         follows = meta.pop("generation", None)
     except (OSError, KeyError, ValueError, TypeError, IndexError) as exc:  # truncated, overwritten...
-        raise ResultError(f"{h5_path}: not a readable sweep summary ({type(exc).__name__}: "
-                          f"{str(exc).splitlines()[0] if str(exc) else 'damaged'})") from None
+        from ..results.reader import _reason
+
+        if isinstance(exc, UnicodeDecodeError):
+            why = "text that is not ASCII"
+        elif isinstance(exc, (TypeError, IndexError)):
+            why = "a layout that is not a sweep summary's"
+        elif isinstance(exc, (OSError, KeyError)):  # HDF5's words
+            why = _reason(exc)
+        else:  # (the snapshot's own checks)
+            why = str(exc).splitlines()[0]
+        raise ResultError(f"{h5_path}: not a readable sweep summary ({why}): damaged, or not written "
+                          "by vibrofeed") from None
     if generation is not None and generation == follows:
         rows += journal  # else the journal is older than the snapshot, which holds its rows
     return _merged(rows, meta)

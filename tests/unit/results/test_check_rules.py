@@ -755,6 +755,32 @@ def test_jumps_are_not_checked_with_periodic_boundaries(tmp_path):
     assert any("moves 0.01 m between frames 1 and 2" in e for e in errors(path))
     with h5py.File(path, "r+") as f:
         f[f"{L.PARTS}/box"].attrs["boundary"] = np.array([b"periodic", b"none", b"none"])
+    assert errors(path) == [f"error: /{L.PARTS}/box/pbc: disagrees with the box's boundary "
+                            "(x periodic, y none, z none)"]
+    with h5py.File(path, "r+") as f:
+        f[f"{L.PARTS}/box/pbc/value"][:, 0] = True
+    assert problems(path) == []
+
+
+def test_box_pbc_says_what_the_boundary_says_and_may_be_absent(tmp_path):
+    path = sequence(tmp_path / "p.h5", frames_of([[1]] * 3, still(3)))
+    with h5py.File(path, "r") as f:
+        pbc = f[f"{L.PARTS}/box/pbc"]
+        assert pbc["value"].dtype == bool and not pbc["value"][()].any() and pbc["value"].shape == (3, 3)
+        assert pbc["step"] == f[f"{L.PARTS}/position/step"] and pbc["time"] == f[f"{L.PARTS}/position/time"]
+    with h5py.File(path, "r+") as f:
+        f[f"{L.PARTS}/box/pbc/value"][1, 2] = True
+    assert errors(path) == [f"error: /{L.PARTS}/box/pbc: disagrees with the box's boundary "
+                            "(x none, y none, z none)"]
+    with h5py.File(path, "r+") as f:
+        del f[f"{L.PARTS}/box/pbc/step"]
+    assert errors(path) == [f"error: /{L.PARTS}/box/pbc: must be sampled with the positions (their step)"]
+    with h5py.File(path, "r+") as f:
+        del f[f"{L.PARTS}/box/pbc"]
+        f[f"{L.PARTS}/box/pbc"] = np.zeros(3, dtype=bool)
+    assert errors(path) == [f"error: /{L.PARTS}/box/pbc: must be a time series of 3 booleans per frame"]
+    with h5py.File(path, "r+") as f:
+        del f[f"{L.PARTS}/box/pbc"]  # files written before it: valid
     assert problems(path) == []
 
 

@@ -8,6 +8,10 @@ compared with what the writer was given, at the quantity's scale.
 
 from __future__ import annotations
 
+import re
+import warnings
+from pathlib import Path
+
 import h5py
 import numpy as np
 import pytest
@@ -280,3 +284,124 @@ def test_an_export_is_refused_before_writing_when_the_parts_data_cannot_fit(bulk
                                                               r"at least 0\.\d+ MB, 0\.001 MB free\)"):
         export_md(r, tmp_path / "x.h5md")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["feed.h5"]
+
+
+# -- each reader's default mode, and the recipes of the export's own docs ---------------------
+DOCS = Path(__file__).resolve().parents[3] / "docs" / "commands.md"
+
+
+def recipes() -> list[str]:
+    """The Python blocks of docs/commands.md's "Reading an h5md-md export", in order."""
+    text = DOCS.read_text()
+    section = text.split("### Reading an h5md-md export", 1)[1].split("\n## ", 1)[0]
+    return re.findall(r"```python\n(.*?)```", section, flags=re.S)
+
+
+def run_recipe(code: str, export: Path) -> dict:
+    assert "md/RUN.h5md" in code
+    namespace: dict = {}
+    exec(compile(code.replace("md/RUN.h5md", str(export)), str(DOCS), "exec"), namespace)
+    return namespace
+
+
+def test_the_export_docs_mdanalysis_recipe_gives_each_frame_its_parts_and_masses(bulk, exported):
+    mdanalysis, _ = recipes()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)  # (MDAnalysis: no types to guess masses from)
+        ns = run_recipe(mdanalysis, exported)
+    u, ids, mass = ns["u"], ns["ids"], ns["mass"]
+    with Result(bulk) as r:
+        present = r.present()
+        last = len(FRAMES) - 1
+        # the recipe's loop ends at the last frame: its parts, their masses, their centre
+        x = present_sorted(r, last, "position", ids[last, :present[last]])[1]
+        _, m = present_sorted(r, last, "mass", ids[last, :present[last]])
+        assert len(ns["parts"]) == present[last]
+        np.testing.assert_allclose(ns["parts"].masses, m, rtol=RTOL, atol=0)
+        np.testing.assert_allclose(ns["centre"], (m[:, None] * x).sum(0) / m.sum() * 1e10, rtol=1e-6)
+        for k, ts in enumerate(u.trajectory):  # and every frame as the recipe reads it
+            u.atoms.masses = mass[ts.frame]
+            parts = u.atoms[ids[ts.frame] >= 0]
+            ids_k, m = present_sorted(r, k, "mass", ids[k, :present[k]])
+            assert len(parts) == present[k] and np.array_equal(ids[k, :present[k]], ids_k)
+            np.testing.assert_allclose(parts.masses, m, rtol=RTOL, atol=0)
+            assert np.isfinite(parts.positions).all() and u.trajectory.ts.dimensions is None  # open box
+
+
+def test_the_export_docs_znh5md_recipe_gives_the_parts_present_their_masses_and_an_open_box(
+        bulk, exported):
+    _, znh5md_recipe = recipes()
+    ns = run_recipe(znh5md_recipe, exported)
+    with Result(bulk) as r:
+        last = len(FRAMES) - 1
+        parts = ns["parts"]
+        ids, m = present_sorted(r, last, "mass", parts.arrays["id"])
+        assert len(parts) == r.present()[last] and np.array_equal(parts.arrays["id"], ids)  # ascending
+        np.testing.assert_allclose(parts.get_masses(), m, rtol=RTOL, atol=0)
+        assert not parts.pbc.any()
+
+
+def test_znh5md_reads_the_result_file_as_the_export_docs_say(bulk):
+    """variable_shape=False, then id >= 0: the parts present at each frame, whatever their slots,
+    their masses, and the box open (box/pbc: without it znh5md read the box as periodic)."""
+    import znh5md
+
+    io = znh5md.IO(str(bulk), variable_shape=False)
+    with Result(bulk) as r:
+        present = r.present()
+        for k in range(len(FRAMES)):
+            atoms = io[k]
+            parts = atoms[atoms.arrays["id"] >= 0]
+            assert len(parts) == present[k]
+            ids, x = present_sorted(r, k, "position", parts.arrays["id"])
+            order = np.argsort(parts.arrays["id"])
+            np.testing.assert_array_equal(parts.positions[order], x)  # m, as stored
+            _, m = present_sorted(r, k, "mass", parts.arrays["id"])
+            np.testing.assert_array_equal(parts.get_masses()[order], m)
+            assert not atoms.pbc.any()
+
+
+@pytest.fixture
+def steady(tmp_path):
+    """A result whose three parts are on the track at every frame (they leave after the last):
+    no padding, no empty slot."""
+    path = feeder(tmp_path / "steady.h5", FRAMES, np.array([1.2, 1.5, 1.9]), speed=0.01,
+                  mass=np.array([1e-7, 2e-7, 3e-7]))
+    with Result(path) as r:
+        assert (r.present() == 3).all()
+    return path
+
+
+def test_znh5md_default_mode_reads_a_result_and_its_export_whose_parts_stay(steady, tmp_path):
+    import znh5md
+
+    export = vibrofeed("export", steady, "--format", "h5md-md", "-o", tmp_path / "md", check=True)
+    assert export.returncode == 0
+    for path, scale in ((steady, 1.0), (tmp_path / "md" / "steady.h5md", 1e9)):
+        io = znh5md.IO(str(path))  # the default mode: variable_shape=True
+        assert len(io) == len(FRAMES)
+        with Result(steady) as r:
+            for k in range(len(FRAMES)):
+                atoms = io[k]
+                ids, x = present_sorted(r, k, "position", atoms.arrays["id"])
+                order = np.argsort(atoms.arrays["id"])
+                assert len(atoms) == 3 and np.array_equal(atoms.arrays["id"][order], [1, 2, 3])
+                np.testing.assert_allclose(atoms.positions[order], x * scale, rtol=RTOL, atol=0)
+                np.testing.assert_array_equal(atoms.get_masses()[order], [1e-7, 2e-7, 3e-7])
+                assert not atoms.pbc.any(), path  # the box is open
+
+
+def test_znh5md_default_mode_cannot_read_parts_that_come_and_go_as_the_export_docs_say(exported):
+    """H5MD stores species as Enumeration or Integer (H5MD 1.1, "Particles group"): no NaN to mark
+    padding, which znh5md's default mode trims by. The export's docs say so and give the way;
+    this test keeps them true (a znh5md that reads it would fail it: then say so in the docs)."""
+    import znh5md
+
+    with h5py.File(exported, "r") as f:
+        group = f["particles/trajectory"]
+        assert group["species/value"].dtype.kind == "i" and group["id/value"].dtype.kind == "i"
+        assert group["id/value"].fillvalue == L.ID_FILL  # H5MD: "the particle is considered non-existing"
+        assert (group["id/value"][()] == L.ID_FILL).any()
+    with pytest.raises(ValueError, match=r'Array "positions" has wrong shape \(\d+, 3\) != \(\d+, 3\)'):
+        znh5md.IO(str(exported))[len(FRAMES) - 1]
+    assert 'Array "positions" has wrong shape (3, 3) != (14, 3)' in DOCS.read_text()

@@ -1,0 +1,81 @@
+"""A study's errors in the user's words: a study refused before its first run leaves nothing
+behind, the budget is named as the user gave it, a damaged study folder is one line."""
+
+from __future__ import annotations
+
+import json
+
+from helpers import vibrofeed
+
+STUDY = """deck = "bulk_feeder"
+[fixed]
+freq = 100
+[variables]
+amp_n = { low = 1e-5, high = 1e-4 }
+[constraints]
+max_acceleration = LIMIT
+[objective]
+maximize = "parts_per_s"
+[budget]
+runs = RUNS
+seeds = 2
+screen = 8
+"""
+
+
+def study(tmp_path, limit=8.0, runs=4):
+    path = tmp_path / "s.toml"
+    path.write_text(STUDY.replace("LIMIT", str(limit)).replace("RUNS", str(runs)))
+    return path
+
+
+def one_line(proc, code=2) -> str:
+    assert proc.returncode == code, proc.stderr
+    lines = [line for line in proc.stderr.strip().splitlines() if not line.startswith("optimize: ")]
+    assert len(lines) == 1 and lines[0].startswith("vibrofeed: error: ") and "Traceback" not in proc.stderr
+    return lines[0].removeprefix("vibrofeed: error: ")  # (after the screen's progress line, if any)
+
+
+def test_a_study_the_screen_refuses_leaves_no_files_and_its_correction_is_not_another_study(tmp_path):
+    # peak acceleration of amp_n at 100 Hz: (2 pi 100)^2 x 1e-5 / 9.81 = 0.40 g at the least,
+    # above a limit of 0.001 g for every setting screened
+    out = tmp_path / "out"
+    line = one_line(vibrofeed("optimize", study(tmp_path, limit=0.001), "-o", out))
+    assert line == ("no setting of the design space passes the checks and the models (section 1: peak "
+                    "acceleration [g] rules out 8); widen the bounds or loosen [constraints]")
+    assert not out.exists()
+    out.mkdir()  # an empty folder given: left empty
+    one_line(vibrofeed("optimize", study(tmp_path, limit=0.001), "-o", out))
+    assert list(out.iterdir()) == []
+    # the corrected file is checked as a new study (refused here for its budget, named as given)
+    line = one_line(vibrofeed("optimize", study(tmp_path, runs=10_000), "-o", out))
+    assert line == f"{tmp_path / 's.toml'}:11: runs = 10000: give 1 to 9999 DEM runs"
+    line = one_line(vibrofeed("optimize", study(tmp_path), "-o", out, "--budget", "10000"))
+    assert line == "--budget 10000: give 1 to 9999 DEM runs"
+    assert list(out.iterdir()) == []
+
+
+def test_optimize_report_on_a_damaged_study_json_is_one_line(tmp_path):
+    path = tmp_path / "study.json"
+    for text, why in (("{bad", "not readable at line 1"), ('{"format": "vibrofeed-study"}',
+                                                             "holds no study (its spec_text)"),
+                      ("[1]", "holds no study (its spec_text)")):
+        path.write_text(text)
+        line = one_line(vibrofeed("optimize-report", tmp_path))
+        assert line == f"{path}: {why}: damaged, or not a file vibrofeed optimize wrote"
+    path.write_bytes(b"\xff\xfe\x00")
+    assert one_line(vibrofeed("optimize-report", tmp_path)) == (
+        f"{path}: not readable: damaged, or not a file vibrofeed optimize wrote")
+
+
+def test_optimize_report_of_a_study_stopped_before_its_search_says_so(tmp_path):
+    """study.json written, the journal empty (killed before its first trial): no runs, no traceback."""
+    (tmp_path / "study.json").write_text(json.dumps({
+        "format": "vibrofeed-study", "fingerprint": "x", "source": "s.toml",
+        "spec_text": study(tmp_path).read_text()}))
+    (tmp_path / "optuna.journal").write_text("")
+    proc = vibrofeed("optimize-report", tmp_path)
+    assert proc.returncode == 0 and proc.stderr == ""
+    assert proc.stdout.splitlines() == [
+        "study s.toml: 0 search runs, 0 proposals ruled out by the models without a DEM run",
+        "no confirmed design"]
