@@ -738,8 +738,8 @@ class FeedRate(AnalysisBase):
                  "joint_crossings": crossings}
         r.bed_trends = trends
         r.unsteady = unsteady(trends)
-        if bowl:  # named: the helix, the chute, then its exit line's elements
-            names = BOWL_SECTIONS + tuple(f"element {e.number}" for e in feeder.elements[1:])
+        if bowl:  # named: the helix, the chute, then its exit line's elements (their s<k>_*)
+            names = BOWL_SECTIONS + tuple(f"s{e.number}" for e in feeder.elements[1:])
             for sec, name in zip(sections, names):
                 sec["name"] = name
         if bowl or is_line(result.parameters):

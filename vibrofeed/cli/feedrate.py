@@ -75,10 +75,12 @@ def section_table(s: dict) -> list[str]:
         return []
     measured = not s.get("reason")
     bowl = "name" in sections[0]  # a bowl's helix and chute, along its path
+    # a bowl alone: its rejects fall back into it; with an exit line, some are the line's
+    returns = bowl and len(sections) == 2
     widths = (22, 22, 22, 20, 15) if bowl else (15, 22, 22, 20, 15)
     head = ("path [mm]" if bowl else "x [mm]", "out [parts/s]", "speed [mm/s]", "hold-up [parts]",
             "density [/mm]")
-    rejects_head = "fell back [/s]" if bowl else "rejects [/s]"
+    rejects_head = "fell back [/s]" if returns else "rejects [/s]"
     lines = ["sections       " + _columns(head, widths) + rejects_head]
     for k, sec in enumerate(sections):
         out = "outlet" if k == len(sections) - 1 else "joint"
@@ -93,12 +95,12 @@ def section_table(s: dict) -> list[str]:
     for name, tool in (s.get("rejects_by_tooling") or {}).items():
         label = TOOLING_NAMES.get(name, name)
         if tool is None:
-            told.append(f"{label}: none on the {'bowl' if bowl else 'line'}")
+            told.append(f"{label}: none on the {'bowl' if returns else 'feeder' if bowl else 'line'}")
             continue
         rate = _pm(tool["per_s"], tool["per_s_error"]) + " /s" if measured else "n/a"
         told.append(f"{label} {rate} ({tool['in_window']} in the window, {tool['total']} in all)")
     if told:
-        lines.append(("fell back by   " if bowl else "rejects        ") + "; ".join(told))
+        lines.append(("fell back by   " if returns else "rejects        ") + "; ".join(told))
     for k in range(len(sections) - 1 if measured else 0):
         into, nxt = sections[k], sections[k + 1]
         flows = (into["joint_flux"], nxt["joint_flux"], nxt["reject_rate"])
