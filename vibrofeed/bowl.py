@@ -43,6 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import ParameterError
+from .feeders.records import Part, number
 from .mesh import MeshBuilder, write_stl
 
 THETA_END = -math.pi / 2  # the track's end: its tangent there is +x, the chute's direction
@@ -395,37 +396,33 @@ PART = ("part_size", "part_thickness", "shape", "size_spread")
 
 
 def bowl_from(p: Mapping) -> Bowl:
-    """The bowl of a deck's parameters (numbers)."""
-    return Bowl(radius=float(p["bowl_diameter"]) / 2, track_width=float(p["track_width"]),
-                helix_angle=float(p["helix_angle"]), turns=float(p["turns"]),
-                wall_height=float(p["wall_height"]), cone_angle=float(p.get("cone_angle", 0.0)),
-                cross_tilt=float(p.get("cross_tilt", 0.0)), lip_height=float(p.get("lip_height", 0.0)),
-                chute_length=float(p.get("chute_length", 0.0)), drop_from=float(p.get("drop_from", 0.0)),
-                drop_to=float(p.get("drop_to", 0.0)), drop_width=float(p.get("drop_width", 0.0)),
-                wiper_height=float(p.get("wiper_height", 0.0)), wiper_at=float(p.get("wiper_at", 0.5)),
-                wiper_length=WIPER_LENGTH * float(p.get("part_size", 0.0)))
+    """The bowl of a deck's parameters (numbers or their strings; the optional ones default
+    as the deck's do)."""
+    def get(name, default=None):
+        return number(p, name, default)
+
+    return Bowl(radius=get("bowl_diameter") / 2, track_width=get("track_width"),
+                helix_angle=get("helix_angle"), turns=get("turns"), wall_height=get("wall_height"),
+                cone_angle=get("cone_angle", 0.0), cross_tilt=get("cross_tilt", 0.0),
+                lip_height=get("lip_height", 0.0), chute_length=get("chute_length", 0.0),
+                drop_from=get("drop_from", 0.0), drop_to=get("drop_to", 0.0),
+                drop_width=get("drop_width", 0.0), wiper_height=get("wiper_height", 0.0),
+                wiper_at=get("wiper_at", 0.5), wiper_length=WIPER_LENGTH * get("part_size", 0.0))
 
 
 def widest_part(p: Mapping) -> float:
-    shape = int(p.get("shape", 0))
-    size = float(p["part_size"])
-    return size * (1 + float(p.get("size_spread", 0.0))) if shape == 0 else size
+    """A part's width lying flat (vibrofeed.feeders.records.Part.widest)."""
+    return Part.from_values(p).widest
 
 
 def tallest_part(p: Mapping) -> float:
     """A part's height lying flat (a sphere's diameter, a chip's or disc's thickness)."""
-    shape = int(p.get("shape", 0))
-    return widest_part(p) if shape == 0 else float(p.get("part_thickness", p["part_size"]))
+    return Part.from_values(p).tallest
 
 
 def part_reach(p: Mapping) -> float:
-    """A part's circumscribed radius (the deck's r_ext: a chip's corner sphere reaches
-    (part_size - part_thickness)/sqrt(2) + part_thickness/2 from its centre)."""
-    shape, size = int(p.get("shape", 0)), float(p["part_size"])
-    if shape == 0:
-        return size / 2 * (1 + float(p.get("size_spread", 0.0)))
-    thickness = float(p.get("part_thickness", size))
-    return (size - thickness) / math.sqrt(2) + thickness / 2 if shape == 1 else size / 2
+    """A part's circumscribed radius (the deck's r_ext; Part.reach)."""
+    return Part.from_values(p).reach
 
 
 def check_bowl(p: Mapping[str, float]) -> None:
@@ -520,7 +517,7 @@ def climb_advice(p: Mapping[str, float]) -> list[str]:
     from .models.deck import transport  # scipy: loaded for a bowl only
 
     b = bowl_from(p)
-    d = track_drive(float(p["amp_t"]), float(p["amp_n"]), float(p["phase"]), float(p["freq"]),
+    d = track_drive(number(p, "amp_t"), number(p, "amp_n"), number(p, "phase"), number(p, "freq"),
                     b.helix_angle, b.r_mid)
     try:
         speed = transport({**p, "amp_t": d.amp_t, "amp_n": d.amp_n, "phase": d.phase,
@@ -543,9 +540,9 @@ def chute_speed(p: Mapping[str, float], x: float):
     from .models.cross_shake import chute_drive, sliding_speed  # loaded for a bowl only
 
     b = bowl_from(p)
-    along, across, normal = chute_drive(float(p["amp_t"]), float(p["amp_n"]), float(p["phase"]),
+    along, across, normal = chute_drive(number(p, "amp_t"), number(p, "amp_n"), number(p, "phase"),
                                         b.helix_angle, b.r_mid, x)
-    return sliding_speed(float(p["freq"]), along, across, normal, float(p["mu"]), b.helix_angle,
+    return sliding_speed(number(p, "freq"), along, across, normal, number(p, "mu"), b.helix_angle,
                          clearance=b.track_width - widest_part(p))
 
 
@@ -559,7 +556,7 @@ def chute_mean_speed(p: Mapping[str, float]) -> tuple[float | None, str]:
     short of the outlet (trapezoids on CHUTE_POINTS points); 0 with a note where the part
     stalls (v <= 0 somewhere), None with a note where the drive makes it hop."""
     b = bowl_from(p)
-    xs = np.linspace(0.0, b.chute_length - float(p["part_size"]), CHUTE_POINTS)
+    xs = np.linspace(0.0, b.chute_length - number(p, "part_size"), CHUTE_POINTS)
     try:
         v = np.array([chute_speed(p, float(x)).velocity for x in xs])
     except ValueError as exc:
@@ -646,7 +643,7 @@ def write_bowl(values: Mapping[str, str], folder: Path) -> list[str]:
     # room for a part however it is turned (LIGGGHTS inserts its bounding sphere), under
     # the next turn
     tall = tallest_part(p)
-    boxes = fill_boxes(b, float(p["part_size"]), min(2.5 * 2 * part_reach(p), b.pitch - 1.5 * tall))
+    boxes = fill_boxes(b, number(p, "part_size"), min(2.5 * 2 * part_reach(p), b.pitch - 1.5 * tall))
     lines = [f"variable bowl_{k} equal {float(v)!r}\n" for k, v in (
         ("r_mid", b.r_mid), ("pitch", b.pitch), ("top", b.top), ("end_z", b.end_z),
         ("outlet_x", b.outlet_x), ("length", b.length), ("theta_start", b.theta_start),

@@ -71,6 +71,17 @@ class Part:
         """A part's height lying flat: the largest sphere, or the thickness [m]."""
         return self.widest if self.shape == 0 else self.thickness
 
+    @property
+    def reach(self) -> float:
+        """The circumscribed radius [m] (the decks' r_ext): the largest sphere's; a chip's
+        corner sphere reaches (size - thickness)/sqrt(2) + thickness/2 from its centre; a
+        disc's rim, size/2."""
+        if self.shape == 0:
+            return self.widest / 2
+        if self.shape == 1:
+            return (self.size - self.thickness) / math.sqrt(2) + self.thickness / 2
+        return self.size / 2
+
 
 @dataclass(frozen=True)
 class Drive:
