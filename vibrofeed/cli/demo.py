@@ -20,6 +20,11 @@ last frame of the steady feeding window and the plots into one folder. The cases
     vibration, then leave along a straight chute. A few dies lie in the bowl, the track
     and the chute are pre-filled, so the exit feeds at once; 0.4 s of vibration, about
     five minutes on one core.
+``bowl-line``
+    That bowl (a shorter chute) handing its dies to a linear exit section of its own drive
+    and tooling (feeders/bowl_line.toml, docs/bowl.md, "The exit line"): faster than the
+    chute's queue, its floor tilted towards a wall, a side drop and a wiper; the dies leave
+    one at a time.
 """
 
 from __future__ import annotations
@@ -33,7 +38,8 @@ DESCRIPTION = ("Run the main job: a feeder line (a bulk section, then a faster s
                "per section, singulation and rejects and write DIR/CASE.h5, a picture of the last "
                "frame of the steady feeding window (DIR/CASE.png) and the plots (DIR/plots/). "
                "--case track runs the single uniform track it replaces, --case bowl a small "
-               "vibratory bowl feeding dies.")
+               "vibratory bowl feeding dies, --case bowl-line that bowl with an exit line that "
+               "singulates them.")
 
 # The supply both cases share: 30 parts/s of 300 um silicon spheres dropped in clumps of
 # three above the track start, nothing pre-filled (a line that only drains is a batch,
@@ -66,10 +72,24 @@ TRACK = {"track_length": "0.008", "track_width": "1.2e-3", "wall_height": "1e-3"
 BOWL = {"shape": "1", "part_size": "5e-4", "part_thickness": "2.5e-4", "n_parts": "10",
         "n_track": "40", "turns": "0.5", "youngs": "2e7", "freq": "75", "amp_t": "2e-4",
         "amp_n": "4e-5", "phase": "-60", "t_end": "0.4", "output_dt": "0.005"}
+# The bowl with an exit line (feeders/bowl_line.toml, the same numbers): the demo's bowl with
+# a 6 mm chute (it brakes the dies: a short one) handing them to a 10 mm linear section of its
+# own drive at the bowl's frequency (a joint between two frequencies opens by both strokes),
+# twice its stroke and a 60 deg lag: 117 mm/s in the dilute limit, sliding, against the
+# chute's queue at ~29 mm/s, so the dies leave the queue spaced (continuity). Its floor tilts
+# 10 deg towards the wall; a side drop keeps the file against it, a wiper sweeps off dies
+# riding on others. 1.5 mm wide: the chute's 1.2 mm and the torsion's sway of its end, 0.13
+# mm either way.
+BOWL_LINE = {**BOWL, "chute_length": "6e-3", "t_end": "0.5",
+             "sections": "2", "s2_length": "0.01", "s2_width": "1.5e-3", "s2_wall_height": "1e-3",
+             "s2_step": "5e-5", "s2_cross_tilt": "10", "s2_freq": "75", "s2_amp_t": "4e-4",
+             "s2_amp_n": "4e-5", "s2_phase": "-60", "s2_drop_from": "0.4", "s2_drop_to": "0.6",
+             "s2_drop_width": "6.5e-4", "s2_wiper_height": "3.2e-4", "s2_wiper_at": "0.7"}
 # case -> (result name, deck, parameters)
 CASES = {"line": ("feeder_line", "bulk_feeder", {**SUPPLY, **LINE}),
          "track": ("bulk_feeder", "bulk_feeder", {**SUPPLY, **TRACK}),
-         "bowl": ("bowl_feeder", "bowl_feeder", BOWL)}
+         "bowl": ("bowl_feeder", "bowl_feeder", BOWL),
+         "bowl-line": ("bowl_line", "bowl_feeder", BOWL_LINE)}
 
 
 def add_arguments(p) -> None:
@@ -77,7 +97,8 @@ def add_arguments(p) -> None:
 
     p.add_argument("--case", choices=sorted(CASES), default="line",
                    help="line (default): the singulating feeder line; track: the uniform track it "
-                        "replaces, with the same supply; bowl: a small vibratory bowl feeding dies")
+                        "replaces, with the same supply; bowl: a small vibratory bowl feeding dies; "
+                        "bowl-line: that bowl with an exit line that singulates them")
     p.add_argument("-o", "--output", default="results", metavar="DIR",
                    help="folder for the result, the picture and the plots (default: results)")
     p.add_argument("-p", "--param", action="append", metavar="NAME=VALUE",
