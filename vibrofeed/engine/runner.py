@@ -166,7 +166,8 @@ def check_target_error(target, deck: Deck) -> float | None:
 
 
 def _reusable(out: Path, rid: str, deck: Deck, values, ranks: int) -> RunResult | None:
-    """A RunResult for ``out`` if it is a complete result with run id ``rid``."""
+    """A RunResult for ``out`` if it is a complete result with run id ``rid`` that ``vibrofeed
+    check`` accepts (an earlier vibrofeed may have completed a run that check rejects)."""
     if not out.is_file():
         return None
     from ..errors import ResultError
@@ -183,6 +184,8 @@ def _reusable(out: Path, rid: str, deck: Deck, values, ranks: int) -> RunResult 
             wall = float(r.run_info.get("wall_seconds", 0.0))
             target, reason = r.target_error, r.stop_reason
     except (ResultError, KeyError):
+        return None
+    if check_problem(out):  # a result vibrofeed check rejects stands in for no run
         return None
     return RunResult(output=out, log=out.with_suffix(".log"), deck=deck.name, ranks=ranks,
                      n_steps=n_steps, dt=sim_time / n_steps if n_steps else 0.0, frames=frames,
@@ -529,13 +532,18 @@ class _Run:
         return result
 
     def complete(self) -> None:
-        """Mark the file ``complete`` and rename it to OUT.h5, one step after the
-        other: only a file that is about to be OUT.h5 says ``complete`` (a kill
-        between the two leaves a ``.part`` that ``vibrofeed check`` fails)."""
+        """Mark the file ``complete``, check it as ``vibrofeed check`` would and rename it to
+        OUT.h5, one step after the other: only a file that is about to be OUT.h5 says
+        ``complete`` (a kill between them leaves a ``.part`` that ``vibrofeed check`` fails),
+        and a result that check rejects is a failed run (its file says ``failed``)."""
         from ..results.writer import mark_file_status
 
         if not mark_file_status(self.part, L.STATUS_COMPLETE):
             self.fail(OutputError(f"cannot mark {self.part} complete"))
+        rejected = check_problem(self.part)
+        if rejected:
+            self.fail(RunError(f"deck {self.deck.name}: the result is not sound, vibrofeed check "
+                               f"rejects it: {rejected}"))
         os.replace(self.part, self.out)
 
     def diagnose(self) -> RunError:
@@ -565,6 +573,20 @@ class _Run:
     def remove_scratch(self) -> None:
         if self.tmp is not None:
             shutil.rmtree(self.tmp, ignore_errors=True)
+
+
+def check_problem(path: Path) -> str | None:
+    """The first error ``vibrofeed check`` finds in the result ``path`` of a run that reached
+    its end (a part faster than the drive can make it, lost parts, ...; the file may still be
+    a ``.part``), else None: a run whose own result check would reject has failed."""
+    from ..results.check import check_file  # h5py: only when needed
+
+    errors = [p for p in check_file(path, allow_incomplete=True).problems if p.level == "error"]
+    if not errors:
+        return None
+    more = len(errors) - 1
+    return errors[0].message + (f" (and {more} more problem{'s' * (more > 1)}: vibrofeed check "
+                                f"--allow-incomplete {path.name} lists them)" if more else "")
 
 
 def _mass_balance_problem(counts: dict | None) -> str | None:
