@@ -223,9 +223,16 @@ def _with_parent_death_signal(cmd: list[str]) -> list[str]:
     return [setpriv, "--pdeathsig", "TERM", "--"] + cmd if setpriv else cmd
 
 
+def unfinished(path: Path) -> Path:
+    """The name ``path`` has while its run goes (``OUT.h5.part``, ``OUT.log.part``): renamed
+    to ``path`` only when the run completes, so a finished result and its log are replaced
+    together, by a run that finished too."""
+    return path.with_name(path.name + ".part")
+
+
 def output_files(output) -> tuple[Path, Path, Path]:
     """The files a run into ``output`` writes: the result, its unfinished ``OUT.part`` and
-    its log (``OUT.log``: the result's suffix replaced)."""
+    its log (``OUT.log``: the result's suffix replaced; ``OUT.log.part`` while it runs)."""
     out = Path(output).expanduser().absolute()
     log = out.with_suffix(".log") if out.suffix else out.with_name(out.name + ".log")
     return out, out.with_name(out.name + ".part"), log
@@ -260,7 +267,8 @@ def check_output(deck: Deck, output, option: str = "output") -> None:
                          "result and its log would be one file; give the result another suffix "
                          "(.h5)")
     inputs = deck_inputs(deck)
-    for what, path in (("the result", out), ("its unfinished result", part), ("its log", log)):
+    for what, path in (("the result", out), ("its unfinished result", part), ("its log", log),
+                       ("its unfinished log", unfinished(log))):
         if path.resolve() in inputs:
             raise UsageError(f"{option} {output}: {what} would replace {path.name}, which the run "
                              f"reads (deck {deck.name}); give another output name")
@@ -354,6 +362,7 @@ def run_deck(deck: Deck, params: Mapping[str, str], output, *, ranks: int = 1,
     # An earlier OUT.h5 stays until this run completes and replaces it (os.replace in finish):
     # a rerun that fails or is killed must not take a finished result with it.
     part.unlink(missing_ok=True)
+    unfinished(log).unlink(missing_ok=True)  # a killed run's; OUT.log stays with OUT.h5
     scratch.remove_abandoned(out.parent)
 
     run = _Run(deck, values, rid, out, part, log, ranks, on_event, target_error)
@@ -366,7 +375,7 @@ def run_deck(deck: Deck, params: Mapping[str, str], output, *, ranks: int = 1,
             raise KeyboardInterrupt(run.stopped)
         return run.finish()
     except KeyboardInterrupt as exc:
-        run.interrupted(run.stopped or interrupt.reason(exc))
+        exc.kept = run.interrupted(run.stopped or interrupt.reason(exc))  # what the user is told
         raise
     finally:
         run.remove_scratch()
@@ -382,6 +391,7 @@ class _Run:
         self.deck, self.values, self.rid, self.ranks = deck, values, rid, ranks
         self.target_error = target_error
         self.out, self.part, self.log = out, part, log
+        self.log_part = unfinished(log)  # the LIGGGHTS log until the run completes
         self.on_event = on_event
         self.tmp: Path | None = None
         self.proc: subprocess.Popen | None = None
@@ -412,7 +422,7 @@ class _Run:
             "variables": values,
             "var_meta": {n: [v.unit, v.description, v.default] for n, v in deck.tunables.items()},
             "constants": deck.constants,
-            "output": str(self.part), "log": str(self.log), "screen": str(self.screen),
+            "output": str(self.part), "log": str(self.log_part), "screen": str(self.screen),
             "seed": int(float(values["seed"])) if "seed" in values else None,
             "command": command, "run_id": self.rid, "sources": deck.sources,
             "before_run": list(before_run or ()),
@@ -496,16 +506,25 @@ class _Run:
             if self.proc is not None:
                 _signal_group(self.proc, signal.SIGTERM)
 
-    def interrupted(self, why: str) -> None:
-        """Stop the worker; keep its frames marked ``interrupted`` (or nothing, before the first)."""
+    def interrupted(self, why: str) -> str:
+        """Stop the worker; keep its frames marked ``interrupted`` with its log (or nothing,
+        before the first frame); what was kept, in words."""
         if self.proc is not None:
             _stop(self.proc)
-        if self.part.exists() and _frames_in(self.part)[0]:
+        frames = _frames_in(self.part)[0] if self.part.exists() else 0
+        if frames:
             from ..results.writer import mark_file_status  # h5py: only when needed
 
-            mark_file_status(self.part, L.STATUS_INTERRUPTED, why)
-        elif not _unreadable(self.part):
-            self.part.unlink(missing_ok=True)
+            if mark_file_status(self.part, L.STATUS_INTERRUPTED, why):
+                return (f"the {frames} frames written before the interruption are kept in "
+                        f"{self.part} (status: interrupted)")
+            return (f"the {frames} frames written are kept in {self.part}, which could not be "
+                    "marked interrupted")
+        if _unreadable(self.part):
+            return f"{self.part} is kept as it is: HDF5 cannot open it"
+        self.part.unlink(missing_ok=True)
+        self.log_part.unlink(missing_ok=True)
+        return f"interrupted before its first frame: nothing written ({self.out.name} not touched)"
 
     def event(self, kind: str) -> dict | None:
         return next((e for e in self.events if e["event"] == kind), None)
@@ -545,6 +564,8 @@ class _Run:
             self.fail(RunError(f"deck {self.deck.name}: the result is not sound, vibrofeed check "
                                f"rejects it: {rejected}"))
         os.replace(self.part, self.out)
+        if self.log_part.exists():  # the log goes with its result, never before it
+            os.replace(self.log_part, self.log)
 
     def diagnose(self) -> RunError:
         frames, last_step, last_time = _frames_in(self.part) if self.part.exists() else (0, None, None)
@@ -552,7 +573,7 @@ class _Run:
         if own is not None and own.get("no_space"):
             where = f"{self.part} ({frames} frames)" if frames else str(self.part)
             return OutputError(f"no space left on {mount_point(self.part.parent)} while writing {where}")
-        return _diagnose(self.rc, self.events, self.deck, self.log, self.screen, self.stderr_path,
+        return _diagnose(self.rc, self.events, self.deck, self.log_part, self.screen, self.stderr_path,
                          last_step, last_time)
 
     def fail(self, error: RunError):

@@ -4,6 +4,8 @@ check rejects (issue 36: a run that exited 0 whose file check called INVALID).""
 
 from __future__ import annotations
 
+import json
+
 import h5py
 import numpy as np
 import pytest
@@ -95,3 +97,55 @@ def test_check_problem_is_none_for_a_sound_file_and_the_first_error_else(tmp_pat
         f[f"{L.PARTS}/mass/value"][1, 0] = -1.0   # one problem only: no count of others
     assert runner.check_problem(tmp_path / "b.h5") == (
         "part 1 has a mass of -1 kg at frame 1 (t = 0.01 s): a part's mass is finite and positive")
+
+
+# -- a finished result's companions (issue 36) -------------------------------------------------
+def test_the_log_is_written_unfinished_and_goes_with_its_result(tmp_path):
+    run = a_run(tmp_path, 0.5)
+    run.prepare("", None, None)
+    try:
+        spec = json.loads(run.spec_path.read_text())
+    finally:
+        run.remove_scratch()
+    assert spec["log"] == str(tmp_path / "r.log.part")   # LIGGGHTS never writes OUT.log itself
+    (tmp_path / "r.log").write_text("the earlier run's log\n")
+    run.log_part.write_text("this run's log\n")
+    assert run.finish().log == tmp_path / "r.log"
+    assert (tmp_path / "r.log").read_text() == "this run's log\n" and not run.log_part.exists()
+
+
+def test_a_run_that_fails_leaves_the_earlier_results_log_as_it_was(tmp_path):
+    # as a rerun killed with SIGKILL does: the earlier r.h5 and r.log stay a pair
+    earlier = write(tmp_path / "r.h5", 0.5, L.STATUS_COMPLETE)
+    (tmp_path / "r.log").write_text("the earlier run's log\n")
+    run = a_run(tmp_path, 8e4)
+    run.log_part.write_text("this run's log\n")
+    with pytest.raises(RunError):
+        run.finish()
+    assert check_file(earlier).ok
+    assert (tmp_path / "r.log").read_text() == "the earlier run's log\n"
+    assert run.log_part.read_text() == "this run's log\n"    # beside its r.h5.part, for diagnosis
+
+
+def test_a_run_interrupted_before_its_first_frame_leaves_nothing_and_says_so(tmp_path):
+    run = a_run(tmp_path, 0.5)
+    run.part.unlink()
+    ResultWriter(run.part, deck_name="d", deck_path="d.liggghts", deck_text=DECK,
+                 variables={"freq": ("50", "Hz", "f", "50")}, derived={}, engine_version="LIGGGHTS",
+                 seed=1).close()                      # opened, no frame yet (the pre-fill settling)
+    run.log_part.write_text("LIGGGHTS (Version ...)\n")
+    kept = run.interrupted("terminated by SIGTERM")
+    assert kept == "interrupted before its first frame: nothing written (r.h5 not touched)"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d.liggghts"]
+
+
+def test_a_run_interrupted_after_frames_keeps_them_marked_and_says_where(tmp_path):
+    run = a_run(tmp_path, 0.5)
+    run.log_part.write_text("LIGGGHTS (Version ...)\n")
+    kept = run.interrupted("interrupted by the user")
+    assert kept == (f"the 2 frames written before the interruption are kept in {run.part} "
+                    "(status: interrupted)")
+    with h5py.File(run.part) as f:
+        assert f[L.RUN].attrs["status"] == L.STATUS_INTERRUPTED
+        assert f[L.RUN].attrs["message"] == "interrupted by the user"
+    assert run.log_part.exists()
