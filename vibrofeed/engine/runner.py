@@ -52,6 +52,11 @@ _LAUNCHER_PREFIXES = ("OMPI_", "PMIX_", "OPAL_", "ORTE_", "PRTE_", "HYDRA_", "PM
 # beyond the cores a run only slows down, and thousands of ranks never start.
 RANKS_PER_CORE = 4
 
+# Space held in each run's scratch folder, beside its output, and given back when the disk
+# fills: enough for the worker to drop the batch it could not write and close the file whole,
+# marked failed (HDF5 cut short mid-flush leaves a file that does not open).
+RESERVE_BYTES = 512 * 1024
+
 
 @dataclass
 class RunResult:
@@ -407,6 +412,10 @@ class _Run:
         templates, if it declares a prepare hook) and the worker's spec."""
         try:
             self.tmp = scratch.make(self.out.parent)
+            with open(self.reserve, "wb") as fh:
+                fh.write(bytes(RESERVE_BYTES))
+                fh.flush()
+                os.fsync(fh.fileno())
             self._write_spec(command, before_run, schedule)
         except OSError as exc:
             if exc.errno != errno.ENOSPC:
@@ -427,6 +436,7 @@ class _Run:
             "command": command, "run_id": self.rid, "sources": deck.sources,
             "before_run": list(before_run or ()),
             "schedule": schedule,
+            "reserve": str(self.reserve),  # to free when the disk fills
             "target_error": self.target_error,  # stop once the feed rate is this precise (None: t_end)
             # extra -var values, the track mesh and the clump template (vibrofeed.geometry.Prepared)
             "prepared": prepared.to_spec() if prepared is not None else None,
@@ -440,6 +450,10 @@ class _Run:
     @property
     def screen(self) -> Path:
         return self.tmp / "screen.txt"
+
+    @property
+    def reserve(self) -> Path:
+        return self.tmp / "reserve"
 
     @property
     def spec_path(self) -> Path:
