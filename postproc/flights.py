@@ -124,8 +124,10 @@ class Flights(AnalysisBase):
     without recorded force); ``landings`` [s] (every impact); ``takeoffs``
     [s] and ``takeoff_kinds`` ("lift-off" or "rebound") of every flight that
     starts in the record; ``flights`` (n, 2) [launch, landing] of the complete
-    flights, their ``kinds`` and ``durations``; ``n_hops``,
-    ``airborne_fraction``, ``max_gap`` [m]; ``impacts`` (n, 3) [time, w_in, e]
+    flights, their ``kinds`` and ``durations``; ``n_hops`` (complete flights);
+    ``airborne_at_start`` (in flight at the first frame), ``in_flight_at_end`` (the launch [s] of
+    a flight not landed by the last frame, else None); ``airborne_fraction`` (of the time
+    recorded, the cut flights included), ``max_gap`` [m]; ``impacts`` (n, 3) [time, w_in, e]
     of every landing (relative normal speed before it, < 0, and the
     restitution realised there) and ``realised_restitution``.
 
@@ -164,7 +166,13 @@ class Flights(AnalysisBase):
         # Touching: overlapping (gap <= 0) or pushed (a damped contact can pull
         # at the very end, so force alone is not enough, nor is the gap alone
         # for results without force).
-        contact = (gap <= 0) | (fc > 0) if fc is not None else gap <= tol
+        # Pushed: beyond the rounding of the body forces taken off the recorded force (a part's
+        # weight ~1e-16 relative), which leaves a few ulp where the normal gravity is ~0 (a
+        # track at -90 deg): as a push, they would hold a part that flew off in contact.
+        if fc is not None:
+            weight = float(np.nanmax(r.gather("mass", where, slots))) * r.derived.get("g", G)
+            pushed = fc > 1e-9 * (weight + abs(float(r.parameters.get("normal_force", 0.0))))
+        contact = (gap <= 0) | pushed if fc is not None else gap <= tol
 
         # Working state of the event search (neither settings nor answers).
         self._t, self._z, self._vz, self._r, self._g, self._fc = t, z, vz, depth, g_n, fc
@@ -220,7 +228,21 @@ class Flights(AnalysisBase):
         res.kinds = kinds
         res.durations = res.flights[:, 1] - res.flights[:, 0]
         res.n_hops = len(res.flights)
-        res.airborne_fraction = float(res.durations.sum() / (t[-1] - t[0])) if n > 1 else 0.0
+        # Airborne: the complete flights, and the flights the record cuts (one under way at the
+        # first frame, one not landed by the last): a part that flies off counts as airborne.
+        airborne, since = 0.0, t[0] if n else 0.0
+        flying = bool(n) and not contact[0]
+        res.airborne_at_start = flying
+        for when, kind in sorted(events):  # at a tie the landing first, then the launch
+            if kind == "land" and flying:
+                airborne += when - since
+            elif kind != "land" and not flying:
+                since = when
+            flying = kind != "land"
+        res.in_flight_at_end = float(since) if flying else None
+        if flying:
+            airborne += t[-1] - since
+        res.airborne_fraction = float(airborne / (t[-1] - t[0])) if n > 1 else 0.0
         res.max_gap = float(np.max(gap)) if n else float("nan")
 
     def _check_frames(self, t, zs, vs) -> None:

@@ -649,13 +649,16 @@ def step_beyond_contact(p: Mapping[str, float]) -> str | None:
 
 def _check_contact_step(p: Mapping[str, float]) -> None:
     """A fixed dt beyond the contact's limits, unless the user insists (dt_unchecked=1:
-    the run is recorded with it and ``vibrofeed check`` fails the result)."""
+    the run goes, and fails at its end, as ``vibrofeed check`` rejects its result; its frames
+    are kept in OUT.h5.part)."""
     problem = step_beyond_contact(p)
     if problem and p.get("dt_unchecked", 0):
-        warnings.warn(f"{problem}, run as dt_unchecked=1 asks: vibrofeed check will fail the result",
+        warnings.warn(f"{problem}, run as dt_unchecked=1 asks: vibrofeed check rejects the result, "
+                      "so the run fails (its frames kept in OUT.h5.part)",
                       ParameterWarning, stacklevel=4)
     elif problem:
-        anyway = ("; to run it anyway add -p dt_unchecked=1 (vibrofeed check then fails the result)"
+        anyway = ("; to run it anyway add -p dt_unchecked=1 (the run then fails, as vibrofeed check "
+                  "rejects its result, with its frames kept)"
                   if "dt_unchecked" in p else "")  # (a deck of one's own may not declare it)
         raise ParameterError(f"{problem}: contacts would last a few steps and parts gain energy; "
                              f"lower dt or set dt=0 (automatic){anyway}")

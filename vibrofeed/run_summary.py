@@ -57,7 +57,9 @@ def run_summary(run) -> str:
                 period = 1.0 / float(r.parameters.get("freq", 1.0))
                 hops = int((fl.durations >= 0.05 * period).sum())  # shorter: rebounds
                 rebounds = fl.n_hops - hops
+                flying = (f", in flight from t = {fl.in_flight_at_end:.3g} s to the end"
+                          if fl.in_flight_at_end is not None else "")  # a flight not landed
                 bits.append(f"{hops} hops" + (f" (+{rebounds} short rebounds)" if rebounds else "")
-                            + f", airborne {fl.airborne_fraction:.0%} of the time, "
+                            + f"{flying}, airborne {fl.airborne_fraction:.0%} of the time, "
                             f"highest {_si(fl.max_gap, 'm')}")
     return head + " | " + ", ".join(bits)

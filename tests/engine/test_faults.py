@@ -203,7 +203,8 @@ def test_a_full_disk_keeps_what_was_written_and_says_so(small_disk):
     assert all("HDF5" not in line and "Traceback" not in line for line in lines)
     part = small_disk / "f.h5.part"
     assert part.exists() and not scratch_folders(small_disk)
-    assert f"{part}" in lines[0] and len(lines) <= 2  # the error, and where the frames are if marked
+    assert f"{part}" in lines[0] and len(lines) == 2  # the error, and where the frames are
+    assert status(part)[0] == "failed"  # it opens (the worker closed it whole) and says so
 
 
 def test_a_run_that_loses_parts_has_failed(tmp_path):

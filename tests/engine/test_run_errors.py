@@ -48,7 +48,8 @@ def test_error_in_a_deck_command_names_message_and_line(tmp_path):
     assert 'Invalid fix style: "gravityy"' in err
     assert f"broken.liggghts:{line_of(deck, 'gravityy')}: fix gravi all gravityy" in err
     assert not out.exists() and not out.with_name("r.h5.part").exists()
-    assert out.with_suffix(".log").exists()  # the LIGGGHTS log is kept for diagnosis
+    # the LIGGGHTS log is kept for diagnosis, as an unfinished run's: r.log is a finished result's
+    assert out.with_name("r.log.part").exists() and not out.with_suffix(".log").exists()
 
 
 def test_error_in_an_included_block_names_that_file_and_line(tmp_path):

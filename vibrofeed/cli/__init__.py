@@ -174,7 +174,11 @@ def main(argv: list[str] | None = None) -> int:
             interrupt.stop_all(exc)
         except KeyboardInterrupt:  # a second signal: leave now
             pass
-        return fail(interrupt.message(exc), interrupt.exit_code(exc))
+        code = fail(interrupt.message(exc), interrupt.exit_code(exc))
+        kept = getattr(exc, "kept", None)  # a run's: what it left behind
+        if kept:
+            print(f"vibrofeed: {kept}", file=sys.stderr)
+        return code
     except BrokenPipeError:
         # The reader stopped (`vibrofeed ... | head`): no traceback, and none again when
         # Python flushes stdout at exit (the recipe of the signal module's documentation).

@@ -1,7 +1,11 @@
 """Parts leaving a bulk feeder's track: outlet events and the mass balance.
 
-A part has left the track when its centre is beyond the outlet edge
-(``x > outlet_x``) and below the catch plane (``z < catch_z``). The driver
+A part has left the track over its outlet edge when it is below the catch plane
+(``z < catch_z``) with its centre beyond the edge less the part's reach, its radius (a
+clump's: the sphere about its centre that encloses it): ``x > outlet_x - radius``. The
+track is a sheet without thickness, so a part that tumbles over the edge can swing under it
+and cross the plane with its centre still behind the edge, by up to its reach; every part
+that leaves over the outlet is an exit, however it turns. The driver
 looks at every frame; a part seen there for the first time is an *event*, and
 the moment it crossed the catch plane is found exactly by following its free
 flight backwards from the frame's state under the deck's gravity
@@ -17,7 +21,8 @@ import math
 import numpy as np
 
 METHOD = ("ballistic: crossing of z = catch_z reconstructed by free flight back from the first "
-          "frame that sees the part beyond outlet_x and below catch_z; orientation at that frame")
+          "frame that sees the part below catch_z with its centre beyond outlet_x less its radius "
+          "(a part tumbling over the edge swings under it); orientation at that frame")
 
 
 def gravity_vector(g: float, incline_deg: float) -> np.ndarray:
@@ -74,8 +79,9 @@ class Outlet:
     def attributes(self) -> dict:
         return {"outlet_x": self.outlet_x, "catch_z": self.catch_z, "method": METHOD}
 
-    def _events(self, time: float, parts: dict, new: np.ndarray) -> dict | None:
-        """The event table of the parts ``new`` marks, timed at their catch-plane crossing."""
+    def _events(self, time: float, parts: dict, new: np.ndarray, extra: dict | None = None) -> dict | None:
+        """The event table of the parts ``new`` marks, timed at their catch-plane crossing;
+        ``extra``: further per-part columns (of all parts) to carry along."""
         if not new.any():
             return None
         ids = np.asarray(parts["id"], dtype=np.int64)[new]
@@ -86,14 +92,24 @@ class Outlet:
         order = np.argsort(tau, kind="stable")  # in the order they crossed
         q = parts.get("orientation")
         q = np.tile([1.0, 0.0, 0.0, 0.0], (len(ids), 1)) if q is None else np.asarray(q)[new]
-        return {"time": (time + tau)[order], "id": ids[order], "position": pos[order],
-                "velocity": vel[order], "orientation": q[order]}
+        table = {"time": (time + tau)[order], "id": ids[order], "position": pos[order],
+                 "velocity": vel[order], "orientation": q[order]}
+        for name, column in (extra or {}).items():
+            table[name] = np.asarray(column)[new][order]
+        return table
+
+    def _over_the_edge(self, parts: dict, x: np.ndarray) -> np.ndarray:
+        """Whether each part's centre is beyond the outlet edge less its reach (its radius;
+        0 where the parts give none): below the catch plane, it went over the edge."""
+        radius = parts.get("radius")
+        reach = np.zeros(len(x)) if radius is None else np.nan_to_num(np.asarray(radius, dtype=float))
+        return x[:, 0] > self.outlet_x - reach
 
     def step(self, time: float, parts: dict, inserted: int) -> tuple[dict | None, dict]:
         ids = np.asarray(parts["id"], dtype=np.int64)
         x = np.asarray(parts["position"], dtype=float).reshape(-1, 3)
         reported = np.isin(ids, self.exited, assume_unique=True)
-        new = (x[:, 0] > self.outlet_x) & (x[:, 2] < self.catch_z) & ~reported
+        new = self._over_the_edge(parts, x) & (x[:, 2] < self.catch_z) & ~reported
         events = self._events(time, parts, new)
         self.exited = np.union1d(self.exited, ids[new])
         on_track = int(len(ids) - reported.sum() - new.sum())
@@ -104,9 +120,13 @@ class Outlet:
 
 
 class LineOutlet(Outlet):
-    """A feeder line's outlet and rejects: a part below the catch plane before the outlet
-    edge fell off a side (a side drop, swept off by a wiper, or over a wall) and is a
-    *reject* of the section it fell from (``section_x``: the sections' start x, ascending).
+    """A feeder line's outlet and rejects: a part below the catch plane that did not go over
+    the outlet edge fell off a side (a side drop, swept off by a wiper, over a wall, or into
+    a joint) and is a *reject* of the section it fell from (``section_x``: the sections'
+    start x, ascending): the one it was on at the last frame that saw it above the plane,
+    counted on a section once its centre is past the section's start by its reach (a part
+    tumbling off at a joint, its centre swung under the next section's edge, fell from the
+    section before; where no frame saw it above the plane, where it crossed the plane).
 
     ``step(time, parts, inserted)`` returns (outlet events, reject events with their
     ``section`` (1-based), counts with ``rejected``): inserted = on_track + exited +
@@ -118,16 +138,40 @@ class LineOutlet(Outlet):
         self.section_x = np.asarray(section_x, dtype=float)
         self.rejected = np.empty(0, dtype=np.int64)  # ids with a reject event, sorted
         self.reject_times = np.empty(0)  # their catch-plane crossings, for the returns
+        # the parts present at the last frame (sorted ids) and where each was last seen above
+        # the catch plane: its x less its reach (NaN: never seen there)
+        self._seen_ids = np.empty(0, dtype=np.int64)
+        self._seen_at = np.empty(0)
+
+    def _last_on_track(self, ids: np.ndarray, at: np.ndarray, above: np.ndarray) -> np.ndarray:
+        """``at`` (x less reach) of the parts above the plane now; for the others, theirs at
+        the last frame that saw them above it (NaN if none did). Remembers the parts present."""
+        before = np.full(len(ids), np.nan)
+        if len(self._seen_ids):
+            k = np.minimum(np.searchsorted(self._seen_ids, ids), len(self._seen_ids) - 1)
+            known = self._seen_ids[k] == ids
+            before[known] = self._seen_at[k[known]]
+        last = np.where(above, at, before)
+        order = np.argsort(ids)
+        self._seen_ids, self._seen_at = ids[order], last[order]
+        return last
 
     def step(self, time: float, parts: dict, inserted: int):
         ids = np.asarray(parts["id"], dtype=np.int64)
         x = np.asarray(parts["position"], dtype=float).reshape(-1, 3)
+        radius = parts.get("radius")
+        reach = np.zeros(len(ids)) if radius is None else np.nan_to_num(np.asarray(radius, dtype=float))
+        last = self._last_on_track(ids, x[:, 0] - reach, x[:, 2] >= self.catch_z)
         reported = np.isin(ids, np.union1d(self.exited, self.rejected))
         below = (x[:, 2] < self.catch_z) & ~reported
-        out, fell = below & (x[:, 0] > self.outlet_x), below & (x[:, 0] <= self.outlet_x)
-        events, rejects = self._events(time, parts, out), self._events(time, parts, fell)
-        if rejects is not None:  # the section it fell from: where it crossed the plane
-            rejects["section"] = np.searchsorted(self.section_x, rejects["position"][:, 0],
+        over = self._over_the_edge(parts, x)
+        out, fell = below & over, below & ~over
+        events = self._events(time, parts, out)
+        rejects = self._events(time, parts, fell, {"last": last})
+        if rejects is not None:  # the section it fell from (the class's docstring)
+            at = rejects.pop("last")
+            at = np.where(np.isfinite(at), at, rejects["position"][:, 0])
+            rejects["section"] = np.searchsorted(self.section_x, at,
                                                  side="right").clip(1, len(self.section_x))
             self.reject_times = np.concatenate([self.reject_times, rejects["time"]])
         self.exited = np.union1d(self.exited, ids[out])

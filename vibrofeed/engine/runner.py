@@ -52,6 +52,11 @@ _LAUNCHER_PREFIXES = ("OMPI_", "PMIX_", "OPAL_", "ORTE_", "PRTE_", "HYDRA_", "PM
 # beyond the cores a run only slows down, and thousands of ranks never start.
 RANKS_PER_CORE = 4
 
+# Space held in each run's scratch folder, beside its output, and given back when the disk
+# fills: enough for the worker to drop the batch it could not write and close the file whole,
+# marked failed (HDF5 cut short mid-flush leaves a file that does not open).
+RESERVE_BYTES = 512 * 1024
+
 
 @dataclass
 class RunResult:
@@ -166,7 +171,8 @@ def check_target_error(target, deck: Deck) -> float | None:
 
 
 def _reusable(out: Path, rid: str, deck: Deck, values, ranks: int) -> RunResult | None:
-    """A RunResult for ``out`` if it is a complete result with run id ``rid``."""
+    """A RunResult for ``out`` if it is a complete result with run id ``rid`` that ``vibrofeed
+    check`` accepts (an earlier vibrofeed may have completed a run that check rejects)."""
     if not out.is_file():
         return None
     from ..errors import ResultError
@@ -183,6 +189,8 @@ def _reusable(out: Path, rid: str, deck: Deck, values, ranks: int) -> RunResult 
             wall = float(r.run_info.get("wall_seconds", 0.0))
             target, reason = r.target_error, r.stop_reason
     except (ResultError, KeyError):
+        return None
+    if check_problem(out):  # a result vibrofeed check rejects stands in for no run
         return None
     return RunResult(output=out, log=out.with_suffix(".log"), deck=deck.name, ranks=ranks,
                      n_steps=n_steps, dt=sim_time / n_steps if n_steps else 0.0, frames=frames,
@@ -220,9 +228,16 @@ def _with_parent_death_signal(cmd: list[str]) -> list[str]:
     return [setpriv, "--pdeathsig", "TERM", "--"] + cmd if setpriv else cmd
 
 
+def unfinished(path: Path) -> Path:
+    """The name ``path`` has while its run goes (``OUT.h5.part``, ``OUT.log.part``): renamed
+    to ``path`` only when the run completes, so a finished result and its log are replaced
+    together, by a run that finished too."""
+    return path.with_name(path.name + ".part")
+
+
 def output_files(output) -> tuple[Path, Path, Path]:
     """The files a run into ``output`` writes: the result, its unfinished ``OUT.part`` and
-    its log (``OUT.log``: the result's suffix replaced)."""
+    its log (``OUT.log``: the result's suffix replaced; ``OUT.log.part`` while it runs)."""
     out = Path(output).expanduser().absolute()
     log = out.with_suffix(".log") if out.suffix else out.with_name(out.name + ".log")
     return out, out.with_name(out.name + ".part"), log
@@ -257,7 +272,8 @@ def check_output(deck: Deck, output, option: str = "output") -> None:
                          "result and its log would be one file; give the result another suffix "
                          "(.h5)")
     inputs = deck_inputs(deck)
-    for what, path in (("the result", out), ("its unfinished result", part), ("its log", log)):
+    for what, path in (("the result", out), ("its unfinished result", part), ("its log", log),
+                       ("its unfinished log", unfinished(log))):
         if path.resolve() in inputs:
             raise UsageError(f"{option} {output}: {what} would replace {path.name}, which the run "
                              f"reads (deck {deck.name}); give another output name")
@@ -351,6 +367,7 @@ def run_deck(deck: Deck, params: Mapping[str, str], output, *, ranks: int = 1,
     # An earlier OUT.h5 stays until this run completes and replaces it (os.replace in finish):
     # a rerun that fails or is killed must not take a finished result with it.
     part.unlink(missing_ok=True)
+    unfinished(log).unlink(missing_ok=True)  # a killed run's; OUT.log stays with OUT.h5
     scratch.remove_abandoned(out.parent)
 
     run = _Run(deck, values, rid, out, part, log, ranks, on_event, target_error)
@@ -363,7 +380,7 @@ def run_deck(deck: Deck, params: Mapping[str, str], output, *, ranks: int = 1,
             raise KeyboardInterrupt(run.stopped)
         return run.finish()
     except KeyboardInterrupt as exc:
-        run.interrupted(run.stopped or interrupt.reason(exc))
+        exc.kept = run.interrupted(run.stopped or interrupt.reason(exc))  # what the user is told
         raise
     finally:
         run.remove_scratch()
@@ -379,6 +396,7 @@ class _Run:
         self.deck, self.values, self.rid, self.ranks = deck, values, rid, ranks
         self.target_error = target_error
         self.out, self.part, self.log = out, part, log
+        self.log_part = unfinished(log)  # the LIGGGHTS log until the run completes
         self.on_event = on_event
         self.tmp: Path | None = None
         self.proc: subprocess.Popen | None = None
@@ -394,6 +412,10 @@ class _Run:
         templates, if it declares a prepare hook) and the worker's spec."""
         try:
             self.tmp = scratch.make(self.out.parent)
+            with open(self.reserve, "wb") as fh:
+                fh.write(bytes(RESERVE_BYTES))
+                fh.flush()
+                os.fsync(fh.fileno())
             self._write_spec(command, before_run, schedule)
         except OSError as exc:
             if exc.errno != errno.ENOSPC:
@@ -409,11 +431,12 @@ class _Run:
             "variables": values,
             "var_meta": {n: [v.unit, v.description, v.default] for n, v in deck.tunables.items()},
             "constants": deck.constants,
-            "output": str(self.part), "log": str(self.log), "screen": str(self.screen),
+            "output": str(self.part), "log": str(self.log_part), "screen": str(self.screen),
             "seed": int(float(values["seed"])) if "seed" in values else None,
             "command": command, "run_id": self.rid, "sources": deck.sources,
             "before_run": list(before_run or ()),
             "schedule": schedule,
+            "reserve": str(self.reserve),  # to free when the disk fills
             "target_error": self.target_error,  # stop once the feed rate is this precise (None: t_end)
             # extra -var values, the track mesh and the clump template (vibrofeed.geometry.Prepared)
             "prepared": prepared.to_spec() if prepared is not None else None,
@@ -427,6 +450,10 @@ class _Run:
     @property
     def screen(self) -> Path:
         return self.tmp / "screen.txt"
+
+    @property
+    def reserve(self) -> Path:
+        return self.tmp / "reserve"
 
     @property
     def spec_path(self) -> Path:
@@ -493,16 +520,25 @@ class _Run:
             if self.proc is not None:
                 _signal_group(self.proc, signal.SIGTERM)
 
-    def interrupted(self, why: str) -> None:
-        """Stop the worker; keep its frames marked ``interrupted`` (or nothing, before the first)."""
+    def interrupted(self, why: str) -> str:
+        """Stop the worker; keep its frames marked ``interrupted`` with its log (or nothing,
+        before the first frame); what was kept, in words."""
         if self.proc is not None:
             _stop(self.proc)
-        if self.part.exists() and _frames_in(self.part)[0]:
+        frames = _frames_in(self.part)[0] if self.part.exists() else 0
+        if frames:
             from ..results.writer import mark_file_status  # h5py: only when needed
 
-            mark_file_status(self.part, L.STATUS_INTERRUPTED, why)
-        elif not _unreadable(self.part):
-            self.part.unlink(missing_ok=True)
+            if mark_file_status(self.part, L.STATUS_INTERRUPTED, why):
+                return (f"the {frames} frames written before the interruption are kept in "
+                        f"{self.part} (status: interrupted)")
+            return (f"the {frames} frames written are kept in {self.part}, which could not be "
+                    "marked interrupted")
+        if _unreadable(self.part):
+            return f"{self.part} is kept as it is: HDF5 cannot open it"
+        self.part.unlink(missing_ok=True)
+        self.log_part.unlink(missing_ok=True)
+        return f"interrupted before its first frame: nothing written ({self.out.name} not touched)"
 
     def event(self, kind: str) -> dict | None:
         return next((e for e in self.events if e["event"] == kind), None)
@@ -529,14 +565,21 @@ class _Run:
         return result
 
     def complete(self) -> None:
-        """Mark the file ``complete`` and rename it to OUT.h5, one step after the
-        other: only a file that is about to be OUT.h5 says ``complete`` (a kill
-        between the two leaves a ``.part`` that ``vibrofeed check`` fails)."""
+        """Mark the file ``complete``, check it as ``vibrofeed check`` would and rename it to
+        OUT.h5, one step after the other: only a file that is about to be OUT.h5 says
+        ``complete`` (a kill between them leaves a ``.part`` that ``vibrofeed check`` fails),
+        and a result that check rejects is a failed run (its file says ``failed``)."""
         from ..results.writer import mark_file_status
 
         if not mark_file_status(self.part, L.STATUS_COMPLETE):
             self.fail(OutputError(f"cannot mark {self.part} complete"))
+        rejected = check_problem(self.part)
+        if rejected:
+            self.fail(RunError(f"deck {self.deck.name}: the result is not sound, vibrofeed check "
+                               f"rejects it: {rejected}"))
         os.replace(self.part, self.out)
+        if self.log_part.exists():  # the log goes with its result, never before it
+            os.replace(self.log_part, self.log)
 
     def diagnose(self) -> RunError:
         frames, last_step, last_time = _frames_in(self.part) if self.part.exists() else (0, None, None)
@@ -544,7 +587,7 @@ class _Run:
         if own is not None and own.get("no_space"):
             where = f"{self.part} ({frames} frames)" if frames else str(self.part)
             return OutputError(f"no space left on {mount_point(self.part.parent)} while writing {where}")
-        return _diagnose(self.rc, self.events, self.deck, self.log, self.screen, self.stderr_path,
+        return _diagnose(self.rc, self.events, self.deck, self.log_part, self.screen, self.stderr_path,
                          last_step, last_time)
 
     def fail(self, error: RunError):
@@ -565,6 +608,20 @@ class _Run:
     def remove_scratch(self) -> None:
         if self.tmp is not None:
             shutil.rmtree(self.tmp, ignore_errors=True)
+
+
+def check_problem(path: Path) -> str | None:
+    """The first error ``vibrofeed check`` finds in the result ``path`` of a run that reached
+    its end (a part faster than the drive can make it, lost parts, ...; the file may still be
+    a ``.part``), else None: a run whose own result check would reject has failed."""
+    from ..results.check import check_file  # h5py: only when needed
+
+    errors = [p for p in check_file(path, allow_incomplete=True).problems if p.level == "error"]
+    if not errors:
+        return None
+    more = len(errors) - 1
+    return errors[0].message + (f" (and {more} more problem{'s' * (more > 1)}: vibrofeed check "
+                                f"--allow-incomplete {path.name} lists them)" if more else "")
 
 
 def _mass_balance_problem(counts: dict | None) -> str | None:

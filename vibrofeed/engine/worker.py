@@ -734,6 +734,20 @@ def no_space(exc: BaseException) -> bool:
         "No space left on device" in str(exc) or f"errno = {errno.ENOSPC}," in str(exc)
 
 
+def close_on_full_disk(spec: dict, writer) -> None:
+    """The disk filled: give back the space the runner held for this (``spec["reserve"]``) and
+    close rank 0's file whole, marked failed, without the batch it could not write."""
+    reserve = spec.get("reserve")
+    if reserve:
+        Path(reserve).unlink(missing_ok=True)
+    if writer is not None:
+        try:
+            writer.finish(L.STATUS_FAILED, "no space left on the device while writing the frames: "
+                                           "the frames written before are kept")
+        except Exception:  # nothing more to be done here; the runner says what it can
+            pass
+
+
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     OnTerminate.block()  # before MPI and any thread start: they inherit the mask
@@ -750,6 +764,8 @@ def main(argv=None) -> int:
         return 3
     except Exception as exc:  # a bug or an I/O failure: tell the parent, then stop all ranks
         extra = {"no_space": True} if no_space(exc) else {}
+        if extra:
+            close_on_full_disk(spec, on_term.writer)
         report("error", message=f"{type(exc).__name__}: {exc}", **extra)
         if MPI.COMM_WORLD.size > 1:
             MPI.COMM_WORLD.Abort(1)

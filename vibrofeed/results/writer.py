@@ -531,6 +531,28 @@ class ResultWriter:
     def _write_pending(self) -> None:
         if not self.file.id.valid or not (self._pending or self._pending_events):
             return
+        events = {path: len(table["id"]) for path, table in self._tables.items()}
+        try:
+            self._write_batch()
+        except BaseException:
+            # A batch that could not be written (a full disk) is dropped whole: every series
+            # back to the frames and events written before it, so that the file, once it can
+            # be flushed again, holds those alone, each series as long as ``step``.
+            self._pending, self._pending_events = [], []
+            frames = [*self._values.values(), *self._counts.values(), self._edges, self._time,
+                      self._step, *(ds for surface in self._surfaces for ds in surface.values()),
+                      *(self._rotation.values() if self._rotation is not None else ())]
+            try:
+                for ds in frames:
+                    ds.id.set_extent((self.written,) + ds.shape[1:])
+                for path, table in self._tables.items():
+                    for ds in table.values():
+                        ds.id.set_extent((events.get(path, 0),) + ds.shape[1:])
+            except Exception:  # the file is beyond repair; the first error says why
+                pass
+            raise
+
+    def _write_batch(self) -> None:
         if self._pending_events:
             for path in dict.fromkeys(p for p, _ in self._pending_events):
                 if path not in self._tables:
@@ -575,9 +597,9 @@ class ResultWriter:
         # step/time last: a frame counts once its step is there.
         self._append(self._time, k0, np.array([f[1] for f in self._pending], dtype="f8"))
         self._append(self._step, k0, np.array([f[0] for f in self._pending], dtype="i8"))
+        self.file.flush()  # the batch counts as written once on disk (a full disk: dropped)
         self.written += n
         self._pending = []
-        self.file.flush()
 
     @staticmethod
     def _append(ds, k, block) -> None:

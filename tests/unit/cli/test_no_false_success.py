@@ -165,7 +165,7 @@ def test_a_step_beyond_the_contact_is_refused_unless_insisted(deck):
     too_long = repr(limit * 1.01)
     with pytest.raises(ParameterError, match=r"dt=.* s is \d+% of the (Rayleigh|Hertz) time"):
         resolve(d, {**run, "dt": too_long})
-    with pytest.warns(ParameterWarning, match="vibrofeed check will fail the result"):
+    with pytest.warns(ParameterWarning, match="vibrofeed check rejects the result, so the run fails"):
         assert resolve(d, {**run, "dt": too_long, "dt_unchecked": "1"})["dt"] == too_long
 
 

@@ -41,6 +41,29 @@ def test_frames_that_follow_the_surface_count_the_hops(tmp_path):
     assert "0 hops" in line and "hops not counted" not in line
 
 
+def test_a_part_that_flies_off_and_never_lands_is_said_to_be_in_the_air(tmp_path):
+    # Issue 36: "0 hops, airborne 0 % of the time, highest 35.8 mm" for a part flying 36 mm above
+    # the plate. Here a part rests on a still plate (pressed: a contact force m g) until 20 ms,
+    # then leaves it at 1 m/s and is still rising at 0.1 s (it would land 2 v / g = 204 ms later).
+    g, v0, t_l, mass, dt = 9.81, 1.0, 0.02, 1e-6, 1e-3
+    times = np.arange(0, 0.1 + dt / 2, dt)
+    frames = []
+    for k, t in enumerate(times):
+        s = max(t - t_l, 0.0)
+        z, v = 5e-4 + v0 * s - g / 2 * s * s, (v0 - g * s) if t > t_l else 0.0
+        force = -mass * g if t > t_l else 0.0  # total force: gravity alone once in flight
+        frames.append((k, float(t), parts([1], [[0.0, 0.0, z]], velocity=[[0, 0, v]],
+                                          force=[[0, 0, force]], mass=mass)))
+    path = write_result(tmp_path / "off.h5", frames,
+                        variables={"freq": ("50", "Hz", "f", "50"), "incline": ("0", "deg", "i", "0")})
+    run = RunResult(output=path, log=path.with_suffix(".log"), deck="single_part", ranks=1,
+                    n_steps=len(times), dt=1e-6, frames=len(times), sim_time=0.1, wall=1.0)
+    highest = v0 * 0.08 - g / 2 * 0.08 ** 2  # 48.6 mm above the plate at the last frame
+    assert f"{highest * 1e3:.3g}" == "48.6"
+    assert run_summary(run).endswith(
+        "0 hops, in flight from t = 0.02 s to the end, airborne 80% of the time, highest 48.6 mm")
+
+
 # ---------------------------------------------------------------- the line from a faked result
 class FakeResult:
     """What run_summary reads of a result, set by hand."""
@@ -69,7 +92,7 @@ def fake_run(**kw):
 def analyses(monkeypatch, velocity=0.0, durations=()):
     transport = SimpleNamespace(mean_velocity=velocity)
     flights = SimpleNamespace(durations=np.asarray(durations, float), n_hops=len(durations),
-                              airborne_fraction=0.5, max_gap=2e-3)
+                              airborne_fraction=0.5, max_gap=2e-3, in_flight_at_end=None)
     def analysis(results):
         return lambda r: SimpleNamespace(run=lambda: SimpleNamespace(results=results))
 

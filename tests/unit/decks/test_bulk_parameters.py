@@ -407,8 +407,8 @@ def test_a_step_past_both_limits_is_refused_with_its_fractions_of_both_times():
     assert str(err.value) == (
         f"dt={dt:g} s is {whole_percent(0.15 * hertz / rayleigh)}% of the Rayleigh time (limit 20%) "
         "and 15% of the Hertz time (limit 10%): contacts would last a few steps and parts gain energy; "
-        "lower dt or set dt=0 (automatic); to run it anyway add -p dt_unchecked=1 (vibrofeed check "
-        "then fails the result)")
+        "lower dt or set dt=0 (automatic); to run it anyway add -p dt_unchecked=1 (the run then "
+        "fails, as vibrofeed check rejects its result, with its frames kept)")
 
 
 def test_the_automatic_step_is_allowed_even_past_a_fifth_of_the_rayleigh_time():

@@ -169,3 +169,66 @@ def test_a_reject_is_of_the_section_where_it_crossed_the_plane_behind_the_inlet_
     by_id = dict(zip(rej["id"].tolist(), rej["section"].tolist()))
     assert by_id == {1: 1, 2: 1, 3: 2}
     assert c["rejected"] == 3 and c["lost"] == 0
+
+
+# -- parts that tumble over an edge (issue 36) -------------------------------------------------
+CHIP_REACH = 1.46e-4  # m: a 200 x 200 x 50 um chip's enclosing sphere about its centre
+
+
+def with_radius(f, radius):
+    f["radius"] = np.full(len(f["id"]), radius)
+    return f
+
+
+def test_a_part_tumbling_over_the_outlet_edge_is_an_exit_not_a_loss():
+    # The issue's chip went over the outlet edge tumbling; the track is a sheet without
+    # thickness, so its centre was still 60-90 um behind the edge when it dropped below the
+    # catch plane. Its reach is 146 um: it went over the edge, an exit.
+    out = Outlet(outlet_x=0.02, catch_z=-3e-4, gravity=G)
+    out.step(0.0, with_radius(frame([1], [0.02 - 3e-5], [1e-4]), CHIP_REACH), inserted=1)
+    ev, c = out.step(0.01, with_radius(frame([1], [0.02 - 8e-5], [-4e-4]), CHIP_REACH), inserted=1)
+    assert ev["id"].tolist() == [1] and c == dict(inserted=1, on_track=0, exited=1, lost=0)
+    ev, c = out.step(0.02, with_radius(frame([], [], []), CHIP_REACH), inserted=1)  # the floor took it
+    assert ev is None and c == dict(inserted=1, on_track=0, exited=1, lost=0)
+
+
+def test_a_part_below_the_plane_farther_behind_the_edge_than_its_reach_did_not_go_over_it():
+    out = Outlet(outlet_x=0.02, catch_z=-3e-4, gravity=G)
+    ev, c = out.step(0.0, with_radius(frame([1], [0.02 - 1.47e-4], [-4e-4]), CHIP_REACH), inserted=1)
+    assert ev is None and c == dict(inserted=1, on_track=1, exited=0, lost=0)
+    line = LineOutlet(outlet_x=0.02, catch_z=-3e-4, gravity=G, section_x=(0.0, 0.006))
+    ev, rej, c = line.step(0.0, with_radius(frame([1], [0.02 - 1.47e-4], [-4e-4]), CHIP_REACH),
+                           inserted=1)
+    assert ev is None and rej["section"].tolist() == [2] and c["rejected"] == 1
+
+
+def test_a_line_counts_a_part_tumbling_over_its_outlet_edge_as_an_exit_not_a_reject():
+    line = LineOutlet(outlet_x=0.02, catch_z=-3e-4, gravity=G, section_x=(0.0, 0.006))
+    ev, rej, c = line.step(0.5, with_radius(frame([4], [0.02 - 9e-5], [-5e-4]), CHIP_REACH), inserted=1)
+    assert ev["id"].tolist() == [4] and rej is None
+    assert c == dict(inserted=1, on_track=0, exited=1, rejected=0, lost=0)
+
+
+def test_a_part_tumbling_off_at_a_joint_is_a_reject_of_the_section_it_fell_from():
+    # Section 2 starts at 6 mm. Part 1 was last seen above the plane on section 1's end, 20 um
+    # before the joint; tumbling into the joint its centre swung 60 um under section 2's edge
+    # before it crossed the plane there: it fell from section 1. Part 2 was over section 2,
+    # its centre 200 um past the joint (more than its reach): section 2's, as its crossing.
+    line = LineOutlet(outlet_x=0.02, catch_z=-3e-4, gravity=G, section_x=(0.0, 0.006))
+    line.step(0.0, with_radius(frame([1, 2], [0.006 - 2e-5, 0.0062], [1e-4, 1e-4]), CHIP_REACH),
+              inserted=2)
+    _, rej, c = line.step(0.01, with_radius(frame([1, 2], [0.006 + 6e-5, 0.0062], [-4e-4, -4e-4]),
+                                            CHIP_REACH), inserted=2)
+    assert rej["position"][:, 0].min() > 0.006   # both crossed the plane beyond the joint
+    assert dict(zip(rej["id"].tolist(), rej["section"].tolist())) == {1: 1, 2: 2}
+    assert c == dict(inserted=2, on_track=0, exited=0, rejected=2, lost=0)
+
+
+def test_a_part_remembered_above_the_plane_keeps_where_it_was_until_it_falls():
+    # seen above the plane over section 2 at one frame, then below it at a frame later (two
+    # frames in between it was still above): the last frame above it decides, not the first
+    line = LineOutlet(outlet_x=0.02, catch_z=-3e-4, gravity=G, section_x=(0.0, 0.006))
+    line.step(0.0, frame([5], [0.004], [1e-4]), inserted=1)
+    line.step(0.01, frame([5], [0.0065], [1e-4]), inserted=1)
+    _, rej, _ = line.step(0.02, frame([5], [0.0059], [-1e-3]), inserted=1)
+    assert rej["section"].tolist() == [2]

@@ -251,7 +251,10 @@ def test_an_impact_in_a_record_of_two_frames(tmp_path):
         fl = Flights(r).run().results
     assert fl.landings == pytest.approx([t1], abs=1e-12) and fl.takeoffs == pytest.approx([t1], abs=1e-12)
     assert fl.impacts[0, 2] == pytest.approx(e, rel=1e-9)
-    assert fl.n_hops == 0 and fl.airborne_fraction == 0.0   # no complete flight in one interval
+    assert fl.n_hops == 0                                   # no complete flight in one interval
+    # but in the air throughout: falling from the first frame, flying again after the impact
+    assert fl.airborne_at_start and fl.in_flight_at_end == pytest.approx(t1, abs=1e-12)
+    assert fl.airborne_fraction == pytest.approx(1.0, abs=1e-9)
 
 
 def test_the_part_followed_by_default_is_the_lowest_id(tmp_path):

@@ -72,7 +72,9 @@ def test_every_answer_of_a_bouncing_ball(tmp_path, press):
     assert res.flights == pytest.approx(np.column_stack([t_hit[:-1], t_hit[1:]]), abs=1e-9)
     assert res.kinds == ["rebound"] * (len(t_hit) - 1) and res.n_hops == len(t_hit) - 1
     assert res.durations == pytest.approx(np.diff(t_hit), abs=1e-9)
-    assert res.airborne_fraction == pytest.approx(np.diff(t_hit).sum() / times[-1], rel=1e-6)
+    # dropped from H0 at the first frame and in flight after the last impact: never at rest
+    assert res.airborne_at_start and res.in_flight_at_end == pytest.approx(t_hit[-1], abs=1e-9)
+    assert res.airborne_fraction == pytest.approx(1.0, abs=1e-9)
     assert res.max_gap == pytest.approx(H0, abs=1e-15)  # m: the first frame's
     assert res.impacts[:, 0] == pytest.approx(t_hit, abs=1e-9)
     assert res.impacts[:, 1] == pytest.approx([h[1] for h in hits[:len(t_hit)]], rel=1e-6)
@@ -92,7 +94,8 @@ def test_a_later_start_counts_the_airborne_time_from_there(tmp_path):
     # the record starts in flight: the flight under way has no launch in it
     assert res.n_hops == len(t_hit) - 1
     span = times[-1] - times[first]
-    assert res.airborne_fraction == pytest.approx(np.diff(t_hit).sum() / span, rel=1e-6)
+    assert res.airborne_at_start and res.time[-1] - res.time[0] == pytest.approx(span, abs=1e-15)
+    assert res.airborne_fraction == pytest.approx(1.0, abs=1e-9)  # in flight throughout, as before
 
 
 def test_normal_contact_force_removes_gravity_and_the_pressing_force(tmp_path):
@@ -233,3 +236,24 @@ def test_the_refusal_says_the_spacing_the_period_and_the_frames_needed(tmp_path,
     with plate_file(tmp_path / "m.h5", times, zs, vs, freq) as r, \
             pytest.raises(InputError, match=re.escape(msg)):
         Flights(r).run()
+
+
+def test_a_part_that_drifts_off_a_vertical_track_is_airborne(tmp_path):
+    # Issue 36 (-p incline=-90): gravity along the track, none into it. The recorded force (0
+    # here) plus the part's weight into the surface, m g cos(-90 deg) = m g 6e-17, leaves a
+    # push of rounding size: no contact. The part leaves the plate at t = 0 at 0.1 m/s and
+    # drifts 5 mm off it in 0.05 s: in flight from 0 to the end, never landing.
+    dt, v = 1e-3, 0.1
+    times = np.arange(0, 0.05 + dt / 2, dt)
+    frames = [(k, float(t), parts([3], [[0.0, 0.0, R + v * t]], radius=R, mass=M, velocity=[[0, 0, v]]))
+              for k, t in enumerate(times)]
+    variables = {"freq": ("50", "Hz", "f", "50"), "incline": ("-90", "deg", "i", "0")}
+    with Result(write_result(tmp_path / "v.h5", frames, variables=variables)) as r:
+        assert normal_contact_force(r, 3)[1:] == pytest.approx(M * G * math.cos(math.radians(-90)),
+                                                               rel=1e-3)   # N: > 0, by rounding
+        res = Flights(r).run().results
+    assert res.takeoffs == pytest.approx([0.0], abs=1e-12) and len(res.landings) == 0
+    assert res.n_hops == 0 and not res.airborne_at_start
+    assert res.in_flight_at_end == pytest.approx(0.0, abs=1e-12)
+    assert res.airborne_fraction == pytest.approx(1.0, abs=1e-9)
+    assert res.max_gap == pytest.approx(v * times[-1], rel=1e-9)  # m: 5 mm

@@ -412,6 +412,7 @@ def test_hops_on_a_sine_plate_with_a_shorter_last_interval(tmp_path):
     bound = W * math.tan(math.asin(0.5)) * dt ** 2
     assert np.abs(fl.takeoffs - t_l[:3]).max() <= bound
     assert fl.n_hops == 3 and fl.realised_restitution == 0.0
+    assert fl.in_flight_at_end is None   # the third landing ends the record in contact
     assert fl.airborne_fraction == pytest.approx((t_land - t_l)[:3].sum() / times[-1],
                                                  abs=3 * bound / times[-1])
 
@@ -452,8 +453,10 @@ def test_a_chip_of_four_spheres_hops_from_its_lowest_sphere(tmp_path, tilt_deg):
         return 0.0
 
     assert fl.max_gap == pytest.approx(max(gap(t) for t in times), rel=1e-9, abs=0)   # m
-    assert fl.airborne_fraction == pytest.approx((t_land - t_l)[:3].sum() / times[-1],
-                                                 abs=0.3 * dt / times[-1])
+    # the three flights, and the fourth from its launch to the end of the record
+    assert not fl.airborne_at_start and fl.in_flight_at_end == pytest.approx(t_l[3], abs=0.1 * dt)
+    assert fl.airborne_fraction == pytest.approx(
+        ((t_land - t_l)[:3].sum() + times[-1] - t_l[3]) / times[-1], abs=0.4 * dt / times[-1])
 
 
 @pytest.mark.parametrize("output_dt", [T, 2 * T, 1.05 * T, T / 4])
