@@ -73,6 +73,14 @@ def decks_dir() -> Path:
     return installed if installed.is_dir() else here.parent / "decks"
 
 
+def feeders_dir() -> Path:
+    """The folder holding the example feeder descriptions: the repository's ``feeders/``
+    (``vibrofeed/_feeders`` in an installed package, as decks_dir's)."""
+    here = Path(__file__).resolve().parent
+    installed = here / "_feeders"
+    return installed if installed.is_dir() else here.parent / "feeders"
+
+
 def available() -> list[str]:
     """Names of the decks in :func:`decks_dir` (its include/ blocks are not decks)."""
     return sorted(p.stem for p in decks_dir().glob(f"*{DECK_SUFFIX}"))

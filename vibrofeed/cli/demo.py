@@ -72,24 +72,12 @@ TRACK = {"track_length": "0.008", "track_width": "1.2e-3", "wall_height": "1e-3"
 BOWL = {"shape": "1", "part_size": "5e-4", "part_thickness": "2.5e-4", "n_parts": "10",
         "n_track": "40", "turns": "0.5", "youngs": "2e7", "freq": "75", "amp_t": "2e-4",
         "amp_n": "4e-5", "phase": "-60", "t_end": "0.4", "output_dt": "0.005"}
-# The bowl with an exit line (feeders/bowl_line.toml, the same numbers): the demo's bowl with
-# a 6 mm chute (it brakes the dies: a short one) handing them to a 10 mm linear section of its
-# own drive at the bowl's frequency (a joint between two frequencies opens by both strokes),
-# twice its stroke and a 60 deg lag: 117 mm/s in the dilute limit, sliding, against the
-# chute's queue at ~29 mm/s, so the dies leave the queue spaced (continuity). Its floor tilts
-# 10 deg towards the wall; a side drop keeps the file against it, a wiper sweeps off dies
-# riding on others. 1.5 mm wide: the chute's 1.2 mm and the torsion's sway of its end, 0.13
-# mm either way.
-BOWL_LINE = {**BOWL, "chute_length": "6e-3", "t_end": "0.5",
-             "sections": "2", "s2_length": "0.01", "s2_width": "1.5e-3", "s2_wall_height": "1e-3",
-             "s2_step": "5e-5", "s2_cross_tilt": "10", "s2_freq": "75", "s2_amp_t": "4e-4",
-             "s2_amp_n": "4e-5", "s2_phase": "-60", "s2_drop_from": "0.4", "s2_drop_to": "0.6",
-             "s2_drop_width": "6.5e-4", "s2_wiper_height": "3.2e-4", "s2_wiper_at": "0.7"}
-# case -> (result name, deck, parameters)
+# case -> (result name, deck or feeder description (feeders/), parameters). The bowl with an
+# exit line is its description's (feeders/bowl_line.toml: its numbers and why they are so).
 CASES = {"line": ("feeder_line", "bulk_feeder", {**SUPPLY, **LINE}),
          "track": ("bulk_feeder", "bulk_feeder", {**SUPPLY, **TRACK}),
          "bowl": ("bowl_feeder", "bowl_feeder", BOWL),
-         "bowl-line": ("bowl_line", "bowl_feeder", BOWL_LINE)}
+         "bowl-line": ("bowl_line", "bowl_line.toml", {})}
 
 
 def add_arguments(p) -> None:
@@ -113,7 +101,7 @@ def add_arguments(p) -> None:
 
 
 def run(args) -> int:
-    from ..decks import Deck
+    from ..decks import Deck, feeders_dir
     from ..engine.runner import run_deck
     from ..parameters import parse_assignments
     from ..run_progress import RunProgress
@@ -122,7 +110,7 @@ def run(args) -> int:
 
     folder = folder_destination("-o", args.output, create=False, parents=True)
     name, deck_name, case = CASES[args.case]
-    deck = Deck.find(deck_name)
+    deck = Deck.find(feeders_dir() / deck_name if deck_name.endswith(".toml") else deck_name)
     params = {**case, **parse_assignments(args.param)}
     output = folder / f"{name}.h5"
     progress = RunProgress(name, enabled=False if args.quiet else None)
