@@ -285,7 +285,7 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
             hint = f"; {slip[1]}" if slip and slip[0](x) else ""
             raise ParameterError(f"parameter {name}={value}{unit} {problem}{hint}")
         values[name] = engine_text(value, x, getattr(rule, "integer", False))
-    declared = max((int(m[1]) for n in tunables if (m := re.match(r"^s(\d)_length$", n))), default=1)
+    declared = max((int(m[1]) for n in tunables if (m := re.match(r"^s(\d)_(?:length|kind)$", n))), default=1)
     if numbers.get("sections", 1) > declared:
         raise ParameterError(
             f"parameter sections={values['sections']}: deck {deck.name} declares "

@@ -115,7 +115,7 @@ def test_a_joint_that_does_not_step_down_is_refused_naming_the_element(tmp_path)
     (('kind = "linear"\nlength = 0.004', 'kind = "linear"\nstep = 1e-5\nlength = 0.004'),
      "element 1: step: the first section has no joint before it to step down at"),
     (('kind = "linear"\nlength = 0.003', 'kind = "spiral"\nlength = 0.003'),
-     "element 2: kind = 'spiral': this version builds bowl, linear and chute elements"),
+     "element 2: kind = 'spiral': this version builds bowl, linear, chute and mesh elements"),
     (('kind = "linear"\nlength = 0.003', 'kind = "bowl"\nlength = 0.003'),
      "element 2: kind = 'bowl': a bowl is the first element"),
     (("length = 0.003\n", ""), "element 2 has no length: every linear element states its own"),
