@@ -230,8 +230,23 @@ class MeshElement:
         down = np.tile([0.0, 0.0, -1.0], (len(xy), 1))
         hits, ray, face = self.placed.ray.intersects_location(origins, down, multiple_hits=False)
         z, up = np.full(len(xy), np.nan), np.full(len(xy), np.nan)
-        z[ray], up[ray] = hits[:, 2], self.placed.face_normals[face, 2]
+        if len(ray):
+            z[ray], up[ray] = hits[:, 2], self.placed.face_normals[face, 2]
         return z, up
+
+    def _walls_around(self, xy, z, across) -> np.ndarray:
+        """Whether a wall stands within the width on either side of each point (n, 2) at
+        height ``z`` (n,), looking across the path both ways (``across``: (n, 2) unit vectors)."""
+        origins = np.column_stack([xy, z])
+        found = []
+        for sign in (1.0, -1.0):
+            ways = np.column_stack([sign * across, np.zeros(len(xy))])
+            hits, ray, _ = self.placed.ray.intersects_location(origins, ways, multiple_hits=False)
+            near = np.zeros(len(xy), dtype=bool)
+            if len(ray):
+                near[ray] = np.linalg.norm(hits - origins[ray], axis=1) <= self.width
+            found.append(near)
+        return found[0] & found[1]
 
     def entry_z(self, y):
         """The floor's height at rest just after the joint at ``y`` [m] (within the walls)."""
@@ -325,8 +340,10 @@ class MeshElement:
             zs = z if fraction == 0 else self.floor_under(at[:, :2] + fraction * self.width * across, top)[0]
             miss.append(np.isnan(zs) | (zs < at[:, 2] - self.width / 2))
         miss = np.array(miss)
-        if miss.all(axis=0).any():
-            j = int(np.argmax(miss.all(axis=0)))
+        # no floor anywhere across: between walls a hole, else the path has left the mesh
+        walled = self._walls_around(at[:, :2], at[:, 2] + part.size / 2, across)
+        if (miss.all(axis=0) & ~walled).any():
+            j = int(np.argmax(miss.all(axis=0) & ~walled))
             raise self._fail(("path",), f"the path leaves the mesh at {where(j)}: no floor under it")
         if miss.any():
             j = int(np.argmax(miss.any(axis=0)))

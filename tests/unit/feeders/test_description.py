@@ -3,9 +3,10 @@ naming the element and the key; the deck they become; their dotted parameter nam
 
 import re
 
+import numpy as np
 import pytest
 
-from helpers import DECKS, REPO
+from helpers import DECKS, REPO, channel
 from vibrofeed.cli.demo import CASES
 from vibrofeed.decks import Deck
 from vibrofeed.errors import ParameterError
@@ -58,9 +59,17 @@ def test_the_demo_line_described_is_the_demo_cases_run():
 
 
 @pytest.mark.parametrize("example", sorted(p.name for p in EXAMPLES.glob("*.toml")))
-def test_each_example_resolves_and_its_feeder_passes_its_checks(example):
+def test_each_example_resolves_and_its_feeder_passes_its_checks(example, tmp_path):
     deck = Deck.find(EXAMPLES / example)
-    values = resolve(deck, {})
+    given = {}
+    if "mesh" in deck.description.kinds:  # its STL is made by a script (CAD): a channel along its path
+        from vibrofeed.mesh import write_stl
+
+        k = deck.description.kinds.index("mesh") + 1
+        path = np.array(deck.tunables[f"s{k}_path"].default.split(","), dtype=float).reshape(-1, 3)
+        write_stl(*channel(path, 1.2, 1.0), tmp_path / "track.stl", "track")
+        given = {f"element.{k}.file": str(tmp_path / "track.stl")}
+    values = resolve(deck, given)
     feeder = Feeder.from_values(values)
     assert len(feeder.elements) == deck.description.sections == int(values["sections"])
     feeder.check()
