@@ -275,14 +275,15 @@ class Feeder:
         """The parameters with path section ``k``'s drive (1-based) as the deck's ``freq``,
         ``amp_t``, ``amp_n``, ``phase`` and ``waveform``: what a model of one part alone on
         that section takes (a further section runs a sine); None for an undriven one (a
-        chute). A bowl's sections take the bowl's parameters (its drive seen from the helix:
+        chute) and for a mesh element (its path turns: no model of one part on it). A bowl's
+        sections take the bowl's parameters (its drive seen from the helix:
         vibrofeed.bowl.track_drive)."""
         values = dict(self.values or {})
         e = self.element_of(k)
         if e is self.elements[0]:
             return values
         if not isinstance(e, LinearSection):
-            return None  # (a chute: no vibration to model)
+            return None  # (a chute: no vibration to model; a mesh: no straight track)
         d = e.drive
         out = {**values, "freq": d.freq, "amp_t": d.amp_t, "amp_n": d.amp_n, "phase": d.phase,
                "waveform": 0}
