@@ -602,12 +602,15 @@ class FeedRate(AnalysisBase):
                                                              else chute_model(result.parameters))
                 else:
                     try:
-                        drive = feeder_of(result.parameters).section_values(k)
+                        feeder = feeder_of(result.parameters)
+                        drive = feeder.section_values(k)
                     except ParameterError as exc:
                         sec["model_speed"], sec["model_note"] = None, f"the result lacks {exc}"
                     else:
+                        none = ("undriven (a chute)" if feeder.element_of(k).kind == "chute"
+                                else "none for a track from CAD (its path turns)")
                         sec["model_speed"], sec["model_note"] = (
-                            dilute_limit(drive) if drive is not None else (None, "undriven (a chute)"))
+                            dilute_limit(drive) if drive is not None else (None, none))
                 sec["speed_ratio"] = velocity_ratio(sec["speed"], sec["model_speed"])
 
     def _bed_pass(self, frames):

@@ -7,7 +7,9 @@ arc length along the helical track's centre line from its start, then along the 
 (:func:`vibrofeed.bowl.path_coordinate`), of the part's centre in the bowl's frame (the
 recorded lift and rotation undone), then on along its exit line, if it has one
 (:meth:`vibrofeed.feeders.Feeder.line_coordinate`); NaN for a part that is not on the
-track (in the pile on the bottom, falling). The outlet edge is then the path's end.
+track (in the pile on the bottom, falling). The outlet edge is then the path's end. Over a
+line's mesh element (a track from CAD, its last), from its joint on: the arc length along its
+path (the same method), NaN off it; its path's end is the outlet edge.
 
 :func:`along` gives both the coordinate and what a speed is measured on: a linear track's
 raw x (over whole periods the surface's displacement cancels), a bowl's path coordinate.
@@ -53,7 +55,7 @@ def outlet_x(result) -> float:
 def path_end(result) -> float:
     """The outlet edge's coordinate along the path [m] (a linear track: :func:`outlet_x`)."""
     feeder = feeder_of(result.parameters)
-    if feeder is not None and feeder.bowl is not None:
+    if feeder is not None and (feeder.bowl is not None or math.isfinite(feeder.mesh_start)):
         return feeder.path_end
     return outlet_x(result)
 
@@ -70,7 +72,12 @@ def along(result, frames, axis: int = 0, position=None) -> tuple[np.ndarray, np.
     b = feeder.bowl if feeder is not None else None
     if b is None:
         x = position[..., axis]
-        return x - result.read("surface_position", frames=frames)[:, axis][:, None], x
+        coordinate = x - result.read("surface_position", frames=frames)[:, axis][:, None]
+        if feeder is None or not math.isfinite(feeder.mesh_start):
+            return coordinate, x
+        # over a mesh element at rest (its strokes are far below a part): along its path
+        on, curved = position[..., 0] >= feeder.mesh_start, feeder.line_coordinate(position)
+        return np.where(on, curved, coordinate), np.where(on, curved, x)
     from ..bowl import path_coordinate
 
     lift = result.read("surface_position", frames=frames)

@@ -279,3 +279,37 @@ def write_trial(path, n=300, sigma=5e-6, seed=0, placeholder=PLACEHOLDER, mutate
         lines.append(",".join(row))
     path.write_bytes(("\r\n".join(lines) + "\r\n").encode("utf-8"))
     return path
+
+
+def channel(points, width, wall, holes=(), flipped=()):
+    """An open channel along a polyline in plan (points (N, 3), any unit): its floor, two strips
+    either side of the path, and two walls ``wall`` high, mitred at the corners, open at both
+    ends and along the walls' tops, every face wound towards the inside (its floor's normals up):
+    a track as a CAD export gives it. ``holes``: (segment, side) floor strips left out (side
+    +1 left of the path, -1 right); ``flipped``: indices of triangles wound the other way.
+    Returns (vertices, triangles)."""
+    from vibrofeed.mesh import MeshBuilder
+
+    p = np.asarray(points, dtype=float)
+    d = np.diff(p[:, :2], axis=0)
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    n = np.column_stack([-d[:, 1], d[:, 0]])  # left of the path
+    m = np.vstack([n[:1], n[:-1] + n[1:], n[-1:]])
+    m /= np.linalg.norm(m, axis=1)[:, None]
+    m /= np.concatenate([[1.0], np.einsum("ij,ij->i", m[1:-1], n[1:]), [1.0]])[:, None]  # (mitre)
+    left = np.column_stack([p[:, :2] + width / 2 * m, p[:, 2]])
+    right = np.column_stack([p[:, :2] - width / 2 * m, p[:, 2]])
+    up = np.array([0.0, 0.0, wall])
+    b = MeshBuilder()
+    for i in range(len(p) - 1):
+        if (i, -1) not in holes:
+            b.quad(right[i], right[i + 1], p[i + 1], p[i])
+        if (i, 1) not in holes:
+            b.quad(p[i], p[i + 1], left[i + 1], left[i])
+        b.quad(left[i], left[i + 1], left[i + 1] + up, left[i] + up)
+        b.quad(right[i + 1], right[i], right[i] + up, right[i + 1] + up)
+    v, t = b.mesh()
+    t = t.copy()
+    for k in flipped:
+        t[k] = t[k][::-1]
+    return v, t

@@ -285,14 +285,16 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
             hint = f"; {slip[1]}" if slip and slip[0](x) else ""
             raise ParameterError(f"parameter {name}={value}{unit} {problem}{hint}")
         values[name] = engine_text(value, x, getattr(rule, "integer", False))
-    declared = max((int(m[1]) for n in tunables if (m := re.match(r"^s(\d)_length$", n))), default=1)
+    declared = max((int(m[1]) for n in tunables if (m := re.match(r"^s(\d)_(?:length|kind)$", n))), default=1)
     if numbers.get("sections", 1) > declared:
         raise ParameterError(
             f"parameter sections={values['sections']}: deck {deck.name} declares "
             f"{'one section' if declared == 1 else f'sections 1 to {declared}'}; a line of more "
             "sections is a feeder description (docs/feeders.md)")
+    # a mesh element's STL and path are words its checks read beside the numbers
+    words = {name: value for name, value in values.items() if re.match(r"^s\d+_(?:file|path)$", name)}
     try:
-        _check_relations(numbers)
+        _check_relations({**words, **numbers})
     except ParameterError as exc:
         raise ParameterError(_with_slips(str(exc), numbers)) from None
     # An idle parameter is worth a word only when the user moved it from the deck's default

@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import ParameterError
-from . import bowl, chute
+from . import bowl, chute, mesh_element
 from .linear import KEYS, MAX_SECTIONS, deck_names
 from .records import shape_code
 
@@ -37,10 +37,13 @@ def _kind_keys(kind: str, k: int) -> tuple[dict, dict]:
     if kind == "chute":
         known = {(key,): None for key in chute.KEYS}
         return known, ({} if k == 1 else {(key,): chute.deck_name(k, key) for key in chute.KEYS})
+    if kind == "mesh":
+        return mesh_element.KEYS, ({} if k == 1 else {key: mesh_element.deck_name(k, key)
+                                                      for key in mesh_element.KEYS})
     return KEYS, deck_names(k)
 
 SUFFIX = ".toml"
-ELEMENT_KINDS = ("bowl", "linear", "chute")
+ELEMENT_KINDS = ("bowl", "linear", "chute", "mesh")
 # The deck a description becomes: the project deck its first element's kind runs on.
 TEMPLATES = {"linear": "bulk_feeder", "bowl": "bowl_feeder"}
 # table -> {key: deck name}; the element's keys are vibrofeed.feeders.linear.KEYS
@@ -156,7 +159,7 @@ def read(path: str | os.PathLike, text: str | None = None) -> Description:
     if len(elements) > MAX_SECTIONS:
         raise _fail(path, f"{len(elements)} elements: at most {MAX_SECTIONS} in this version")
     for k, element in enumerate(elements, start=1):
-        values.update(_element(path, k, element))
+        values.update(_element(path, k, element, k == len(elements)))
     values["sections"] = str(len(elements))
     kinds = [e["kind"] for e in elements]
     feeder = data.get("feeder", {})
@@ -165,7 +168,7 @@ def read(path: str | os.PathLike, text: str | None = None) -> Description:
                        values=values, aliases=aliases(kinds), source=text)
 
 
-def _element(path: Path, k: int, element: dict) -> dict[str, str]:
+def _element(path: Path, k: int, element: dict, last: bool) -> dict[str, str]:
     """Element ``k``'s numbers as the deck's parameters."""
     where = f"element {k}"
     kind = element.get("kind")
@@ -178,10 +181,14 @@ def _element(path: Path, k: int, element: dict) -> dict[str, str]:
     if k > 1 and kind == "bowl":
         raise _fail(path, f"{where}: kind = 'bowl': a bowl is the first element (the supply's "
                           "store); elements after it are its exit line")
+    if kind == "mesh" and not last:
+        raise _fail(path, f"{where}: kind = 'mesh': a mesh element is the last element in this "
+                          "version (its path's end is the outlet edge)")
     known, names = _kind_keys(kind, k)
     singles = [key[0] for key in known if len(key) == 1]
     tables = sorted({key[0] for key in known if len(key) == 2})
-    out = {f"s{k}_kind": str(chute.KIND_CODE)} if kind == "chute" else {}
+    codes = {"chute": chute.KIND_CODE, "mesh": mesh_element.KIND_CODE}
+    out = {f"s{k}_kind": str(codes[kind])} if kind in codes else {}
     for key, value in element.items():
         if key == "kind":
             continue
@@ -201,12 +208,42 @@ def _element(path: Path, k: int, element: dict) -> dict[str, str]:
             raise _unknown(path, where, key, singles + tables)
         if (key,) not in names:
             raise _fail(path, f"{where}: {key}: {_not_here(k, (key,))}")
+        if kind == "mesh" and key in ("file", "unit", "path"):
+            out[names[(key,)]] = _mesh_word(path, k, key, value)
+            continue
         out[names[(key,)]] = _value(path, f"element.{k}.{key}", value)
-    needed = {"chute": ("length", "width", "slope"), "bowl": bowl.NEEDED}.get(kind, ("length", "width"))
+    needed = {"chute": ("length", "width", "slope"), "bowl": bowl.NEEDED,
+              "mesh": mesh_element.NEEDED}.get(kind, ("length", "width"))
     for key in needed:
         if (key,) not in set(_given(element)):
             raise _fail(path, f"{where} has no {key}: every {kind} element states its own")
     return out
+
+
+def _mesh_word(path: Path, k: int, key: str, value) -> str:
+    """A mesh element's file (relative to the description's folder), unit ("mm" or "m") or path
+    (a list of [x, y, z] in the STL's unit) as the deck's word."""
+    where = f"element {k}: {key}"
+    if key == "unit":
+        if value not in mesh_element.UNITS:
+            raise _fail(path, f"{where} = {value!r}: the STL's unit is \"mm\" (as CAD exports) or \"m\"")
+        return repr(mesh_element.UNITS[value])
+    if key == "file":
+        if not isinstance(value, str) or not value.strip():
+            raise _fail(path, f"{where} must be the STL's path, relative to the description's folder")
+        full = (path.parent / value).resolve()
+        if any(c.isspace() or c in "#$\"'" for c in str(full)):
+            raise _fail(path, f"{where}: {full} has a space or a character LIGGGHTS' variables cannot "
+                              "hold; move the STL to a plain path")
+        return str(full)
+    ok = (isinstance(value, list) and len(value) >= 2
+          and all(isinstance(q, list) and len(q) == 3 and all(isinstance(c, int | float)
+                                                              and not isinstance(c, bool) for c in q)
+                  for q in value))
+    if not ok or not all(math.isfinite(c) for q in value for c in q):
+        raise _fail(path, f"{where} must be a list of at least two points [x, y, z] (numbers, in the "
+                          "STL's unit), on its floor's centre line in conveying order")
+    return mesh_element.path_text(value)
 
 
 def _given(element: dict):
@@ -269,6 +306,14 @@ def deck_text(description: Description, template: str, variables: dict) -> str:
             out.append(_declaration(f"s{k}_kind", str(chute.KIND_CODE), "-",
                                     f"element {k}'s kind: {chute.KIND_CODE} a chute"))
             for suffix, unit, text in chute.KEYS.values():
+                name = f"s{k}_{suffix}"
+                default = variables[f"s2_{suffix}"].default if f"s2_{suffix}" in variables else "0"
+                out.append(_declaration(name, values.get(name, default), unit, text))
+            continue
+        if description.kinds[k - 1] == "mesh":
+            code = mesh_element.KIND_CODE
+            out.append(_declaration(f"s{k}_kind", str(code), "-", f"element {k}'s kind: {code} a mesh"))
+            for suffix, unit, text in mesh_element.KEYS.values():
                 name = f"s{k}_{suffix}"
                 default = variables[f"s2_{suffix}"].default if f"s2_{suffix}" in variables else "0"
                 out.append(_declaration(name, values.get(name, default), unit, text))

@@ -27,6 +27,8 @@ from .chute import KIND_CODE as CHUTE
 from .chute import Chute
 from .joints import Joint
 from .linear import MAX_SECTIONS, LinearSection
+from .mesh_element import KIND_CODE as MESH
+from .mesh_element import MeshElement
 from .records import Drive, Part, number
 
 
@@ -78,11 +80,13 @@ class Feeder:
             kind = number(values, f"s{k}_kind", 0.0) if k > 1 else 0.0
             if kind == CHUTE:
                 s = Chute.from_values(values, k, x0, level)
+            elif kind == MESH:
+                s = MeshElement.from_values(values, k, x0, level)
             elif kind == 0:
                 s = LinearSection.from_values(values, k, x0, level, part)
             else:
-                raise ParameterError(f"s{k}_kind={kind:g} must be 0 (a linear section) or "
-                                     f"{CHUTE} (a chute)")
+                raise ParameterError(f"s{k}_kind={kind:g} must be 0 (a linear section), "
+                                     f"{CHUTE} (a chute) or {MESH} (a mesh)")
             elements.append(s)
             x0, level = s.x1, s.exit_level
         return cls(part, tuple(elements), bool(recirculate), values)
@@ -154,20 +158,33 @@ class Feeder:
         """Where points (..., 3) of the deck's frame are along the path over the elements after
         a bowl (its exit line): x plus :attr:`path_shift` over one of them (between its
         entry and its end, within its walls, above its floor by less than its walls' height
-        and a part), NaN elsewhere; all NaN for a feeder without a bowl (a line's coordinate
-        is its x: vibrofeed.postproc.path)."""
+        and a part), NaN elsewhere; over a mesh element (after a bowl or not) its path
+        coordinate (MeshElement.coordinate), NaN farther from its path than half its width
+        and a part. A line's coordinate over its straight elements is its x
+        (vibrofeed.postproc.path): NaN there for a feeder without a bowl."""
         p = np.asarray(points, dtype=float)
         out = np.full(p.shape[:-1], np.nan)
-        if self.bowl is None:
-            return out
         ox, oy, oz = self.line_origin
         x, y, z = p[..., 0] - ox, p[..., 1] - oy, p[..., 2] - oz
         for e in self.elements[1:]:
+            if isinstance(e, MeshElement):
+                at = e.coordinate(np.stack([x, y, z], axis=-1), e.width / 2 + self.part.size)
+                out = np.where(np.isnan(out), at + self.path_shift, out)
+                continue
+            if self.bowl is None:
+                continue
             over = (x >= e.x0) & (x <= e.x1) & (np.abs(y) <= e.width / 2)
             floor = e.floor_at(x, y)
             over &= (z >= floor - self.part.tallest) & (z < floor + e.wall_height + self.part.size)
             out = np.where(over & np.isnan(out), x + self.path_shift, out)
         return out
+
+    @property
+    def mesh_start(self) -> float:
+        """Where a mesh element starts in the deck's x [m] (its joint): from there on a part's
+        path coordinate is along its path (:meth:`line_coordinate`); inf without one."""
+        return next((e.x0 + self.line_origin[0] for e in self.elements if isinstance(e, MeshElement)),
+                    math.inf)
 
     def height_at(self, s):
         """A bowl's floor height on the centre line at path coordinate ``s`` [m] (the profile in
@@ -258,14 +275,15 @@ class Feeder:
         """The parameters with path section ``k``'s drive (1-based) as the deck's ``freq``,
         ``amp_t``, ``amp_n``, ``phase`` and ``waveform``: what a model of one part alone on
         that section takes (a further section runs a sine); None for an undriven one (a
-        chute). A bowl's sections take the bowl's parameters (its drive seen from the helix:
+        chute) and for a mesh element (its path turns: no model of one part on it). A bowl's
+        sections take the bowl's parameters (its drive seen from the helix:
         vibrofeed.bowl.track_drive)."""
         values = dict(self.values or {})
         e = self.element_of(k)
         if e is self.elements[0]:
             return values
         if not isinstance(e, LinearSection):
-            return None  # (a chute: no vibration to model)
+            return None  # (a chute: no vibration to model; a mesh: no straight track)
         d = e.drive
         out = {**values, "freq": d.freq, "amp_t": d.amp_t, "amp_n": d.amp_n, "phase": d.phase,
                "waveform": 0}

@@ -179,33 +179,10 @@ class LinearSection:
         motion, s<k>_surface_*)."""
         k, s = self.number, f"s{self.number}"
         level = "+".join(f"v_s{j}_step" for j in range(2, k + 1))
-        half = f"$(v_{s}_omega*v_dt_used/2)"
-        return {
-            "derived": [f"variable {s}_omega equal 2*PI*v_{s}_freq",
-                        f"variable {s}_phi equal v_{s}_phase*PI/180",
-                        f"variable {s}_low equal -({level}+v_{s}_width*tan(v_{s}_cross_tilt*PI/180))"],
-            "peak": [f"variable {s}_peak equal v_{s}_omega*sqrt(v_{s}_amp_t^2+v_{s}_amp_n^2)"],
-            "catch": [f"variable {s}_catch equal v_{s}_low-(v_{s}_amp_n+2*v_r_ext)"],
-            "mesh": [f"fix track_{s} all mesh/surface file ${{mesh_dir}}/track_{s}.stl type 2 "
-                     f"move 0 0 $(v_{s}_amp_n*sin(v_{s}_phi))"],
-            "motion": [
-                f"fix {s}_shake_t all move/mesh mesh track_{s} wiggle amplitude ${{{s}_amp_t}} 0 0 "
-                f"period $(1/v_{s}_freq)",
-                f"fix {s}_shake_n all move/mesh mesh track_{s} viblin axis 0 0 1 order 1 amplitude "
-                f"${{{s}_amp_n}} &\n     phase $(v_{s}_phi-PI/2) period $(1/v_{s}_freq)",
-                f"variable {s}_surface_x equal &\n"
-                f"$(v_{s}_amp_t*v_{s}_omega*v_dt_used/sin(v_{s}_omega*v_dt_used/2))&\n"
-                f"*sin(step*{half})*cos((step+1)*{half})",
-                f"variable {s}_surface_y equal 0",
-                f"variable {s}_surface_z equal &\n"
-                f"$(v_{s}_amp_n*sin(v_{s}_phi))&\n"
-                f"+$(v_{s}_amp_n*v_{s}_omega*v_dt_used/sin(v_{s}_omega*v_dt_used/2))&\n"
-                f"*sin(step*{half})*cos((step+1)*{half}+$(v_{s}_phi))",
-                f"variable {s}_surface_vx equal $(v_{s}_amp_t*v_{s}_omega)*cos($(v_{s}_omega)*time)",
-                f"variable {s}_surface_vy equal 0",
-                f"variable {s}_surface_vz equal "
-                f"$(v_{s}_amp_n*v_{s}_omega)*cos($(v_{s}_omega)*time+$(v_{s}_phi))"],
-        }
+        out = sine_commands(k)
+        out["derived"].append(
+            f"variable {s}_low equal -({level}+v_{s}_width*tan(v_{s}_cross_tilt*PI/180))")
+        return out
 
     def deck_names(self, drive: bool = True) -> list[str]:
         """The deck's names of this section's numbers (``drive``: with its drive's)."""
@@ -253,3 +230,38 @@ class LinearSection:
             if d.width < 0.5 * part.widest:
                 raise ParameterError(f"{n(('side_drop', 'width'))}={d.width:g} m is less than half a "
                                      f"part ({part.widest / 2:g} m): every part would fall off the drop")
+
+
+def sine_commands(k: int) -> dict[str, list[str]]:
+    """Element ``k``'s commands as a sine drive along x and z moves its mesh
+    ``track_s<k>.stl``, its tunables ``s<k>_freq``, ``amp_t``, ``amp_n``, ``phase``: ``derived``
+    (its angular frequency and phase; the element adds its lowest floor ``s<k>_low``),
+    ``peak``, ``catch`` (below ``s<k>_low``), ``mesh`` (placed where its sine puts it at
+    t = 0) and ``motion`` (the movers and the recorded motion, s<k>_surface_*)."""
+    s = f"s{k}"
+    half = f"$(v_{s}_omega*v_dt_used/2)"
+    return {
+        "derived": [f"variable {s}_omega equal 2*PI*v_{s}_freq",
+                    f"variable {s}_phi equal v_{s}_phase*PI/180"],
+        "peak": [f"variable {s}_peak equal v_{s}_omega*sqrt(v_{s}_amp_t^2+v_{s}_amp_n^2)"],
+        "catch": [f"variable {s}_catch equal v_{s}_low-(v_{s}_amp_n+2*v_r_ext)"],
+        "mesh": [f"fix track_{s} all mesh/surface file ${{mesh_dir}}/track_{s}.stl type 2 "
+                 f"move 0 0 $(v_{s}_amp_n*sin(v_{s}_phi))"],
+        "motion": [
+            f"fix {s}_shake_t all move/mesh mesh track_{s} wiggle amplitude ${{{s}_amp_t}} 0 0 "
+            f"period $(1/v_{s}_freq)",
+            f"fix {s}_shake_n all move/mesh mesh track_{s} viblin axis 0 0 1 order 1 amplitude "
+            f"${{{s}_amp_n}} &\n     phase $(v_{s}_phi-PI/2) period $(1/v_{s}_freq)",
+            f"variable {s}_surface_x equal &\n"
+            f"$(v_{s}_amp_t*v_{s}_omega*v_dt_used/sin(v_{s}_omega*v_dt_used/2))&\n"
+            f"*sin(step*{half})*cos((step+1)*{half})",
+            f"variable {s}_surface_y equal 0",
+            f"variable {s}_surface_z equal &\n"
+            f"$(v_{s}_amp_n*sin(v_{s}_phi))&\n"
+            f"+$(v_{s}_amp_n*v_{s}_omega*v_dt_used/sin(v_{s}_omega*v_dt_used/2))&\n"
+            f"*sin(step*{half})*cos((step+1)*{half}+$(v_{s}_phi))",
+            f"variable {s}_surface_vx equal $(v_{s}_amp_t*v_{s}_omega)*cos($(v_{s}_omega)*time)",
+            f"variable {s}_surface_vy equal 0",
+            f"variable {s}_surface_vz equal "
+            f"$(v_{s}_amp_n*v_{s}_omega)*cos($(v_{s}_omega)*time+$(v_{s}_phi))"],
+    }

@@ -88,7 +88,7 @@ def test_the_chutes_mesh_is_its_floor_and_two_walls_open_at_both_ends():
     ({"s2_slope": 61}, "s2_slope=61 deg must be in (0, 60]"),
     ({"s2_width": 2e-4}, "s2_width=0.0002 m is narrower than a part"),
     ({"s2_wall_height": 1e-4}, "s2_wall_height=0.0001 m is no higher than a part's centre"),
-    ({"s2_kind": 2}, "s2_kind=2 must be 0 (a linear section) or 1 (a chute)"),
+    ({"s2_kind": 3}, "s2_kind=3 must be 0 (a linear section), 1 (a chute) or 2 (a mesh)"),
 ])
 def test_a_chute_that_does_not_work_is_refused_in_one_line(change, words):
     with pytest.raises(ParameterError) as err:

@@ -3,9 +3,10 @@ naming the element and the key; the deck they become; their dotted parameter nam
 
 import re
 
+import numpy as np
 import pytest
 
-from helpers import DECKS, REPO
+from helpers import DECKS, REPO, channel
 from vibrofeed.cli.demo import CASES
 from vibrofeed.decks import Deck
 from vibrofeed.errors import ParameterError
@@ -58,9 +59,17 @@ def test_the_demo_line_described_is_the_demo_cases_run():
 
 
 @pytest.mark.parametrize("example", sorted(p.name for p in EXAMPLES.glob("*.toml")))
-def test_each_example_resolves_and_its_feeder_passes_its_checks(example):
+def test_each_example_resolves_and_its_feeder_passes_its_checks(example, tmp_path):
     deck = Deck.find(EXAMPLES / example)
-    values = resolve(deck, {})
+    given = {}
+    if "mesh" in deck.description.kinds:  # its STL is made by a script (CAD): a channel along its path
+        from vibrofeed.mesh import write_stl
+
+        k = deck.description.kinds.index("mesh") + 1
+        path = np.array(deck.tunables[f"s{k}_path"].default.split(","), dtype=float).reshape(-1, 3)
+        write_stl(*channel(path, 1.2, 1.0), tmp_path / "track.stl", "track")
+        given = {f"element.{k}.file": str(tmp_path / "track.stl")}
+    values = resolve(deck, given)
     feeder = Feeder.from_values(values)
     assert len(feeder.elements) == deck.description.sections == int(values["sections"])
     feeder.check()
@@ -115,7 +124,7 @@ def test_a_joint_that_does_not_step_down_is_refused_naming_the_element(tmp_path)
     (('kind = "linear"\nlength = 0.004', 'kind = "linear"\nstep = 1e-5\nlength = 0.004'),
      "element 1: step: the first section has no joint before it to step down at"),
     (('kind = "linear"\nlength = 0.003', 'kind = "spiral"\nlength = 0.003'),
-     "element 2: kind = 'spiral': this version builds bowl, linear and chute elements"),
+     "element 2: kind = 'spiral': this version builds bowl, linear, chute and mesh elements"),
     (('kind = "linear"\nlength = 0.003', 'kind = "bowl"\nlength = 0.003'),
      "element 2: kind = 'bowl': a bowl is the first element"),
     (("length = 0.003\n", ""), "element 2 has no length: every linear element states its own"),

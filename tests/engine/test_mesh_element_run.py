@@ -1,0 +1,93 @@
+"""A line whose last element is a track from CAD (a mesh element) through the driver, on 1 and 2
+ranks: a short S-bend channel in millimetres after a 4 mm section; the mass balance is exact at
+every frame (inserted = on_track + exited + rejected, nothing lost), the outlet is the path's
+end along x (4 + 4.6 mm), the mesh is stored placed after section 1 with its vertices told
+apart, its recorded motion is its own sine drive, and the parts over it have their path
+coordinate along the bend (the legs of 1.5, 2 and 1.5 mm: 5 mm of path from the joint)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from helpers import channel, vibrofeed
+from vibrofeed.mesh import write_stl
+from vibrofeed.postproc.path import along, path_end
+from vibrofeed.results.check import check_file
+from vibrofeed.results.reader import Result
+
+PATH = [(0, 0, 0), (1.5, 0, 0), (3.1, 1.2, 0), (4.6, 1.2, 0)]  # mm: legs 1.5, 2 (1.6, 1.2), 1.5
+BEND = f"""
+[feeder]
+name = "bend"
+[parts]
+size = 3e-4
+[supply]
+n_parts = 16
+fill_from = 0.6
+fill_to = 0.97
+[run]
+t_end = 0.12
+output_dt = 0.004
+
+[[element]]
+kind = "linear"
+length = 0.004
+width = 1.2e-3
+drive = {{ freq = 100, amp_t = 1e-4, amp_n = 5e-5 }}
+
+[[element]]
+kind = "mesh"
+file = "bend.stl"
+unit = "mm"
+path = {[list(p) for p in PATH]}
+width = 1.2e-3
+step = 5e-5
+drive = {{ freq = 100, amp_t = 1.5e-4, amp_n = 5e-5, phase = -20 }}
+"""
+A_T, A_N, W, PHI = 1.5e-4, 5e-5, 2 * math.pi * 100.0, math.radians(-20)
+
+
+@pytest.mark.parametrize("ranks", [1, 2])
+def test_a_cad_track_conveys_with_an_exact_mass_balance(tmp_path, monkeypatch, ranks):
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    write_stl(*channel(PATH, 1.2, 1.0), tmp_path / "bend.stl", "bend")
+    (tmp_path / "bend.toml").write_text(BEND)
+    out = tmp_path / f"bend{ranks}.h5"
+    vibrofeed("run", tmp_path / "bend.toml", "-q", "-o", out, "-n", ranks, check=True)
+    report = check_file(out)
+    assert report.ok, [str(p) for p in report.problems]
+    with Result(out) as r:
+        mb, ev, plane = r.mass_balance, r.outlet, r.outlet_plane
+        assert (mb["lost"] == 0).all()
+        assert (mb["inserted"] == mb["on_track"] + mb["exited"] + mb["rejected"]).all()
+        assert mb["inserted"][-1] == 16
+        assert len(ev["id"]) == mb["exited"][-1] > 0  # some left over the bend's end
+        assert (ev["position"][:, 0] > 8.6e-3).all()  # past the path's end along x
+        assert plane["outlet_x"] == pytest.approx(8.6e-3, abs=1e-12)
+        v, _ = r.track_mesh
+        mine = v[r.track_sections == 2]
+        assert mine[:, 0].min() == pytest.approx(4e-3, abs=1e-8)
+        assert mine[:, 0].max() == pytest.approx(8.6e-3, abs=1e-8)
+        assert mine[:, 1].max() == pytest.approx(1.8e-3, abs=1e-8)  # the last leg's wall: 1.2 + 0.6 mm
+        assert mine[:, 2].min() == pytest.approx(-5e-5, abs=1e-8)
+        p2, v2 = r.section_surface(2)
+        t = r.time
+        assert np.abs(v2[:, 0] - A_T * W * np.cos(W * t)).max() <= 1e-9 * A_T * W
+        assert np.abs(v2[:, 2] - A_N * W * np.cos(W * t + PHI)).max() <= 1e-9 * A_T * W
+        # the path coordinate: 4 mm of section 1, then 5 mm along the bend
+        assert path_end(r) == pytest.approx(9e-3, abs=1e-12)
+        frames = np.arange(r.n_frames)
+        s, _ = along(r, frames)
+        x = r.read("position", frames=frames)[..., 0]
+        on_mesh = np.isfinite(s) & (x > 4.2e-3)
+        assert on_mesh.any()  # parts crossed the joint onto the bend
+        over, past = on_mesh & (s <= 9e-3), on_mesh & (s > 9e-3)
+        assert over.any() and (s[over] > 4e-3).all()
+        # the path runs 0.4 mm more than x (its diagonal leg 2 mm for 1.6); across that leg a part
+        # 0.6 mm off the path at most is 0.6 x 0.6 mm off along x; on the last leg s - x is 0.4 mm
+        assert (s[over] - x[over] >= -0.36e-3 - 1e-12).all() and (s[over] - x[over] <= 0.76e-3).all()
+        last = over & (s >= 7.7e-3)
+        assert last.any() and np.abs(s[last] - x[last] - 0.4e-3).max() <= 1e-12
+        # past the path's end, on along its last leg (along +x): as far past it as past 8.6 mm
+        assert np.abs((s[past] - 9e-3) - (x[past] - 8.6e-3)).max(initial=0) <= 1e-12

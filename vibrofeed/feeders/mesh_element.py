@@ -1,0 +1,362 @@
+"""A mesh element: a track the designer drew in CAD and exported as an STL, with the path parts
+follow along it; the last element of a line.
+
+The STL is read with trimesh in its own frame and unit (``unit``: metres per unit of the STL,
+0.001 for millimetres as CAD exports them); ``path`` is the polyline parts follow, points on the
+floor's centre line in the STL's frame and unit. vibrofeed places the mesh where the line needs
+it: turned about z so that the path's first segment runs along +x (in plan), and moved so that
+the path's start lies at the joint, ``step`` below the element before it at its high edge:
+(x0, 0, -level). The path coordinate over it is x0 plus the arc length along the placed path
+to a part's nearest point on it.
+
+Why it is last, and what is checked for it: the outlet counts a part as out when it is beyond
+the line's farthest x (``outlet_x``), so the mesh must end at its path's end, nothing of it
+beyond and nothing before its joint; its floor must lie under the whole path, with no hole a
+part falls through, its triangles wound alike, the floor's normals up (towards the parts), and
+its size a feeder's (1 mm to 1 m: a 100 m track is a millimetre STL read as metres).
+
+Its drive is a linear section's: a sine along x (the path's start direction) and along z (the
+deck's wiggle and viblin), whatever the path's turns: on a bend, part of the stroke along x is
+across the track. Its numbers in the deck's vocabulary are ``s<k>_*`` (:data:`KEYS`), with
+``s<k>_kind = 2``; ``s<k>_file`` and ``s<k>_path`` are words (the STL's absolute path; the
+path's coordinates, comma separated).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from ..errors import ParameterError
+from .linear import sine_commands
+from .records import Drive, Part, number
+
+KIND_CODE = 2  # s<k>_kind: 0 a linear section, 1 a chute, 2 a mesh
+UNITS = {"mm": 1e-3, "m": 1.0}
+# description key -> (deck suffix, unit, meaning)
+KEYS: dict[tuple[str, ...], tuple[str, str, str]] = {
+    ("file",): ("file", "-", "mesh: the STL exported from CAD (its absolute path)"),
+    ("unit",): ("unit", "m", "mesh: metres per unit of the STL and its path (millimetres: 0.001)"),
+    ("path",): ("path", "-", "mesh: the path parts follow, x,y,z of each point in the STL's frame"),
+    ("width",): ("width", "m", "mesh: its track's width between the walls"),
+    ("step",): ("step", "m", "step down at the joint, to the mesh's floor at its path's start"),
+    ("drive", "freq"): ("freq", "Hz", "mesh: vibration frequency"),
+    ("drive", "amp_t"): ("amp_t", "m", "mesh: displacement amplitude along x, its path's start"),
+    ("drive", "amp_n"): ("amp_n", "m", "mesh: displacement amplitude along z"),
+    ("drive", "phase"): ("phase", "deg", "mesh: lead of its motion along z over the one along x"),
+}
+WORDS = ("file", "path")  # not numbers: the deck holds them as words
+NEEDED = ("file", "unit", "path", "width")
+# A feeder's track is 1 mm to 1 m long and across (after the unit).
+SIZES = (1e-3, 1.0)
+# How far the mesh may reach past its path's end or before its joint [m] (an STL holds
+# single-precision coordinates: 1e-7 of 10 cm is 1e-8 m).
+REACH = 1e-6
+# The floor is looked for under the path at these fractions of the width across it.
+ACROSS = (-0.4, -0.2, 0.0, 0.2, 0.4)
+
+
+def deck_name(k: int, key: tuple[str, ...]) -> str:
+    return f"s{k}_{KEYS[key][0]}"
+
+
+def path_text(points) -> str:
+    """A path (N, 3) as the deck's word: its coordinates, comma separated."""
+    return ",".join(repr(float(c)) for c in np.asarray(points, dtype=float).ravel())
+
+
+@dataclass(frozen=True)
+class MeshElement:
+    """Element ``number`` (>= 2, the last): a track from CAD (module docstring). ``path`` is
+    the polyline in the STL's frame and unit, ``unit`` metres per unit of it."""
+
+    kind = "mesh"
+    moves = True
+    number: int
+    x0: float
+    file: str
+    unit: float
+    path: tuple
+    width: float
+    drive: Drive
+    step: float = 0.0
+    level: float = 0.0  # below the first section's floor at the joint: the steps summed
+    side_drop = None
+    wiper = None
+    gate = None
+
+    @classmethod
+    def from_values(cls, values: Mapping, k: int, x0: float = 0.0, level: float = 0.0) -> MeshElement:
+        def get(key, default=None):
+            return number(values, deck_name(k, key), default)
+
+        name = deck_name(k, ("path",))
+        try:
+            flat = [float(c) for c in str(values.get(name, "")).split(",")]
+        except ValueError:
+            flat = []
+        if len(flat) < 6 or len(flat) % 3 or not all(math.isfinite(c) for c in flat):
+            raise ParameterError(f"element {k}'s path ({name}): give at least two points of three "
+                                 "coordinates each, x, y, z in the STL's unit")
+        if deck_name(k, ("file",)) not in values:
+            raise ParameterError(f"the feeder needs the parameter {deck_name(k, ('file',))!r}")
+        step = get(("step",), 0.0)
+        drive = Drive(freq=get(("drive", "freq")), amp_t=get(("drive", "amp_t")),
+                      amp_n=get(("drive", "amp_n")), phase=get(("drive", "phase"), 0.0))
+        return cls(number=k, x0=x0, file=str(values[deck_name(k, ("file",))]), unit=get(("unit",)),
+                   path=tuple(flat), width=get(("width",)), drive=drive, step=step, level=level + step)
+
+    # ---------------------------------------------------------------- the path
+    @cached_property
+    def _placing(self) -> tuple[np.ndarray, np.ndarray]:
+        """(rotation (3, 3), shift (3,)): a point q of the STL goes to rotation @ (q unit) + shift."""
+        p = np.asarray(self.path, dtype=float).reshape(-1, 3) * self.unit
+        dx, dy = p[1, :2] - p[0, :2]
+        a = -math.atan2(dy, dx) if (dx or dy) else 0.0
+        turn = np.array([[math.cos(a), -math.sin(a), 0.0], [math.sin(a), math.cos(a), 0.0], [0, 0, 1.0]])
+        return turn, np.array([self.x0, 0.0, -self.level]) - turn @ p[0]
+
+    def place(self, points) -> np.ndarray:
+        """Points (..., 3) of the STL's frame, in its unit, in the deck's frame [m]."""
+        turn, shift = self._placing
+        return np.asarray(points, dtype=float) * self.unit @ turn.T + shift
+
+    @cached_property
+    def points(self) -> np.ndarray:
+        """The path placed in the deck's frame (N, 3) [m]."""
+        return self.place(np.asarray(self.path, dtype=float).reshape(-1, 3))
+
+    @cached_property
+    def _arc(self) -> np.ndarray:
+        """The arc length at each path point from its start [m]."""
+        return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(self.points, axis=0), axis=1))])
+
+    @property
+    def path_length(self) -> float:
+        return float(self._arc[-1])
+
+    @property
+    def x1(self) -> float:
+        """Where its path ends along x (the outlet edge) [m]."""
+        return float(self.points[-1, 0])
+
+    @property
+    def bounds(self) -> list[tuple[float, float]]:
+        """Along the path: from its joint's x on by the path's length."""
+        return [(self.x0, self.x0 + self.path_length)]
+
+    @property
+    def exit_width(self) -> float:
+        return self.width
+
+    @property
+    def exit_level(self) -> float:
+        """How far below the first section's floor its path ends [m]."""
+        return float(-self.points[-1, 2])
+
+    @property
+    def exit_direction(self) -> tuple[float, float, float]:
+        d = self.points[-1] - self.points[-2]
+        return tuple(float(c) for c in d / np.linalg.norm(d))
+
+    def coordinate(self, points, reach: float) -> np.ndarray:
+        """Where points (..., 3) of the deck's frame are along the path: x0 plus the arc length
+        to their nearest point on it (past its end, on along its last segment), NaN farther
+        from it than ``reach`` [m]."""
+        p = np.asarray(points, dtype=float)
+        flat = p.reshape(-1, 3)
+        a, b = self.points[:-1], self.points[1:]
+        d = b - a
+        dd = np.einsum("ij,ij->i", d, d)
+        hi = np.ones(len(d))
+        hi[-1] = np.inf  # past the end: on along the last segment, beyond the path's end
+        best = np.full(len(flat), np.inf)
+        out = np.full(len(flat), np.nan)
+        for start in range(0, len(flat), 4096):  # (points x segments at a time)
+            q = flat[start:start + 4096, None, :]
+            t = np.clip(np.einsum("psj,sj->ps", q - a, d) / dd, 0.0, hi)
+            gap = np.linalg.norm(q - (a + t[..., None] * d), axis=-1)
+            gap = np.where(np.isnan(gap), np.inf, gap)
+            i = np.argmin(gap, axis=1)
+            rows = np.arange(len(i))
+            best[start:start + len(i)] = gap[rows, i]
+            out[start:start + len(i)] = self._arc[i] + t[rows, i] * np.sqrt(dd[i])
+        return np.where(best <= reach, self.x0 + out, np.nan).reshape(p.shape[:-1])
+
+    # ---------------------------------------------------------------- the mesh
+    def _fail(self, key: tuple[str, ...], message: str) -> ParameterError:
+        return ParameterError(f"element {self.number}'s {'.'.join(key)} ({deck_name(self.number, key)}): "
+                              f"{message}")
+
+    @cached_property
+    def stl(self):
+        """The STL as trimesh reads it (its frame and unit; vertices merged)."""
+        import trimesh
+
+        try:
+            mesh = trimesh.load_mesh(self.file, file_type="stl")
+        except Exception as exc:  # (trimesh raises what its readers raise)
+            reason = getattr(exc, "strerror", None) or (str(exc).splitlines() or [type(exc).__name__])[0]
+            raise self._fail(("file",), f"cannot read {self.file} as an STL: {reason}") from None
+        if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
+            raise self._fail(("file",), f"{self.file} holds no triangles")
+        return mesh
+
+    @cached_property
+    def placed(self):
+        """The mesh placed in the deck's frame [m] (a trimesh.Trimesh)."""
+        import trimesh
+
+        return trimesh.Trimesh(self.place(self.stl.vertices), np.asarray(self.stl.faces), process=False)
+
+    def mesh(self):
+        """The mesh at rest in the deck's frame (vertices (V, 3) [m], triangles (T, 3))."""
+        return np.asarray(self.placed.vertices, dtype=float), np.asarray(self.placed.faces, dtype=np.int32)
+
+    @property
+    def lowest(self) -> float:
+        """The mesh's lowest point at rest [m]."""
+        return float(self.placed.vertices[:, 2].min())
+
+    def floor_under(self, xy, above) -> tuple[np.ndarray, np.ndarray]:
+        """(height [m], normal's z) of the first face under each point (n, 2) of the deck's frame,
+        looking down from height ``above`` (n,); NaN where nothing is under it."""
+        xy = np.atleast_2d(np.asarray(xy, dtype=float))
+        origins = np.column_stack([xy, np.broadcast_to(above, len(xy))])
+        down = np.tile([0.0, 0.0, -1.0], (len(xy), 1))
+        hits, ray, face = self.placed.ray.intersects_location(origins, down, multiple_hits=False)
+        z, up = np.full(len(xy), np.nan), np.full(len(xy), np.nan)
+        if len(ray):
+            z[ray], up[ray] = hits[:, 2], self.placed.face_normals[face, 2]
+        return z, up
+
+    def _walls_around(self, xy, z, across) -> np.ndarray:
+        """Whether a wall stands within the width on either side of each point (n, 2) at
+        height ``z`` (n,), looking across the path both ways (``across``: (n, 2) unit vectors)."""
+        origins = np.column_stack([xy, z])
+        found = []
+        for sign in (1.0, -1.0):
+            ways = np.column_stack([sign * across, np.zeros(len(xy))])
+            hits, ray, _ = self.placed.ray.intersects_location(origins, ways, multiple_hits=False)
+            near = np.zeros(len(xy), dtype=bool)
+            if len(ray):
+                near[ray] = np.linalg.norm(hits - origins[ray], axis=1) <= self.width
+            found.append(near)
+        return found[0] & found[1]
+
+    def entry_z(self, y):
+        """The floor's height at rest just after the joint at ``y`` [m] (within the walls)."""
+        y = np.clip(np.asarray(y, dtype=float), -0.49 * self.width, 0.49 * self.width)
+        start = self.points[0]
+        xy = np.column_stack([np.broadcast_to(self.x0 + self.width / 100, y.shape).ravel(), y.ravel()])
+        z, _ = self.floor_under(xy, start[2] + self.width / 2)
+        return z.reshape(y.shape) if y.shape else float(z[0])
+
+    # ---------------------------------------------------------------- the deck
+    def deck_names(self, drive: bool = True) -> list[str]:
+        """The deck's names of its numbers (its file and path are words, held by its mesh)."""
+        return [f"s{self.number}_kind"] + [deck_name(self.number, key) for key in KEYS
+                                           if key[0] not in WORDS and (drive or key[0] != "drive")]
+
+    def name(self, key) -> str:
+        key = (key,) if isinstance(key, str) else tuple(key)
+        return deck_name(self.number, key) if key in KEYS else ".".join(key)
+
+    def deck_commands(self) -> dict[str, list[str]]:
+        """Its commands in the deck (vibrofeed.feeders.deck): a linear section's sine
+        (:func:`vibrofeed.feeders.linear.sine_commands`), its lowest point and its run along x
+        as numbers of its placed mesh, and the box widened to hold its bends."""
+        s = f"s{self.number}"
+        out = sine_commands(self.number)
+        y = float(np.abs(self.placed.vertices[:, 1]).max())
+        out["derived"] += [f"variable {s}_low equal {self.lowest!r}",
+                           f"variable {s}_length equal {self.x1 - self.x0!r}",
+                           "variable box_y delete",  # (the widest of the line and the mesh, and a part)
+                           f"variable box_y equal (v_half_w+{y!r}+abs(v_half_w-{y!r}))/2+v_part_size"]
+        return out
+
+    # ---------------------------------------------------------------- checks
+    def check(self, part: Part, last: bool = True) -> None:
+        """The element on its own, judged on its placed mesh with trimesh (module docstring):
+        a one-line ParameterError naming the element and its key."""
+        if not last:
+            raise self._fail(("file",), "a mesh element is the line's last element in this version "
+                                        "(its path's end is the outlet edge)")
+        if self.width < part.widest:
+            raise self._fail(("width",), f"{self.width:g} m is narrower than a part ({part.widest:g} m "
+                                         "across)")
+        if self.unit not in UNITS.values():
+            raise self._fail(("unit",), f"{self.unit:g} m per unit: an STL from CAD is in millimetres "
+                                        "(unit = \"mm\", 0.001) or metres (\"m\", 1)")
+        p = self.points
+        if not np.linalg.norm(np.diff(p, axis=0), axis=1).all():
+            raise self._fail(("path",), "two consecutive points of the path coincide")
+        mesh = self.placed
+        size = max(float(mesh.extents.max()), self.path_length)
+        if not SIZES[0] <= size <= SIZES[1]:
+            guess = "mm" if size > SIZES[1] else "m"
+            raise self._fail(("unit",), f"the mesh is {float(mesh.extents.max()):.4g} m across and its path "
+                                        f"{self.path_length:.4g} m long at {self.unit:g} m per unit; a "
+                                        f"feeder's track is 1 mm to 1 m: is the unit {guess}?")
+        if not mesh.is_winding_consistent:
+            raise self._fail(("file",), "the mesh's triangles are not wound alike (inconsistent "
+                                        "normals): export it again with its normals repaired")
+        low, high = float(mesh.vertices[:, 0].min()), float(mesh.vertices[:, 0].max())
+        if low < self.x0 - REACH:
+            raise self._fail(("path",), f"the mesh reaches {(self.x0 - low) * 1e3:.3g} mm back past its "
+                                        "joint (under the element before it): start the path at the "
+                                        "mesh's start")
+        if high > self.x1 + REACH:
+            raise self._fail(("path",), f"the mesh reaches {(high - self.x1) * 1e3:.3g} mm beyond its "
+                                        "path's end along x: the outlet (beyond the path's end) would "
+                                        "take parts still on it; end the path at the mesh's farthest x")
+        self._check_floor(part)
+
+    def _check_floor(self, part: Part) -> None:
+        """The floor under the path: found (the path on the mesh), facing up, whole (no hole a
+        part falls through), at points along it at most half a part apart."""
+        p, arc = self.points, self._arc
+        n = max(2, math.ceil(self.path_length / (part.size / 2)))
+        s = (np.arange(n) + 0.5) * self.path_length / n  # (clear of the open ends)
+        i = np.clip(np.searchsorted(arc, s, side="right") - 1, 0, len(p) - 2)
+        d = p[i + 1] - p[i]
+        at = p[i] + ((s - arc[i]) / np.linalg.norm(d, axis=1))[:, None] * d
+        across = np.column_stack([-d[:, 1], d[:, 0]]) / np.hypot(d[:, 0], d[:, 1])[:, None]
+        top = at[:, 2] + self.width / 2  # above the floor, below the walls' tops
+        shown = np.asarray(self.path, dtype=float).reshape(-1, 3)  # (in the STL's frame for messages)
+
+        def where(j):
+            q = shown[i[j]] + (s[j] - arc[i[j]]) / np.linalg.norm(d[j]) * (shown[i[j] + 1] - shown[i[j]])
+            return (f"{s[j] * 1e3:.3g} mm along the path (near {', '.join(f'{c:.4g}' for c in q)} "
+                    "in the STL)")
+
+        z, up = self.floor_under(at[:, :2], top)
+        miss = []  # nothing within half the width under the path's point, at each place across
+        for fraction in ACROSS:
+            zs = z if fraction == 0 else self.floor_under(at[:, :2] + fraction * self.width * across, top)[0]
+            miss.append(np.isnan(zs) | (zs < at[:, 2] - self.width / 2))
+        miss = np.array(miss)
+        # no floor anywhere across: between walls a hole, else the path has left the mesh
+        walled = self._walls_around(at[:, :2], at[:, 2] + part.size / 2, across)
+        if (miss.all(axis=0) & ~walled).any():
+            j = int(np.argmax(miss.all(axis=0) & ~walled))
+            raise self._fail(("path",), f"the path leaves the mesh at {where(j)}: no floor under it")
+        if miss.any():
+            j = int(np.argmax(miss.any(axis=0)))
+            f = int(np.argmax(miss[:, j]))  # (the first place across where it misses)
+            raise self._fail(("file",), f"the floor has a hole at {where(j)}, "
+                                        f"{ACROSS[f] * self.width * 1e3:+.3g} mm across: parts would "
+                                        "fall through")
+        off = np.abs(z - at[:, 2]) > part.size / 2
+        if off.any():
+            j = int(np.argmax(off))
+            raise self._fail(("path",), f"the path lies {(at[j, 2] - z[j]) * 1e3:+.3g} mm above the floor "
+                                        f"at {where(j)}: its points lie on the floor's centre line")
+        if (up <= 0).any():
+            j = int(np.argmax(up <= 0))
+            raise self._fail(("file",), f"the floor's normals face down under the path at {where(j)}: "
+                                        "export it with the normals out of the solid (towards the parts)")
