@@ -171,8 +171,9 @@ def test_the_graph_covers_every_package_and_module():
                     "vibrofeed.pictures", "vibrofeed.postproc", "vibrofeed.models", "vibrofeed.validation",
                     "vibrofeed.validation.replay", "vibrofeed.validation.studies"):
         assert package in graph, package
-    # + the decks' helper scripts, shipped as vibrofeed._decks
-    n_files = sum(len(list(folder.rglob("*.py"))) for folder in [*PACKAGE_DIRS, REPO / "decks"])
+    # + the decks' helper scripts and the example feeders' (vibrofeed._decks, vibrofeed._feeders)
+    folders = [*PACKAGE_DIRS, REPO / "decks", REPO / "feeders"]
+    n_files = sum(len(list(folder.rglob("*.py"))) for folder in folders)
     assert len(graph) == n_files
     assert "vibrofeed.postproc.base" in graph["vibrofeed.postproc.feedrate"]  # a relative import
     assert "vibrofeed.models.deck" in graph["vibrofeed.postproc.feedrate"]  # one inside a function
