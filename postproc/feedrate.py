@@ -68,8 +68,9 @@ conveying speed and every fed section's hold-up (a section past a joint, or
 section 1 with an inlet) are followed; one drifts when the means of the last
 and first thirds of its batches differ by more than 3 standard errors of that
 difference (the batch scatter about a straight line, :func:`.line.drift`).
-A store without inflow (section 1 of a pre-filled bed without inlet) drains
-at its out-flux however steadily it feeds, so its hold-up is not judged. A
+A store without inflow (the first element of a pre-filled bed without inlet:
+a line's section 1, a bowl's helix and chute) drains at its out-flux however
+steadily it feeds, so its hold-up is not judged. A
 drift makes ``unsteady`` (and ``reason``) say which, and how much: the rate is
 then not a steady one. A single track is section 1. When the window is found
 (no ``start`` given), it starts no earlier than every fed section is full (the
@@ -241,6 +242,13 @@ def bin_width(t_lo: float, t_hi: float, freq: float, n_events: int = 0) -> float
 MIN_EXITS = 10
 # How often the window's start may move later for a drifting bed (by a sixth each time).
 SETTLE_STEPS = 3
+
+
+def store_sections(parameters) -> int:
+    """How many sections along the path, from the first, are the store a pre-fill without
+    inlet drains: the first element's (a line's section 1; a bowl's helix and chute)."""
+    feeder = feeder_of(parameters)
+    return len(feeder.elements[0].bounds) if feeder is not None else 1
 
 
 def is_fed(parameters) -> bool:
@@ -639,13 +647,11 @@ class FeedRate(AnalysisBase):
         frame_dt = float(np.median(np.diff(self.times))) if len(self.times) > 1 else 1.0
         width = max(5 / freq if freq > 0 else 0.0, 5 * frame_dt)
         _, counts = self._bed_pass(frames)
-        fed = is_fed(result.parameters)
+        judged = 0 if is_fed(result.parameters) else store_sections(result.parameters)
         which = np.floor((self.times - t0) / width + 1e-9).astype(np.int64)
         n_bins = int(which.max()) + 1
         start = t0
-        for k in range(counts.shape[1]):
-            if k == 0 and not fed:
-                continue
+        for k in range(judged, counts.shape[1]):
             total = np.bincount(which, weights=counts[:, k], minlength=n_bins)
             held = total / np.maximum(np.bincount(which, minlength=n_bins), 1)
             start = max(start, t0 + width * mser(held, cut_end=False)[0])
@@ -715,9 +721,11 @@ class FeedRate(AnalysisBase):
         window, window_t = frames[inside], self.times[inside]
         span = (t_a, t_b, freq)
         cuts = batch_cuts(t_a, t_b, freq, max(self.batches, DRIFT_MIN_BATCHES))
-        # A store without inflow (section 1 of a pre-filled bed, no inlet) drains at its
-        # out-flux however steadily it feeds: only a fed section's hold-up must hold.
+        # A store without inflow (the first element of a pre-filled bed, no inlet: a line's
+        # section 1, a bowl's helix and chute) drains at its out-flux however steadily it
+        # feeds: only a fed section's hold-up must hold.
         fed = is_fed(result.parameters)
+        store = store_sections(result.parameters)
         sections, speeds, held, trends = [], [], [], []
         for k, (lo, hi) in enumerate(bounds):
             last = k == len(bounds) - 1
@@ -735,7 +743,7 @@ class FeedRate(AnalysisBase):
             speeds.append(batch_means(mid_t, v, cuts))
             held.append(batch_means(window_t, n, cuts))
             trends += trend(k + 1, "conveying speed", speeds[-1])
-            if k > 0 or fed:
+            if k >= store or fed:
                 trends += trend(k + 1, "hold-up", held[-1])
         r.bed = {"batch_edges": cuts, "speed": np.array(speeds), "hold_up": np.array(held),
                  "joint_crossings": crossings}

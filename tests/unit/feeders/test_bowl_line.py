@@ -168,3 +168,13 @@ def test_a_bowl_description_with_a_number_its_deck_lacks_is_refused(tmp_path):
     with pytest.raises(ParameterError, match=r"^b.toml: supply.inlet_rate: a feeder whose first element "
                                              r"is a bowl has no such number"):
         Deck.find(path)
+
+
+def test_the_store_a_pre_fill_drains_is_the_first_elements_sections():
+    from vibrofeed.postproc.feedrate import store_sections
+
+    assert store_sections(BOWL_LINE) == 2  # the helix and the chute: the exit line must hold
+    assert store_sections({**BOWL_LINE, "sections": 1}) == 2
+    line = {"part_size": 3e-4, "track_length": 4e-3, "track_width": 1.2e-3, "wall_height": 1e-3,
+            "sections": 2, "s2_length": 4e-3, "s2_width": 1.2e-3, "s2_wall_height": 1e-3, "s2_step": 5e-5}
+    assert store_sections(line) == 1 and store_sections({}) == 1  # (no feeder: a single track)
