@@ -1,17 +1,19 @@
 """Benchmark of feeder descriptions: their generated deck against today's deck, and
 `vibrofeed run` against plain `liggghts -in` of the generated deck, side by side.
 
-    .venv/bin/python benchmarks/bench_feeders.py [--pairs 5] [--t-end 0.3]
+    .venv/bin/python benchmarks/bench_feeders.py [--feeder demo-line|bowl-line] [--pairs 5] [--t-end 0.3]
 
-The feeder is the demo line (feeders/demo_line.toml, the parameters of `vibrofeed demo`),
+The feeder is the demo line (feeders/demo_line.toml, the parameters of `vibrofeed demo`) or
+the bowl with its exit line (feeders/bowl_line.toml, `vibrofeed demo --case bowl-line`),
 run for --t-end seconds of vibration on one rank. Each comparison runs its two commands in
 turn, A B A B ..., after one warm-up pair, as whole processes; it prints each command's
 median wall time and the median of the pairs' ratios A/B (a ratio pair by pair holds when
 the machine's speed drifts), as a Markdown table for BENCHMARKS.md:
 
-* described vs deck: `vibrofeed run feeders/demo_line.toml` against `vibrofeed run
-  bulk_feeder` with the demo's parameters (the same commands and values: the description
-  costs its reading and the deck's generation);
+* described vs deck (the demo line: a project deck runs the same feeder): `vibrofeed run
+  feeders/demo_line.toml` against `vibrofeed run bulk_feeder` with the demo's parameters
+  (the same commands and values: the description costs its reading and the deck's
+  generation);
 * vibrofeed vs by hand: `vibrofeed run` of the generated deck against `liggghts -in` of it
   on the geometry `vibrofeed prepare` wrote (a text dump every output_dt).
 """
@@ -68,7 +70,9 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--pairs", type=int, default=5)
     ap.add_argument("--t-end", type=float, default=0.3)
+    ap.add_argument("--feeder", choices=("demo-line", "bowl-line"), default="demo-line")
     args = ap.parse_args()
+    toml = ROOT / "feeders" / f"{args.feeder.replace('-', '_')}.toml"
     sys.path.insert(0, str(ROOT))
     from vibrofeed.cli.demo import CASES
 
@@ -79,15 +83,16 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         os.environ["XDG_CACHE_HOME"] = str(tmp / "cache")
-        described = VIBROFEED + ["run", str(ROOT / "feeders" / "demo_line.toml"), "-q", "-o", "a.h5",
-                                 "-p", t_end]
-        by_deck = VIBROFEED + ["run", deck, "-q", "-o", "b.h5", "-p", t_end]
-        for name, value in given.items():
-            if name != "t_end":
-                by_deck += ["-p", f"{name}={value}"]
-        rows = [("`vibrofeed run feeders/demo_line.toml` / `vibrofeed run bulk_feeder -p ...`",
-                 paired(described, by_deck, args.pairs, tmp))]
-        line = subprocess.run(VIBROFEED + ["prepare", str(ROOT / "feeders" / "demo_line.toml"), "-o",
+        rows = []
+        if args.feeder == "demo-line":
+            described = VIBROFEED + ["run", str(toml), "-q", "-o", "a.h5", "-p", t_end]
+            by_deck = VIBROFEED + ["run", deck, "-q", "-o", "b.h5", "-p", t_end]
+            for name, value in given.items():
+                if name != "t_end":
+                    by_deck += ["-p", f"{name}={value}"]
+            rows.append(("`vibrofeed run feeders/demo_line.toml` / `vibrofeed run bulk_feeder -p ...`",
+                         paired(described, by_deck, args.pairs, tmp)))
+        line = subprocess.run(VIBROFEED + ["prepare", str(toml), "-o",
                                            str(tmp / "prep"), "-p", t_end],
                               check=True, capture_output=True, text=True).stdout.strip().splitlines()[-1]
         generated = shlex.split(line)[2]
@@ -96,7 +101,7 @@ def main() -> None:
         driver = VIBROFEED + ["run", generated, "-q", "-o", "c.h5", "-p", t_end]
         rows.append(("`vibrofeed run` / `liggghts -in` of the generated deck",
                      paired(driver, hand, args.pairs, tmp / "prep")))
-    print(f"Machine: {machine()}; the demo line, {args.t_end:g} s of vibration, 1 rank, "
+    print(f"Machine: {machine()}; {toml.name}, {args.t_end:g} s of vibration, 1 rank, "
           f"{args.pairs} alternated pairs after a warm-up pair\n")
     print("| A / B | time | A (median) | B (median) | A/B median (min .. max) |")
     print("|---|---|---|---|---|")

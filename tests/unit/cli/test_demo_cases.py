@@ -67,10 +67,10 @@ def test_the_bowl_case_is_a_bowl_whose_dies_climb_sliding_within_5_g():
     assert speed == pytest.approx(0.048, rel=0.02, abs=0)  # [m/s] the comment's 48 mm/s
 
 
-def test_the_bowl_line_case_speeds_the_dies_up_at_each_joint_as_its_description_says():
-    """feeders/bowl_line.toml: the chute's lone die, slower than the first exit section's, slower
-    than the second's, by the single-part models (the chute's: vibrofeed.bowl.chute_mean_speed);
-    each joint sound (Feeder.check)."""
+def test_the_bowl_line_case_speeds_the_dies_up_at_its_joint_as_its_description_says():
+    """feeders/bowl_line.toml: the chute's lone die more than three times slower than one alone on
+    the exit section, by the single-part models (the chute's: vibrofeed.bowl.chute_mean_speed);
+    the joint sound (Feeder.check)."""
     from vibrofeed.bowl import chute_mean_speed
     from vibrofeed.cli.demo import CASES
     from vibrofeed.decks import feeders_dir
@@ -81,13 +81,13 @@ def test_the_bowl_line_case_speeds_the_dies_up_at_each_joint_as_its_description_
     values = resolve(Deck.find(feeders_dir() / deck), {})
     feeder = Feeder.from_values(values)
     feeder.check()
-    assert [e.kind for e in feeder.elements] == ["bowl", "linear", "linear"]
+    assert [e.kind for e in feeder.elements] == ["bowl", "linear"]
     p = {k: float(v) for k, v in values.items() if k not in ("deck_dir", "mesh_dir", "dump_file",
                                                             "outlet_file")}
     chute, note = chute_mean_speed(p)
     assert chute is not None and chute > 0, note
-    s2, s3 = (transport(feeder.section_values(k)).velocity for k in (3, 4))
-    assert s2 > 2 * chute and s3 > 1.5 * s2
-    # sliding, not hopping, on both: the normal stroke below 1 g
-    for e in feeder.elements[1:]:
-        assert e.drive.amp_n * (2 * math.pi * e.drive.freq) ** 2 < 9.81
+    exit_line = transport(feeder.section_values(3)).velocity
+    assert exit_line > 3 * chute  # the speed step that spaces the queue (continuity)
+    # sliding, not hopping: the normal stroke below 1 g
+    drive = feeder.elements[1].drive
+    assert drive.amp_n * (2 * math.pi * drive.freq) ** 2 < 9.81

@@ -154,10 +154,10 @@ def test_the_bowl_line_description_becomes_the_bowl_deck_with_its_exit_line():
     deck = Deck.find(REPO / "feeders" / "bowl_line.toml")
     assert deck.description.template == "bowl_feeder" and deck.prepare_target.endswith("prepare_bowl_feeder")
     values = resolve(deck, {})
-    assert values["bowl_diameter"] == "0.02" and values["s3_amp_t"] == "0.00054"
+    assert values["bowl_diameter"] == "0.02" and values["s2_amp_t"] == "0.0004"
     assert resolve(deck, {"element.1.drive.amp_t": "1.5e-4"})["amp_t"] == "1.5e-4"
     f = Feeder.from_values(values)
-    assert [e.kind for e in f.elements] == ["bowl", "linear", "linear"]
+    assert [e.kind for e in f.elements] == ["bowl", "linear"]
 
 
 def test_a_bowl_description_with_a_number_its_deck_lacks_is_refused(tmp_path):
