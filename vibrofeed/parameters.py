@@ -397,6 +397,48 @@ def _check_insertion(p: Mapping[str, float]) -> None:
             "track or use smaller parts")
 
 
+# The inlet's block (decks/bulk_feeder.liggghts, region inlet), in part sizes: from r_ext +
+# 0.05 to r_ext + 3 along the track, 0.05 in from each wall, 0.1 to 3 above the floor's top.
+INLET_LENGTH, INLET_HEIGHT, INLET_MARGIN = 2.95, 2.9, 0.05
+GRAVITY = 9.81  # m/s^2, as the decks take it
+
+
+def inlet_capacity(p: Mapping[str, float]) -> tuple[float, float]:
+    """(the most parts the bulk feeder's inlet block holds at once, at the packing of a
+    settled fill (FILL_PACKING); the time [s] a part dropped at rest from its top takes to
+    fall out of it). A part is in the block a fall time at most, so the inlet drops at most
+    capacity / time parts a second (:func:`_check_inlet`)."""
+    size, shape = p["part_size"], int(p.get("shape", 0))
+    width = p["track_width"] - 2 * INLET_MARGIN * size
+    block = INLET_LENGTH * size * max(width, 0.0) * INLET_HEIGHT * size
+    parts = FILL_PACKING * block / part_volume(shape, size, p.get("part_thickness", size))
+    return parts, math.sqrt(2 * INLET_HEIGHT * size / GRAVITY)
+
+
+def _check_inlet(p: Mapping[str, float]) -> None:
+    """An inlet asked for more than its block can ever hold: LIGGGHTS tries each step to
+    insert what does not fit (a run a thousand times slower, or 'Unable to calculate region
+    volume'), and what the run measures is the block's limit, not the rate asked for."""
+    rate = p.get("inlet_rate", 0.0)
+    if "bowl_diameter" in p or rate <= 0:
+        return
+    capacity, fall = inlet_capacity(p)
+    size = f"part_size={p['part_size']:g} m"
+    batch = p.get("inlet_batch", 1.0)
+    if batch > capacity:
+        raise ParameterError(
+            f"inlet_batch={batch:g} parts do not fit in the inlet's block above the track's start: "
+            f"it holds at most {capacity:.0f} parts of {size} on track_width={p['track_width']:g} m; "
+            f"lower inlet_batch to {max(math.floor(capacity), 1):d} or less")
+    most = capacity / fall
+    if rate > most:
+        raise ParameterError(
+            f"inlet_rate={rate:g} /s is more than the inlet can drop: its block above the track's "
+            f"start holds at most {capacity:.0f} parts of {size} on track_width="
+            f"{p['track_width']:g} m, and a part falls through it in {fall * 1e3:.2g} ms, so at most "
+            f"{most:.3g} parts/s; lower inlet_rate, or pre-fill the track (n_parts)")
+
+
 # Random loose packing of a settled pre-fill, to tell whether it stays between the walls.
 FILL_PACKING = 0.6
 
@@ -447,6 +489,7 @@ def _check_bulk_feeder(p: Mapping[str, float]) -> None:
         raise ParameterError(f"track_width={p['track_width']:g} m is narrower than a part "
                              f"({widest:g} m across)")
     _check_insertion(p)
+    _check_inlet(p)
     gate = p.get("gate_width", 0.0)
     length = p.get("track_length", math.inf)
     if gate > 0:
