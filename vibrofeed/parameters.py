@@ -264,27 +264,11 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
 
     numbers = {}
     for name, value in values.items():
-        var = tunables[name]
-        if not (var.is_numeric or rule_for(name)):
+        x = checked_value(deck, name, value)
+        if x is None:
             continue
-        try:
-            x = float(value)
-        except ValueError:
-            if name in NAMED_VALUES:
-                choices = ", ".join(f"{k} ({v})" for k, v in NAMED_VALUES[name].items())
-                raise ParameterError(f"parameter {name}={value!r} must be one of {choices}") from None
-            raise ParameterError(f"parameter {name}={value!r} is not a number") from None
-        if not math.isfinite(x):
-            raise ParameterError(f"parameter {name}={value} is not finite")
         numbers[name] = x
-        rule = rule_for(name)
-        problem = rule(x) if rule else None
-        if problem:
-            unit = f" {var.unit}" if var.unit and var.unit != "-" else ""
-            slip = UNIT_SLIPS.get(name)
-            hint = f"; {slip[1]}" if slip and slip[0](x) else ""
-            raise ParameterError(f"parameter {name}={value}{unit} {problem}{hint}")
-        values[name] = engine_text(value, x, getattr(rule, "integer", False))
+        values[name] = engine_text(value, x, getattr(rule_for(name), "integer", False))
     declared = max((int(m[1]) for n in tunables if (m := re.match(r"^s(\d)_length$", n))), default=1)
     if numbers.get("sections", 1) > declared:
         raise ParameterError(
@@ -302,6 +286,34 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
     for line in advice(numbers, moved) + climb_advice(numbers):
         warnings.warn(line, ParameterWarning, stacklevel=2)
     return values
+
+
+def checked_value(deck: Deck, name: str, value: str) -> float | None:
+    """The number parameter ``name`` of ``deck`` takes from the text ``value`` (a name of
+    :data:`NAMED_VALUES` as its number), checked against its own limit (:data:`RULES`);
+    None for a parameter that is no number. ParameterError naming it otherwise. The limits
+    between parameters are :func:`resolve`'s."""
+    var = deck.tunables[name]
+    if not (var.is_numeric or rule_for(name)):
+        return None
+    value = NAMED_VALUES.get(name, {}).get(value.strip().lower(), value)
+    try:
+        x = float(value)
+    except ValueError:
+        if name in NAMED_VALUES:
+            choices = ", ".join(f"{k} ({v})" for k, v in NAMED_VALUES[name].items())
+            raise ParameterError(f"parameter {name}={value} must be one of {choices}") from None
+        raise ParameterError(f"parameter {name}={value} is not a number") from None
+    if not math.isfinite(x):
+        raise ParameterError(f"parameter {name}={value} is not finite")
+    rule = rule_for(name)
+    problem = rule(x) if rule else None
+    if problem:
+        unit = f" {var.unit}" if var.unit and var.unit != "-" else ""
+        slip = UNIT_SLIPS.get(name)
+        hint = f"; {slip[1]}" if slip and slip[0](x) else ""
+        raise ParameterError(f"parameter {name}={value}{unit} {problem}{hint}")
+    return x
 
 
 def _with_slips(message: str, p: Mapping[str, float]) -> str:
