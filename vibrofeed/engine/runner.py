@@ -125,6 +125,18 @@ def check_ranks(ranks) -> int:
     return ranks
 
 
+def check_at_once(workers: int, ranks: int) -> None:
+    """``-j workers`` runs of ``ranks`` MPI ranks each, at once: UsageError when that is more
+    ranks than this machine can run (:func:`max_ranks`), as one run of that many is."""
+    limit = max_ranks()
+    if workers > 1 and workers * ranks > limit:
+        each = f" of ranks_per_run = {ranks} ranks each" if ranks > 1 else ""
+        raise UsageError(f"-j {workers}: {workers} runs at once{each} is {workers * ranks} ranks, more "
+                         f"than this machine can run: at most {limit} ({RANKS_PER_CORE} per core; set "
+                         f"VIBROFEED_MAX_RANKS to change the limit); give -j {max(limit // ranks, 1)} "
+                         "or less")
+
+
 def run_id(deck: Deck, values: Mapping[str, str], before_run=None, schedule=None,
            target_error: float | None = None) -> str:
     """The identity of a run (signac's state point idea): a SHA-256 over the

@@ -47,6 +47,7 @@ from pathlib import Path
 import numpy as np
 
 from ..engine import batch
+from ..engine.runner import check_at_once
 from ..errors import ParameterError, RunError, UsageError
 from ..parameters import resolve
 from ..sweep import folder as F
@@ -452,6 +453,8 @@ def optimize(spec_path, output=None, workers: int = 1, budget: int | None = None
     _check_folder(folder, spec, resume)
     if comm is not None and workers > 1:
         raise UsageError("-j: under mpirun the groups of ranks_per_run ranks are the workers; drop -j")
+    if comm is None:
+        check_at_once(workers, spec.ranks_per_run)
     groups = 1 if comm is None else comm.Get_size() // spec.ranks_per_run
     if comm is not None and groups < 1:
         raise UsageError(f"ranks_per_run = {spec.ranks_per_run} needs at least that many ranks; "

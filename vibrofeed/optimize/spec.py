@@ -60,6 +60,11 @@ TOP_KEYS = ("deck", "ranks_per_run", "seed", "description", "target_error", "fix
 CONSTRAINT_KEYS = ("max_acceleration", "max_displacement", "frequency", "min_model_speed",
                    "no_hopping", "require")
 BUDGET = {"runs": 20, "seeds": 6, "screen": 256, "confirm": 3, "replicates": 3}
+# The most settings the model screen takes: each is checked as vibrofeed run checks it and
+# screened on the models, about 90 ms with the single-part model
+# (studies/line_singulated_rate.toml on a 2-core Xeon, 2026-12-03): 10 000 take 15 minutes
+# before the first DEM run (screen = 1000000000 ended in a memory traceback).
+MAX_SCREEN = 10_000
 # Metrics an objective may name: the sweep's metrics of a bulk result, and two products.
 METRICS = ("parts_per_s", "mass_per_s", "mean_velocity", "singulated_fraction", "orientation_yield",
            "singulated_rate", "oriented_rate", "cv_interarrival", "doubles_rate")
@@ -326,6 +331,10 @@ def _budget(table: dict, r: KeyReader) -> dict:
         if out[key] > 100:
             r.fail(("budget", key), f"{key} must be at most 100 (confirmation runs are numbered "
                                     f"10000 + 100 x rank + replicate), got {out[key]}")
+    if out["screen"] > MAX_SCREEN:
+        r.fail(("budget", "screen"), f"screen = {out['screen']} is more settings than the models screen "
+                                     f"in reasonable time: at most {MAX_SCREEN} (about 90 ms a setting "
+                                     "with the single-part model: 15 minutes before the first run)")
     if out["seeds"] > out["runs"]:
         r.fail(("budget", "seeds"), f"seeds ({out['seeds']}) exceeds runs ({out['runs']}): the "
                                     "screen's settings are part of the search's runs")

@@ -29,6 +29,7 @@ from vibrofeed.engine.runner import (
     _prepare_output,
     _reusable,
     _unreadable,
+    check_at_once,
     check_ranks,
     check_target_error,
     clean_environment,
@@ -94,6 +95,21 @@ def three_cores(monkeypatch):
 def test_the_rank_limit_is_four_per_usable_core(three_cores):
     assert RANKS_PER_CORE == 4
     assert max_ranks() == 12  # the 3 cores of the affinity mask, not the 5 of the machine
+
+
+def test_runs_at_once_are_held_to_the_rank_limit_as_one_run_is(three_cores):
+    """sweep and optimize -j 1000 started a thousand LIGGGHTS processes on a 3-core machine."""
+    check_at_once(12, 1)
+    check_at_once(6, 2)
+    check_at_once(1, 12)
+    with pytest.raises(UsageError) as err:
+        check_at_once(13, 1)
+    assert str(err.value) == ("-j 13: 13 runs at once is 13 ranks, more than this machine can run: at "
+                              "most 12 (4 per core; set VIBROFEED_MAX_RANKS to change the limit); give "
+                              "-j 12 or less")
+    with pytest.raises(UsageError, match=r"^-j 5: 5 runs at once of ranks_per_run = 3 ranks each is 15 "
+                                         r"ranks, .*; give -j 4 or less$"):
+        check_at_once(5, 3)
 
 
 def test_without_an_affinity_mask_every_core_counts(three_cores, monkeypatch):

@@ -161,6 +161,10 @@ def test_defaults_and_two_objectives():
     (("seeds = 4", "seeds = 4\nreplicates = 2.5"), "replicates must be a whole number >= 1"),
     (("seeds = 4", "seeds = 4\nconfirm = true"), "confirm must be a whole number >= 0"),
     (("seeds = 4", "seeds = 4\nscreen = 3"), "screen (3) must be at least seeds (4)"),
+    # screen = 1000000000 ended in a memory traceback (and would have screened for years)
+    (("seeds = 4", "seeds = 4\nscreen = 10001"), "screen = 10001 is more settings than the models "
+                                                 "screen in reasonable time: at most 10000"),
+    (("seeds = 4", "seeds = 4\nscreen = 1000000000"), "at most 10000 (about 90 ms a setting"),
     (("mu = [0.4, 0.6]", "mu = []"), "robustness mu must list the values to try"),
     (("mu = [0.4, 0.6]", "mu = 0.4"), "robustness mu must list the values to try"),
     (("mu = [0.4, 0.6]", "mu = [[0.4]]"), "robustness mu must list the values to try"),
@@ -187,6 +191,7 @@ def test_each_section_must_be_a_table(key):
     (("max_acceleration = 6.0", "no_hopping = [1, 2]"), lambda s: s.constraints["no_hopping"] == [1, 2]),
     (("runs = 12", "runs = 4"), lambda s: s.budget["runs"] == s.budget["seeds"] == 4),  # seeds == runs
     (("seeds = 4", "seeds = 4\nscreen = 4"), lambda s: s.budget["screen"] == 4),  # screen == seeds
+    (("seeds = 4", "seeds = 4\nscreen = 10000"), lambda s: s.budget["screen"] == 10_000),
     (("runs = 12\nseeds = 4", "runs = 1\nseeds = 1\nscreen = 1\nconfirm = 0\nreplicates = 1"),
      lambda s: s.budget == {"runs": 1, "seeds": 1, "screen": 1, "confirm": 0, "replicates": 1}),
     (("mu = [0.4, 0.6]", 'mu = [0.5]\nmesh = ["chip.stl"]'),

@@ -934,3 +934,37 @@ def test_the_lock_file_is_readable_by_all_and_executable_by_none(tmp_path):
         assert (tmp_path / F.LOCK_NAME).stat().st_mode & 0o777 == 0o644
     finally:
         os.close(fd)
+
+
+# ------------------------------------------------------------------ sizes that cannot be done
+def test_a_sweep_of_more_jobs_than_it_can_plan_is_refused_before_it_makes_them():
+    """replicates = 1000000000 with --dry-run was killed by the kernel at 23 GB: the jobs are
+    counted first, and what would fit is said."""
+    text = ISSUE.replace("replicates = 2", "replicates = 1000000000")
+    message = refused(text, UsageError, planned=True)
+    assert message == ("s.toml:3: 4 setting(s) x replicates = 1000000000 make 4,000,000,000 jobs, more "
+                       "than a sweep plans: at most 100,000 (each job is checked and kept in memory "
+                       "before the first run: 100,000 take about 4 minutes and 0.5 GB); replicates = "
+                       "25000 at most, or split the sweep")
+    # at the limit it is counted, not refused (the jobs themselves are not made here)
+    assert P.check_size(spec_of(ISSUE.replace("replicates = 2", "replicates = 25000"))) == P.MAX_JOBS
+    assert "replicates = 25000 at most" in refused(ISSUE.replace("replicates = 2", "replicates = 25001"),
+                                                   UsageError, planned=True)
+    # a grid too large on its own names its longest list
+    grid = ISSUE.replace("replicates = 2", "replicates = 1").replace(
+        "phase = [0.0, 90.0]", "phase = [" + ", ".join(str(k) for k in range(400)) + "]\n"
+        "freq = [" + ", ".join(str(50 + k) for k in range(200)) + "]")
+    assert refused(grid, UsageError, planned=True).startswith(
+        "s.toml:8: 2 x 400 x 200 settings make 160,000 jobs, more than a sweep plans")
+
+
+def test_sweep_minus_j_beyond_the_machine_is_refused_before_anything(tmp_path, monkeypatch):
+    from helpers import REPO, vibrofeed
+
+    monkeypatch.setenv("VIBROFEED_MAX_RANKS", "4")
+    out = tmp_path / "out"
+    proc = vibrofeed("sweep", REPO / "sweeps" / "example.toml", "-o", out, "-j", "1000")
+    assert proc.returncode == 2 and proc.stderr.count("\n") == 1, proc.stderr
+    assert proc.stderr.startswith("vibrofeed: error: -j 1000: 1000 runs at once is 1000 ranks, more than "
+                                  "this machine can run: at most 4")
+    assert not out.exists()
