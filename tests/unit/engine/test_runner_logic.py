@@ -604,3 +604,43 @@ def test_a_hung_worker_is_stopped_and_its_output_reader_joined(monkeypatch):
     run.follow()
     assert run.hung == "no heartbeat for 30 s" and run.rc == -signal.SIGTERM
     assert joined == [False]  # joined, and ended: nothing left reading
+
+
+def test_a_run_that_will_take_long_says_so_before_it_starts(monkeypatch):
+    """-p dt=1e-12 started a run of 75 days without a word."""
+    import warnings
+
+    from vibrofeed.decks import Deck
+    from vibrofeed.engine.runner import LongRunWarning, long_run, warn_long_run
+    from vibrofeed.parameters import STEPS_PER_SECOND, contact_times, resolve, run_steps
+
+    monkeypatch.delenv("VIBROFEED_LONG_RUN_HOURS", raising=False)
+    deck = Deck.find("single_part")
+    values = resolve(deck, {"dt": "1e-12", "t_end": "0.2"})
+    assert long_run(values) == (
+        f"this run will take about {0.2 / 1e-12 / STEPS_PER_SECOND / 86400:.3g} days: 2e+11 steps of "
+        "dt=1e-12 s at 31k steps/s (the demo's speed on one core; more parts run slower); "
+        "VIBROFEED_LONG_RUN_HOURS=1 sets when this is said")
+    with pytest.warns(LongRunWarning, match="^this run will take about 74.7 days"):
+        warn_long_run(values)
+    # the deck's own timestep: the output interval in whole steps of at most 1/50 of the
+    # Hertz time (decks/include/contact_time.liggghts, dt_auto)
+    numbers = {}
+    for name, text in resolve(deck, {}).items():
+        try:
+            numbers[name] = float(text)
+        except ValueError:
+            pass
+    steps, dt = run_steps(numbers)
+    hertz = contact_times(numbers)["hertz"]
+    assert dt == numbers["output_dt"] / math.ceil(numbers["output_dt"] / (hertz / 50))
+    assert steps == pytest.approx(numbers["t_end"] / dt)
+    # below the threshold nothing is said; the threshold is the user's
+    assert long_run(resolve(deck, {})) is None
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        warn_long_run(resolve(deck, {}))
+    monkeypatch.setenv("VIBROFEED_LONG_RUN_HOURS", str(steps / STEPS_PER_SECOND / 3600 / 2))
+    assert long_run(resolve(deck, {})).startswith(f"this run will take about {round(steps / 31000)}s: ")
+    monkeypatch.setenv("VIBROFEED_LONG_RUN_HOURS", "2000")
+    assert long_run(values) is None
