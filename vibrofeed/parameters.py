@@ -202,7 +202,7 @@ def parse_assignments(items) -> dict[str, str]:
         name, sep, value = item.partition("=")
         name, value = name.strip(), value.strip()
         if not sep or not name or not value:
-            raise ParameterError(f"parameter {item!r} is not of the form name=value")
+            raise ParameterError(f"parameter {item or '(nothing)'} is not of the form name=value")
         if out.get(name, value) != value:
             raise ParameterError(f"parameter {name} given twice, as -p {name}={out[name]} and "
                                  f"-p {name}={value}; give it once")
@@ -245,17 +245,17 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
         for name, value in given.items():
             own = deck.aliases.get(name, name)
             if own in named:
-                raise ParameterError(f"parameter {own!r} given twice (as {name!r} too)")
+                raise ParameterError(f"parameter {own} given twice (as {name} too)")
             named[own] = value
         given = named
     for name in given:
         if name in RESERVED:
-            raise ParameterError(f"parameter {name!r} is set by vibrofeed itself, not by -p")
+            raise ParameterError(f"parameter {name} is set by vibrofeed itself, not by -p")
         if name not in tunables:
             close = difflib.get_close_matches(name, tunables, n=1)
-            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            hint = f" (did you mean {close[0]}?)" if close else ""
             raise ParameterError(
-                f"unknown parameter {name!r} for deck {deck.name}{hint}; "
+                f"unknown parameter {name} for deck {deck.name}{hint}; "
                 f"valid parameters: {', '.join(tunables)}")
     values = {name: str(given.get(name, v.default)) for name, v in tunables.items()}
     for name, names in NAMED_VALUES.items():

@@ -35,7 +35,7 @@ from pathlib import Path
 from .. import __version__, environment, interrupt
 from ..decks import Deck
 from ..disk import mount_point
-from ..errors import EngineError, OutputError, RunError, UsageError
+from ..errors import EngineError, OutputError, RunError, UsageError, said
 from ..parameters import resolve
 from ..results import layout as L
 from . import scratch
@@ -117,7 +117,7 @@ def max_ranks() -> int:
 def check_ranks(ranks) -> int:
     """``ranks`` if it is a number of MPI ranks this machine can start, else UsageError."""
     if isinstance(ranks, bool) or not isinstance(ranks, int) or ranks < 1:
-        raise UsageError(f"the number of ranks must be a positive integer, got {ranks!r}")
+        raise UsageError(f"the number of ranks must be a positive integer, got {said(ranks)}")
     limit = max_ranks()
     if ranks > limit:
         raise UsageError(f"{ranks} ranks is more than this machine can run: at most {limit} "
@@ -215,7 +215,7 @@ def check_target_error(target, deck: Deck) -> float | None:
     try:
         value = float(target)
     except (TypeError, ValueError):
-        raise UsageError(f"target error must be a number, got {target!r}") from None
+        raise UsageError(f"target error must be a number, got {said(target)}") from None
     if not 0 < value < 1:  # NaN too
         raise UsageError(f"target error {target} is outside (0, 1): it is the feed rate's "
                          "relative error (0.03: 3 %)")

@@ -69,12 +69,12 @@ def _check_names(spec: SweepSpec, deck: Deck) -> None:
     tunables = deck.tunables
     for name in spec.parameters:
         if name in RESERVED:
-            raise ParameterError(f"{spec.where(*spec.place(name))}: parameter {name!r} is set by "
+            raise ParameterError(f"{spec.where(*spec.place(name))}: parameter {name} is set by "
                                  "vibrofeed itself, not by a sweep")
         if name not in tunables:
             close = difflib.get_close_matches(name, tunables, n=1)
-            hint = f" (did you mean {close[0]!r}?)" if close else ""
-            raise ParameterError(f"{spec.where(*spec.place(name))}: unknown parameter {name!r} for "
+            hint = f" (did you mean {close[0]}?)" if close else ""
+            raise ParameterError(f"{spec.where(*spec.place(name))}: unknown parameter {name} for "
                                  f"deck {deck.name}{hint}; valid parameters: {', '.join(tunables)}")
     if spec.replicates > 1 and "seed" not in tunables:
         raise ParameterError(f"{spec.where('replicates')}: deck {deck.name} has no seed parameter, "

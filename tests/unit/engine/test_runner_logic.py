@@ -38,7 +38,7 @@ from vibrofeed.engine.runner import (
     worker_command,
     worker_environment,
 )
-from vibrofeed.errors import EngineError, OutputError, RunError, UsageError
+from vibrofeed.errors import EngineError, OutputError, RunError, UsageError, said
 from vibrofeed.results import layout as L
 from vibrofeed.results.writer import ResultWriter
 
@@ -157,7 +157,8 @@ def test_check_ranks_refuses_what_is_not_a_positive_integer(monkeypatch, ranks):
     monkeypatch.setenv("VIBROFEED_MAX_RANKS", "5")
     with pytest.raises(UsageError) as caught:
         check_ranks(ranks)
-    assert str(caught.value) == f"the number of ranks must be a positive integer, got {ranks!r}"
+    assert str(caught.value) == f"the number of ranks must be a positive integer, got {said(ranks)}"
+    assert "'" not in str(caught.value)
 
 
 def test_check_ranks_refuses_one_past_the_limit(monkeypatch):

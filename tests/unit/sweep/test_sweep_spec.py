@@ -116,8 +116,8 @@ def test_dispatch_is_longest_expected_first():
 
 # ------------------------------------------------------------------ refusals, with lines
 @pytest.mark.parametrize("text, line, words", [
-    ('deck = "bulk_feeder"\nreplicate = 2\n', 2, "unknown key 'replicate'"),
-    ('deck = "bulk_feeder"\n[grid]\namp_n = [1e-5, 2e-5]\n[grids]\nx = [1]\n', 4, "unknown key 'grids'"),
+    ('deck = "bulk_feeder"\nreplicate = 2\n', 2, "unknown key replicate"),
+    ('deck = "bulk_feeder"\n[grid]\namp_n = [1e-5, 2e-5]\n[grids]\nx = [1]\n', 4, "unknown key grids"),
     ('deck = "bulk_feeder"\n[fixed]\nt_end = [1, 2]\n', 3, "one number or string"),
     ('deck = "bulk_feeder"\n[fixed]\nt_end = 1\n[grid]\n\nt_end = [1, 2]\n', 6, "set twice"),
     ('deck = "bulk_feeder"\n[grid]\namp_n = []\n', 3, "non-empty list"),
@@ -156,9 +156,9 @@ def test_invalid_toml_keeps_tomllibs_position_and_a_missing_deck_is_named():
 @pytest.mark.parametrize("text, line, words", [
     # an unknown parameter, with the deck's list and a close match
     ('deck = "bulk_feeder"\n[fixed]\nt_end = 0.5\n[grid]\namp_nn = [1e-5, 2e-5]\n', 5,
-     "unknown parameter 'amp_nn' for deck bulk_feeder (did you mean 'amp_n'?)"),
+     "unknown parameter amp_nn for deck bulk_feeder (did you mean amp_n?)"),
     ('deck = "bulk_feeder"\n[[point]]\nmu = 0.3\n[[point]]\nmu = 0.4\nbogus = 1\n', 6,
-     "unknown parameter 'bogus'"),
+     "unknown parameter bogus"),
     ('deck = "bulk_feeder"\n[fixed]\ndeck_dir = "x"\n', 3, "set by vibrofeed itself"),
     # a value the deck's checks refuse, in a list spread over lines: the key's line
     ('deck = "bulk_feeder"\n[grid]\nphase = [0, 90]\namp_n = [\n  5e-5,\n  0.5,\n]\n', 4,
@@ -169,7 +169,7 @@ def test_invalid_toml_keeps_tomllibs_position_and_a_missing_deck_is_named():
     ('deck = "bulk_feeder"\n[zip.a]\nfreq = [100, 200]\namp_n = [1e-4, 5e-3]\n', 4,
      "moves the surface at"),
     ('deck = "single_part"\nreplicates = 2\n[fixed]\nseed = "x"\n', 4, "seed"),
-    ('deck = "no_such_deck"\n', 1, "no deck 'no_such_deck'"),
+    ('deck = "no_such_deck"\n', 1, "no deck no_such_deck"),
 ])
 def test_parameters_are_checked_as_vibrofeed_run_checks_them_naming_the_line(text, line, words):
     message = refused(text, exc=InputError, planned=True)
@@ -537,7 +537,7 @@ def test_a_sweep_file_that_cannot_be_read_is_refused_naming_the_file_and_why(tmp
     ('deck = "bulk_feeder"\n[zip.stroke]\nfreq = [50, 100]\n\namp_t = [1e-4, 1e-4]\n', 5,
      "zip.stroke.amp_t lists a value twice"),
     ('deck = "bulk_feeder"\n[zip.stroke]\nfreq = [50, 100]\namp_t = [1e-4, true]\n', 4,
-     "zip.stroke.amp_t: True is not a number or a string"),
+     "zip.stroke.amp_t: true is not a number or a string"),
     ('deck = "bulk_feeder"\n[zip]\nstroke.freq = [50, 100]\nstroke.amp_t = [1e-4]\n', 4,
      "zip.stroke: amp_t has 1 values, the lists before it 2"),
     ('deck = "bulk_feeder"\nzip.stroke.freq = [50, 50]\n', 2, "zip.stroke.freq lists a value twice"),
@@ -551,7 +551,7 @@ def test_a_sweep_file_that_cannot_be_read_is_refused_naming_the_file_and_why(tmp
     ('deck = "bulk_feeder"\n[grid]\nphase = [0, 90]\nx.y = [1]\n', 4, "x must be a non-empty list of values"),
     ('deck = "bulk_feeder"\n[[point]]\nmu = 0.3\n[[point]]\nphase = 0\nx.y = 1\n', 6,
      "[[point]] x must be one number or string"),
-    ('deck = "bulk_feeder"\n\nfoo.bar = 1\n', 3, "unknown key 'foo'"),
+    ('deck = "bulk_feeder"\n\nfoo.bar = 1\n', 3, "unknown key foo"),
     # inline tables: no line of their own keys, so the line of the key holding the table
     ('deck = "bulk_feeder"\n[zip]\n\ns = { freq = [50, 50] }\n', 4, "zip.s.freq lists a value twice"),
     ('deck = "bulk_feeder"\n\npoint = [{ mu = 0.3 }, { mu = [1, 2] }]\n', 3,
@@ -880,10 +880,10 @@ def test_a_name_the_deck_lacks_is_refused_before_any_job_is_checked():
     message = refused('deck = "bulk_feeder"\n[fixed]\nt_end = 0.5\n[grid]\namp_nn = [1e-5, 2e-5]\n',
                       ParameterError, planned=True)
     # not as a job's error (no "job 0 (...)", no count of invalid jobs): the name, the deck's names
-    assert message == ("s.toml:5: unknown parameter 'amp_nn' for deck bulk_feeder (did you mean 'amp_n'?); "
+    assert message == ("s.toml:5: unknown parameter amp_nn for deck bulk_feeder (did you mean amp_n?); "
                        f"valid parameters: {', '.join(deck.tunables)}")
     message = refused('deck = "bulk_feeder"\n[fixed]\ndeck_dir = "x"\n', ParameterError, planned=True)
-    assert message == "s.toml:3: parameter 'deck_dir' is set by vibrofeed itself, not by a sweep"
+    assert message == "s.toml:3: parameter deck_dir is set by vibrofeed itself, not by a sweep"
 
 
 def test_a_refused_job_names_the_line_of_the_parameter_its_error_is_about():
