@@ -52,7 +52,7 @@ import math
 import numpy as np
 from scipy.interpolate import CubicHermiteSpline, PPoly
 
-from ..errors import InputError
+from ..errors import InputError, said
 from ..models.constants import G
 from ..rotations import quaternion_matrices
 from .base import AnalysisBase
@@ -138,7 +138,7 @@ class Flights(AnalysisBase):
     def __init__(self, result, part_id: int | None = None, contact_tolerance: float | None = None):
         if contact_tolerance is not None and not (
                 math.isfinite(contact_tolerance) and contact_tolerance >= 0):
-            raise InputError(f"contact_tolerance must be a gap of 0 m or more, got {contact_tolerance!r}")
+            raise InputError(f"contact_tolerance must be a gap of 0 m or more, got {said(contact_tolerance)}")
         super().__init__(result)
         self.part_id = part_id
         self.contact_tolerance = contact_tolerance

@@ -81,7 +81,7 @@ class Case:
         try:
             return self.tolerance[quantity]
         except KeyError:
-            raise CaseError(f"case {self.name}: no tolerance for {quantity!r} in [tolerance]") from None
+            raise CaseError(f"case {self.name}: no tolerance for {quantity} in [tolerance]") from None
 
 
 TOLERANCE_KINDS = ("abs", "rel", "sigma")
@@ -109,7 +109,7 @@ def load(path: str | Path) -> Case:
     name = path.stem
     for key in ("title", "kind", "deck"):
         if key not in data:
-            raise CaseError(f"case {name}: missing {key!r}")
+            raise CaseError(f"case {name}: missing {key}")
     sweep = data.get("sweep", {})
     for key, values in sweep.items():
         if not isinstance(values, list) or not values:
@@ -135,5 +135,5 @@ def find(name: str) -> Case:
         return load(path)
     candidate = CASES_DIR / f"{name}.toml"
     if not candidate.is_file():
-        raise CaseError(f"no validation case {name!r}; cases: {', '.join(available())}")
+        raise CaseError(f"no validation case {name}; cases: {', '.join(available())}")
     return load(candidate)

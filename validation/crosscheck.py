@@ -47,7 +47,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import CaseError
+from ..errors import CaseError, said
 from ..feeders.feeder import Feeder
 from ..models import deck as dm
 from ..models.constants import G
@@ -65,7 +65,7 @@ class CrossCheck:
     def __init__(self, case: Case, out_dir, ranks: int = 1, jobs: int = 1, reuse: bool = False,
                  on_run: Callable[[str, str], None] | None = None):
         if case.kind not in KINDS:
-            raise CaseError(f"case {case.name}: unknown kind {case.kind!r} ({', '.join(KINDS)})")
+            raise CaseError(f"case {case.name}: unknown kind {said(case.kind)} ({', '.join(KINDS)})")
         self.case, self.ranks, self.jobs, self.reuse = case, ranks, max(1, jobs), reuse
         self.dir = Path(out_dir) / case.name
         self.on_run = on_run or (lambda label, state: None)

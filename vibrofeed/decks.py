@@ -279,7 +279,7 @@ class Deck:
         if candidate.is_file() and len(p.parts) == 1:
             return cls(candidate)
         names = ", ".join(available()) or "none"
-        raise DeckError(f"no deck {str(spec)!r} (not a file; decks available by name: {names})")
+        raise DeckError(f"no deck {spec} (not a file; decks available by name: {names})")
 
     @classmethod
     def from_description(cls, path: str | os.PathLike, folder: Path | None = None) -> Deck:

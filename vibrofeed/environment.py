@@ -8,17 +8,19 @@ value: ignored, it would leave the user believing it in effect. Set to nothing
 one of them before any command (:func:`check`), so a slip stops the command at once, not
 a sweep's jobs one by one; the library reads them through the same functions.
 
-===========================  ==============================================================
-``VIBROFEED_DEBUG``          ``1`` (also ``true``, ``yes``, ``on``): a user error keeps its
-                             traceback; ``0`` (``false``, ``no``, ``off``): it does not
-``VIBROFEED_MAX_RANKS``      the most MPI ranks a run may ask for here: a whole number >= 1
-``VIBROFEED_STALL_SECONDS``  seconds of silence after which a worker counts as hung: > 0
-``VIBROFEED_ABORT_SHIM``     the abort shim (a shared library): a file that exists
-``VIBROFEED_DECKS``          the folder of the decks run by name: a folder that exists
-``VIBROFEED_LIGGGHTS_LIB``   LIGGGHTS' shared library: a library name, or a path (with a
-                             ``/``) to a file that exists
-``VIBROFEED_TRIALS_DIR``     the measured trials' folder: a folder that exists
-===========================  ==============================================================
+============================  ==============================================================
+``VIBROFEED_DEBUG``           ``1`` (also ``true``, ``yes``, ``on``): a user error keeps its
+                              traceback; ``0`` (``false``, ``no``, ``off``): it does not
+``VIBROFEED_MAX_RANKS``       the most MPI ranks a run may ask for here: a whole number >= 1
+``VIBROFEED_STALL_SECONDS``   seconds of silence after which a worker counts as hung: > 0
+``VIBROFEED_LONG_RUN_HOURS``  a run estimated to take longer than this says so before it
+                              starts: hours > 0 (default 1)
+``VIBROFEED_ABORT_SHIM``      the abort shim (a shared library): a file that exists
+``VIBROFEED_DECKS``           the folder of the decks run by name: a folder that exists
+``VIBROFEED_LIGGGHTS_LIB``    LIGGGHTS' shared library: a library name, or a path (with a
+                              ``/``) to a file that exists
+``VIBROFEED_TRIALS_DIR``      the measured trials' folder: a folder that exists
+============================  ==============================================================
 """
 
 from __future__ import annotations
@@ -77,6 +79,24 @@ def stall_seconds() -> float | None:
     return seconds
 
 
+def _positive(name: str, value: str, unit: str) -> float:
+    """The number > 0 of ``unit`` variable ``name`` holds as ``value``; refused otherwise."""
+    try:
+        x = float(value) if value.isascii() else math.nan
+    except ValueError:
+        x = math.nan
+    if not (math.isfinite(x) and x > 0):
+        raise _refuse(name, value, f"must be a number of {unit} > 0")
+    return x
+
+
+def long_run_hours() -> float | None:
+    """Hours of estimated run time above which a run says how long it will take
+    (``VIBROFEED_LONG_RUN_HOURS``), or None (the runner's default, 1)."""
+    value = _get("VIBROFEED_LONG_RUN_HOURS")
+    return None if value is None else _positive("VIBROFEED_LONG_RUN_HOURS", value, "hours")
+
+
 def _existing(name: str, kind: str) -> Path | None:
     value = _get(name)
     if value is None:
@@ -116,7 +136,8 @@ def liggghts_lib() -> str | None:
 
 
 READERS = {"VIBROFEED_DEBUG": debug, "VIBROFEED_MAX_RANKS": max_ranks,
-           "VIBROFEED_STALL_SECONDS": stall_seconds, "VIBROFEED_ABORT_SHIM": abort_shim,
+           "VIBROFEED_STALL_SECONDS": stall_seconds, "VIBROFEED_LONG_RUN_HOURS": long_run_hours,
+           "VIBROFEED_ABORT_SHIM": abort_shim,
            "VIBROFEED_DECKS": decks_dir, "VIBROFEED_LIGGGHTS_LIB": liggghts_lib,
            "VIBROFEED_TRIALS_DIR": trials_dir}
 

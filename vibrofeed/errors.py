@@ -121,3 +121,32 @@ class ResultError(RunError):
 
 class IncompleteResult(ResultError):
     """The run that wrote the file did not complete."""
+
+
+def said(value) -> str:
+    """``value`` as a message shows it: as the user writes it, not as Python or numpy spell
+    it. A number plainly (a numpy scalar as its number: ``0.05``, not ``np.float64(0.05)``;
+    a float in its shortest exact form), text without quotes, ``true``/``false``, and lists
+    and tables as TOML writes them (``[0.4, "a"]``, ``{ low = 1 }``): the sweep and study
+    files' own words."""
+    return _said(value, inner=False)
+
+
+def _said(value, inner: bool) -> str:
+    if getattr(value, "shape", None) == () and hasattr(value, "item"):  # a numpy scalar
+        value = value.item()
+    elif hasattr(value, "tolist") and not isinstance(value, list | tuple):  # a numpy array
+        value = value.tolist()
+    if isinstance(value, bytes):
+        value = value.decode(errors="replace")
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float):
+        return repr(value)
+    if isinstance(value, list | tuple):
+        return "[" + ", ".join(_said(v, True) for v in value) + "]"
+    if isinstance(value, dict):
+        return "{ " + ", ".join(f"{k} = {_said(v, True)}" for k, v in value.items()) + " }"
+    if isinstance(value, str) and inner:
+        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    return str(value)

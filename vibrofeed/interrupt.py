@@ -47,16 +47,36 @@ def reason(exc: KeyboardInterrupt) -> str:
     return f"terminated by {exc.signum.name}" if isinstance(exc, Terminated) else "interrupted by the user"
 
 
+# The signal that arrived, if any: code that turns the KeyboardInterrupt into another error
+# (VTK's importer, met by Ctrl-C while render loads it, raises ImportError) does not hide it.
+_received: KeyboardInterrupt | None = None
+
+
 def _raise_terminated(signum, frame):
+    global _received
+    _received = Terminated(signum)
     raise Terminated(signum)
+
+
+def _raise_interrupt(signum, frame):
+    global _received
+    _received = KeyboardInterrupt()
+    signal.default_int_handler(signum, frame)
+
+
+def received() -> KeyboardInterrupt | None:
+    """The interrupt a signal raised in this command, if one did (:func:`install`)."""
+    return _received
 
 
 def install() -> None:
     """Turn SIGTERM and SIGHUP into :class:`Terminated` (from the main thread of a
-    command); a signal this process was started ignoring (``nohup``) stays ignored."""
-    for signum in (signal.SIGTERM, signal.SIGHUP):
+    command), and remember each of them and Ctrl-C (:func:`received`); a signal this process
+    was started ignoring (``nohup``, ``&``) stays ignored."""
+    for signum, handler in ((signal.SIGTERM, _raise_terminated), (signal.SIGHUP, _raise_terminated),
+                            (signal.SIGINT, _raise_interrupt)):
         if signal.getsignal(signum) is not signal.SIG_IGN:
-            signal.signal(signum, _raise_terminated)
+            signal.signal(signum, handler)
 
 
 _cond = threading.Condition()
@@ -94,7 +114,11 @@ def stop_all(exc: KeyboardInterrupt, timeout: float = 30.0, why: str | None = No
     most ``timeout`` s) until each has recorded how it ended."""
     global _stopping
     with _cond:
-        _stopping = exc
+        # what the interrupt was, not the exception itself: its traceback would keep every
+        # frame it passed through alive to the interpreter's end, where their objects'
+        # finalisers fail on a half torn-down interpreter ('Exception ignored in ...': 27
+        # lines after render's 'interrupted', from pyvista's plotter)
+        _stopping = Terminated(exc.signum) if isinstance(exc, Terminated) else KeyboardInterrupt()
         stoppers = list(_stoppers.values())
     for stop in stoppers:
         stop(why or reason(exc))

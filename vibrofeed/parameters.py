@@ -202,7 +202,7 @@ def parse_assignments(items) -> dict[str, str]:
         name, sep, value = item.partition("=")
         name, value = name.strip(), value.strip()
         if not sep or not name or not value:
-            raise ParameterError(f"parameter {item!r} is not of the form name=value")
+            raise ParameterError(f"parameter {item or '(nothing)'} is not of the form name=value")
         if out.get(name, value) != value:
             raise ParameterError(f"parameter {name} given twice, as -p {name}={out[name]} and "
                                  f"-p {name}={value}; give it once")
@@ -242,20 +242,21 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
     tunables = deck.tunables
     if deck.aliases:  # a feeder description's dotted names (element.3.drive.amp_n) for the deck's own
         named: dict[str, str] = {}
+        said: dict[str, str] = {}  # the deck's name -> the name it was given by
         for name, value in given.items():
             own = deck.aliases.get(name, name)
             if own in named:
-                raise ParameterError(f"parameter {own!r} given twice (as {name!r} too)")
-            named[own] = value
+                raise ParameterError(f"parameter {own} given twice, as {said[own]} and as {name}")
+            named[own], said[own] = value, name
         given = named
     for name in given:
         if name in RESERVED:
-            raise ParameterError(f"parameter {name!r} is set by vibrofeed itself, not by -p")
+            raise ParameterError(f"parameter {name} is set by vibrofeed itself, not by -p")
         if name not in tunables:
             close = difflib.get_close_matches(name, tunables, n=1)
-            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            hint = f" (did you mean {close[0]}?)" if close else ""
             raise ParameterError(
-                f"unknown parameter {name!r} for deck {deck.name}{hint}; "
+                f"unknown parameter {name} for deck {deck.name}{hint}; "
                 f"valid parameters: {', '.join(tunables)}")
     values = {name: str(given.get(name, v.default)) for name, v in tunables.items()}
     for name, names in NAMED_VALUES.items():
@@ -264,27 +265,11 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
 
     numbers = {}
     for name, value in values.items():
-        var = tunables[name]
-        if not (var.is_numeric or rule_for(name)):
+        x = checked_value(deck, name, value)
+        if x is None:
             continue
-        try:
-            x = float(value)
-        except ValueError:
-            if name in NAMED_VALUES:
-                choices = ", ".join(f"{k} ({v})" for k, v in NAMED_VALUES[name].items())
-                raise ParameterError(f"parameter {name}={value!r} must be one of {choices}") from None
-            raise ParameterError(f"parameter {name}={value!r} is not a number") from None
-        if not math.isfinite(x):
-            raise ParameterError(f"parameter {name}={value} is not finite")
         numbers[name] = x
-        rule = rule_for(name)
-        problem = rule(x) if rule else None
-        if problem:
-            unit = f" {var.unit}" if var.unit and var.unit != "-" else ""
-            slip = UNIT_SLIPS.get(name)
-            hint = f"; {slip[1]}" if slip and slip[0](x) else ""
-            raise ParameterError(f"parameter {name}={value}{unit} {problem}{hint}")
-        values[name] = engine_text(value, x, getattr(rule, "integer", False))
+        values[name] = engine_text(value, x, getattr(rule_for(name), "integer", False))
     declared = max((int(m[1]) for n in tunables if (m := re.match(r"^s(\d)_(?:length|kind)$", n))), default=1)
     if numbers.get("sections", 1) > declared:
         raise ParameterError(
@@ -304,6 +289,34 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
     for line in advice(numbers, moved) + climb_advice(numbers):
         warnings.warn(line, ParameterWarning, stacklevel=2)
     return values
+
+
+def checked_value(deck: Deck, name: str, value: str) -> float | None:
+    """The number parameter ``name`` of ``deck`` takes from the text ``value`` (a name of
+    :data:`NAMED_VALUES` as its number), checked against its own limit (:data:`RULES`);
+    None for a parameter that is no number. ParameterError naming it otherwise. The limits
+    between parameters are :func:`resolve`'s."""
+    var = deck.tunables[name]
+    if not (var.is_numeric or rule_for(name)):
+        return None
+    value = NAMED_VALUES.get(name, {}).get(value.strip().lower(), value)
+    try:
+        x = float(value)
+    except ValueError:
+        if name in NAMED_VALUES:
+            choices = ", ".join(f"{k} ({v})" for k, v in NAMED_VALUES[name].items())
+            raise ParameterError(f"parameter {name}={value} must be one of {choices}") from None
+        raise ParameterError(f"parameter {name}={value} is not a number") from None
+    if not math.isfinite(x):
+        raise ParameterError(f"parameter {name}={value} is not finite")
+    rule = rule_for(name)
+    problem = rule(x) if rule else None
+    if problem:
+        unit = f" {var.unit}" if var.unit and var.unit != "-" else ""
+        slip = UNIT_SLIPS.get(name)
+        hint = f"; {slip[1]}" if slip and slip[0](x) else ""
+        raise ParameterError(f"parameter {name}={value}{unit} {problem}{hint}")
+    return x
 
 
 def _with_slips(message: str, p: Mapping[str, float]) -> str:
@@ -399,6 +412,48 @@ def _check_insertion(p: Mapping[str, float]) -> None:
             "track or use smaller parts")
 
 
+# The inlet's block (decks/bulk_feeder.liggghts, region inlet), in part sizes: from r_ext +
+# 0.05 to r_ext + 3 along the track, 0.05 in from each wall, 0.1 to 3 above the floor's top.
+INLET_LENGTH, INLET_HEIGHT, INLET_MARGIN = 2.95, 2.9, 0.05
+GRAVITY = 9.81  # m/s^2, as the decks take it
+
+
+def inlet_capacity(p: Mapping[str, float]) -> tuple[float, float]:
+    """(the most parts the bulk feeder's inlet block holds at once, at the packing of a
+    settled fill (FILL_PACKING); the time [s] a part dropped at rest from its top takes to
+    fall out of it). A part is in the block a fall time at most, so the inlet drops at most
+    capacity / time parts a second (:func:`_check_inlet`)."""
+    size, shape = p["part_size"], int(p.get("shape", 0))
+    width = p["track_width"] - 2 * INLET_MARGIN * size
+    block = INLET_LENGTH * size * max(width, 0.0) * INLET_HEIGHT * size
+    parts = FILL_PACKING * block / part_volume(shape, size, p.get("part_thickness", size))
+    return parts, math.sqrt(2 * INLET_HEIGHT * size / GRAVITY)
+
+
+def _check_inlet(p: Mapping[str, float]) -> None:
+    """An inlet asked for more than its block can ever hold: LIGGGHTS tries each step to
+    insert what does not fit (a run a thousand times slower, or 'Unable to calculate region
+    volume'), and what the run measures is the block's limit, not the rate asked for."""
+    rate = p.get("inlet_rate", 0.0)
+    if "bowl_diameter" in p or rate <= 0:
+        return
+    capacity, fall = inlet_capacity(p)
+    size = f"part_size={p['part_size']:g} m"
+    batch = p.get("inlet_batch", 1.0)
+    if batch > capacity:
+        raise ParameterError(
+            f"inlet_batch={batch:g} parts do not fit in the inlet's block above the track's start: "
+            f"it holds at most {capacity:.0f} parts of {size} on track_width={p['track_width']:g} m; "
+            f"lower inlet_batch to {max(math.floor(capacity), 1):d} or less")
+    most = capacity / fall
+    if rate > most:
+        raise ParameterError(
+            f"inlet_rate={rate:g} /s is more than the inlet can drop: its block above the track's "
+            f"start holds at most {capacity:.0f} parts of {size} on track_width="
+            f"{p['track_width']:g} m, and a part falls through it in {fall * 1e3:.2g} ms, so at most "
+            f"{most:.3g} parts/s; lower inlet_rate, or pre-fill the track (n_parts)")
+
+
 # Random loose packing of a settled pre-fill, to tell whether it stays between the walls.
 FILL_PACKING = 0.6
 
@@ -449,6 +504,7 @@ def _check_bulk_feeder(p: Mapping[str, float]) -> None:
         raise ParameterError(f"track_width={p['track_width']:g} m is narrower than a part "
                              f"({widest:g} m across)")
     _check_insertion(p)
+    _check_inlet(p)
     gate = p.get("gate_width", 0.0)
     length = p.get("track_length", math.inf)
     if gate > 0:
@@ -664,3 +720,33 @@ def _check_contact_step(p: Mapping[str, float]) -> None:
                   if "dt_unchecked" in p else "")  # (a deck of one's own may not declare it)
         raise ParameterError(f"{problem}: contacts would last a few steps and parts gain energy; "
                              f"lower dt or set dt=0 (automatic){anyway}")
+
+
+# The engine's speed the run time is estimated at [steps/s]: the demo's run (README, "The
+# demo": 75 parts of the feeder line on 1 rank, 31k steps/s on 1 of 2 Xeon cores with other
+# work running). A lone part runs faster, a bed of hundreds of parts slower: the estimate
+# tells hours from days, not minutes from minutes.
+STEPS_PER_SECOND = 31_000
+
+
+def run_steps(p: Mapping[str, float]) -> tuple[float, float] | None:
+    """(the steps of a run, its timestep [s]) as the decks derive them: ``t_end`` (and a
+    given ``t_settle``) over the given ``dt``, or over the automatic one (decks/*.liggghts,
+    "derived": ``output_dt`` split into whole steps no longer than 1/50 of the Hertz time at
+    the fastest section's surface speed, nor than the surface forces' step limit); None
+    without ``t_end`` or a contact vocabulary."""
+    if "t_end" not in p:
+        return None
+    dt = p.get("dt", 0.0)
+    if dt <= 0:
+        drives = [(p.get("freq", 0.0), p.get("amp_t", 0.0), p.get("amp_n", 0.0))]
+        drives += [(p.get(f"s{k}_freq", 0.0), p.get(f"s{k}_amp_t", 0.0), p.get(f"s{k}_amp_n", 0.0))
+                   for k in range(2, int(p.get("sections", 1)) + 1)]
+        freq, amp_t, amp_n = max(drives, key=lambda d: d[0] * math.hypot(d[1], d[2]))
+        times = contact_times({**p, "freq": freq, "amp_t": amp_t, "amp_n": amp_n})
+        if times is None:
+            return None
+        limit = min(times["hertz"] / 50, surface_forces_step_limit(p))
+        out = p.get("output_dt", limit)
+        dt = out / math.ceil(out / limit)
+    return (p["t_end"] + p.get("t_settle", 0.0)) / dt, dt

@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import minimize_scalar
 
+from ...errors import said
 from ...models.constants import G
 from ...models.surface import PolynomialSurface
 from ...models.vertical import Contact, simulate
@@ -69,7 +70,7 @@ def measured_normal_force_mg(trial) -> float:
     """Measured normal force of a trial [m g], looked up by its number."""
     number = trial.trial.number if isinstance(trial, PreparedTrial) else trial.number
     if number not in MEASURED_NORMAL_FORCE_MG:
-        raise KeyError(f"no measured normal force for trial {number!r}")
+        raise KeyError(f"no measured normal force for trial {said(number)}")
     return MEASURED_NORMAL_FORCE_MG[number]
 
 

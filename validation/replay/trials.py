@@ -81,7 +81,7 @@ from scipy.interpolate import BSpline, PPoly
 from scipy.linalg import cho_solve_banded, cholesky_banded
 from scipy.optimize import brentq
 
-from ...errors import TrialFileError
+from ...errors import TrialFileError, said
 from ...models.surface import PolynomialSurface
 
 __all__ = [
@@ -226,14 +226,14 @@ def read_trial(path) -> Trial:
     if np.any(steps <= 0):
         k = int(np.flatnonzero(steps <= 0)[0])
         raise TrialFileError(
-            path, f"time is not increasing at data row {k + 2} ({t[k]!r} -> {t[k + 1]!r} s)")
+            path, f"time is not increasing at data row {k + 2} ({said(t[k])} -> {said(t[k + 1])} s)")
     dt = float(np.median(steps))
     jitter = np.max(np.abs(steps - dt))
     if jitter > _UNIFORM_RTOL * dt:
         k = int(np.argmax(np.abs(steps - dt)))
         raise TrialFileError(
-            path, f"time is not uniformly sampled: step {steps[k]!r} s at data row {k + 2} "
-                  f"vs median {dt!r} s")
+            path, f"time is not uniformly sampled: step {said(steps[k])} s at data row {k + 2} "
+                  f"vs median {said(dt)} s")
 
     def track(m):
         return Track(*(col[q + m] * _SCALE for q in _QUANTITIES))

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ...errors import said
 from ...models.roots import slip_end, stick_decision, stick_exit
 from ...models.vertical import Contact
 
@@ -129,7 +130,7 @@ def simulate_speed_dependent(surface, contact: Contact, mu_k_fast: float, v_c: f
                     state = ("slow", s) if falls_slow else ("ride", s)
         repeats = repeats + 1 if t1 <= t else 0
         if repeats > 6:
-            raise RuntimeError(f"speed-dependent friction: chattering at t = {t!r} s")
+            raise RuntimeError(f"speed-dependent friction: chattering at t = {said(t)} s")
         t, i = t1, j
     t_eval = np.asarray(t_eval if t_eval is not None else [t_end], dtype=float)
     starts = np.array([g.t0 for g in segments])

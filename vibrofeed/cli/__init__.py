@@ -168,7 +168,12 @@ def main(argv: list[str] | None = None) -> int:
         return fail(str(exc), exc.exit_code)
     interrupt.install()  # SIGTERM ends a command as Ctrl-C does
     try:
-        return args.func(args)
+        try:
+            return args.func(args)
+        except Exception:  # noqa: BLE001 (an interrupt that a library turned into its own error)
+            if interrupt.received() is None:
+                raise
+            raise interrupt.received() from None
     except KeyboardInterrupt as exc:
         try:  # runs waited for in other threads (sweeps, validation) record their end too
             interrupt.stop_all(exc)

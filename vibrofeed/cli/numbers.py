@@ -18,13 +18,13 @@ def real(above: float | None = None, at_least: float | None = None):
         try:
             x = float(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"must be a number, got {text!r}") from None
+            raise argparse.ArgumentTypeError(f"must be a number, got {text or 'nothing'}") from None
         if not math.isfinite(x):
-            raise argparse.ArgumentTypeError(f"must be a finite number, got {text!r}")
+            raise argparse.ArgumentTypeError(f"must be a finite number, got {text or 'nothing'}")
         if above is not None and not x > above:
-            raise argparse.ArgumentTypeError(f"must be > {above:g}, got {text}")
+            raise argparse.ArgumentTypeError(f"must be > {above:g}, got {text or 'nothing'}")
         if at_least is not None and not x >= at_least:
-            raise argparse.ArgumentTypeError(f"must be >= {at_least:g}, got {text}")
+            raise argparse.ArgumentTypeError(f"must be >= {at_least:g}, got {text or 'nothing'}")
         return x
     return parse
 
@@ -35,7 +35,7 @@ def whole(at_least: int | None = None):
         try:
             n = int(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"must be a whole number, got {text!r}") from None
+            raise argparse.ArgumentTypeError(f"must be a whole number, got {text or 'nothing'}") from None
         if at_least is not None and n < at_least:
             raise argparse.ArgumentTypeError(f"must be at least {at_least}, got {n}")
         return n

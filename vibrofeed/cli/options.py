@@ -16,7 +16,8 @@ def count(what: str) -> Callable[[str], int]:
         try:
             n = int(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"must be a whole number of {what}, got {text!r}") from None
+            raise argparse.ArgumentTypeError(
+                f"must be a whole number of {what}, got {text or 'nothing'}") from None
         if n < 1:
             raise argparse.ArgumentTypeError(f"must be at least 1, got {n}")
         return n

@@ -20,7 +20,7 @@ def size(text: str) -> tuple[int, int]:
     try:
         w, h = (int(v) for v in text.lower().split("x"))
     except ValueError:
-        raise argparse.ArgumentTypeError(f"must be WIDTHxHEIGHT in pixels, got {text!r}") from None
+        raise argparse.ArgumentTypeError(f"must be WIDTHxHEIGHT in pixels, got {text or 'nothing'}") from None
     return w, h
 
 

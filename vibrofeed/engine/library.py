@@ -64,7 +64,7 @@ def _load(path: str | None = None) -> ctypes.CDLL:
         lib = ctypes.CDLL(name, mode=ctypes.RTLD_GLOBAL)
     except OSError as exc:
         raise LibraryNotFound(
-            f"cannot load the LIGGGHTS library {name!r} ({exc}); "
+            f"cannot load the LIGGGHTS library {name} ({exc}); "
             "install it with `apt-get install libliggghts-dev` or set VIBROFEED_LIGGGHTS_LIB"
         ) from exc
 

@@ -35,7 +35,7 @@ from pathlib import Path
 from .. import __version__, environment, interrupt
 from ..decks import Deck
 from ..disk import mount_point
-from ..errors import EngineError, OutputError, RunError, UsageError
+from ..errors import EngineError, OutputError, RunError, UsageError, said
 from ..parameters import resolve
 from ..results import layout as L
 from . import scratch
@@ -122,12 +122,72 @@ def max_ranks() -> int:
 def check_ranks(ranks) -> int:
     """``ranks`` if it is a number of MPI ranks this machine can start, else UsageError."""
     if isinstance(ranks, bool) or not isinstance(ranks, int) or ranks < 1:
-        raise UsageError(f"the number of ranks must be a positive integer, got {ranks!r}")
+        raise UsageError(f"the number of ranks must be a positive integer, got {said(ranks)}")
     limit = max_ranks()
     if ranks > limit:
         raise UsageError(f"{ranks} ranks is more than this machine can run: at most {limit} "
                          f"({RANKS_PER_CORE} per core; set VIBROFEED_MAX_RANKS to change the limit)")
     return ranks
+
+
+# A run estimated to take longer than this [h] says so before it starts, unless
+# VIBROFEED_LONG_RUN_HOURS sets another threshold.
+LONG_RUN_HOURS = 1.0
+
+
+class LongRunWarning(UserWarning):
+    """A run estimated to take longer than ``VIBROFEED_LONG_RUN_HOURS`` (:func:`warn_long_run`)."""
+
+
+def long_run(values: Mapping[str, str]) -> str | None:
+    """How long a run of resolved ``values`` will take, when more than
+    ``VIBROFEED_LONG_RUN_HOURS`` (:func:`vibrofeed.parameters.run_steps` at
+    :data:`~vibrofeed.parameters.STEPS_PER_SECOND`); None when less, or not estimated."""
+    import math
+
+    from ..parameters import STEPS_PER_SECOND, run_steps
+    from ..values import duration
+
+    numbers = {}
+    for name, text in values.items():
+        try:
+            numbers[name] = float(text)
+        except (TypeError, ValueError):
+            continue
+    estimate = run_steps(numbers)
+    hours = environment.long_run_hours() or LONG_RUN_HOURS
+    if estimate is None or not math.isfinite(estimate[0]):
+        return None
+    steps, dt = estimate
+    seconds = steps / STEPS_PER_SECOND
+    if seconds <= hours * 3600:
+        return None
+    span = f"{seconds / 86400:.3g} days" if seconds >= 2 * 86400 else duration(seconds)
+    given = "" if float(values.get("dt", 0) or 0) > 0 else " (automatic)"
+    return (f"this run will take about {span}: {steps:.3g} steps of dt={dt:.3g} s{given} at "
+            f"{STEPS_PER_SECOND / 1e3:.0f}k steps/s (the demo's speed on one core; more parts run "
+            f"slower); VIBROFEED_LONG_RUN_HOURS={hours:g} sets when this is said")
+
+
+def warn_long_run(values: Mapping[str, str]) -> None:
+    """Say before a run starts how long it will take, when that is long (:func:`long_run`)."""
+    import warnings
+
+    text = long_run(values)
+    if text:
+        warnings.warn(text, LongRunWarning, stacklevel=3)
+
+
+def check_at_once(workers: int, ranks: int) -> None:
+    """``-j workers`` runs of ``ranks`` MPI ranks each, at once: UsageError when that is more
+    ranks than this machine can run (:func:`max_ranks`), as one run of that many is."""
+    limit = max_ranks()
+    if workers > 1 and workers * ranks > limit:
+        each = f" of ranks_per_run = {ranks} ranks each" if ranks > 1 else ""
+        raise UsageError(f"-j {workers}: {workers} runs at once{each} is {workers * ranks} ranks, more "
+                         f"than this machine can run: at most {limit} ({RANKS_PER_CORE} per core; set "
+                         f"VIBROFEED_MAX_RANKS to change the limit); give -j {max(limit // ranks, 1)} "
+                         "or less")
 
 
 def run_id(deck: Deck, values: Mapping[str, str], before_run=None, schedule=None,
@@ -160,7 +220,7 @@ def check_target_error(target, deck: Deck) -> float | None:
     try:
         value = float(target)
     except (TypeError, ValueError):
-        raise UsageError(f"target error must be a number, got {target!r}") from None
+        raise UsageError(f"target error must be a number, got {said(target)}") from None
     if not 0 < value < 1:  # NaN too
         raise UsageError(f"target error {target} is outside (0, 1): it is the feed rate's "
                          "relative error (0.03: 3 %)")
@@ -364,6 +424,7 @@ def run_deck(deck: Deck, params: Mapping[str, str], output, *, ranks: int = 1,
         kept = _reusable(out, rid, deck, values, ranks)
         if kept is not None:
             return kept
+    warn_long_run(values)
     # An earlier OUT.h5 stays until this run completes and replaces it (os.replace in finish):
     # a rerun that fails or is killed must not take a finished result with it.
     part.unlink(missing_ok=True)

@@ -411,7 +411,7 @@ class PartOnSurface:
             same_time = same_time + 1 if self.t == last_t else 0
             last_t = self.t
             if same_time > 20 or self.n_events > budget:
-                raise RuntimeError(f"event cascade at t={self.t!r} (mode {self.mode})")
+                raise RuntimeError(f"event cascade at t={float(self.t)} (mode {self.mode})")
             if stop_on and any(ev.kind in stop_on for ev in self.events[n0:]):
                 break
         return self

@@ -83,15 +83,15 @@ class Contact:
                       mu_k=self.mu_k, g=self.g)
         for name, value in values.items():
             if not math.isfinite(value):
-                raise ValueError(f"{name} must be finite, got {value!r}")
+                raise ValueError(f"{name} must be finite, got {float(value)}")
         if self.mass <= 0:
-            raise ValueError(f"mass must be > 0, got {self.mass!r}")
+            raise ValueError(f"mass must be > 0, got {float(self.mass)}")
         if self.normal_force < 0 or self.mu_s < 0 or self.mu_k < 0 or self.g < 0:
             raise ValueError("normal_force, mu_s, mu_k and g must be >= 0")
         if self.mu_k > self.mu_s:
             # With mu_k > mu_s a part released at zero relative velocity would
             # slip with more friction than could hold it: no consistent Coulomb law.
-            raise ValueError(f"need mu_k <= mu_s, got mu_k={self.mu_k!r} > mu_s={self.mu_s!r}")
+            raise ValueError(f"need mu_k <= mu_s, got mu_k={float(self.mu_k)} > mu_s={float(self.mu_s)}")
 
     @property
     def stick_upper(self) -> float:
@@ -296,7 +296,7 @@ def simulate(surface, contact: Contact, t_end: float, t_start: float = 0.0,
         # Guard against chattering: many events at the same instant.
         zero_length = zero_length + 1 if t1 <= t else 0
         if zero_length > 4:
-            raise RuntimeError(f"stick/slip chattering at t = {t!r} s")
+            raise RuntimeError(f"stick/slip chattering at t = {float(t)} s")
         t, i = t1, j
     if t_eval is None:
         grid = np.linspace(t_start, t_end, 1001)

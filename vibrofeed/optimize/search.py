@@ -47,6 +47,7 @@ from pathlib import Path
 import numpy as np
 
 from ..engine import batch
+from ..engine.runner import check_at_once
 from ..errors import ParameterError, RunError, UsageError
 from ..parameters import resolve
 from ..sweep import folder as F
@@ -436,6 +437,7 @@ def optimize(spec_path, output=None, workers: int = 1, budget: int | None = None
         if unknown:
             raise ParameterError(f"{spec.where(*key)}: unknown parameter(s) {', '.join(unknown)} for "
                                  f"deck {deck.name} (vibrofeed params {deck.name} lists them)")
+    check_values(spec, deck)
     if spec.target_error is not None:
         from ..engine.runner import check_target_error
 
@@ -451,6 +453,8 @@ def optimize(spec_path, output=None, workers: int = 1, budget: int | None = None
     _check_folder(folder, spec, resume)
     if comm is not None and workers > 1:
         raise UsageError("-j: under mpirun the groups of ranks_per_run ranks are the workers; drop -j")
+    if comm is None:
+        check_at_once(workers, spec.ranks_per_run)
     groups = 1 if comm is None else comm.Get_size() // spec.ranks_per_run
     if comm is not None and groups < 1:
         raise UsageError(f"ranks_per_run = {spec.ranks_per_run} needs at least that many ranks; "
@@ -468,6 +472,43 @@ def optimize(spec_path, output=None, workers: int = 1, budget: int | None = None
         raise
     finally:
         os.close(lock)
+
+
+def check_values(spec: StudySpec, deck) -> None:
+    """What the study's file asks that no run could give, before any run: a value of
+    ``[fixed]``, a variable's choice or a ``[robustness]`` value that ``vibrofeed run``
+    refuses on its own (``mu = -1``: the robustness runs come after the search and the
+    confirmation), and an objective or target the deck's runs never measure (a deck without
+    an outlet measures ``mean_velocity`` only; spheres no orientation)."""
+    from ..parameters import checked_value
+    from ..results import layout as L
+
+    given = [(("fixed", name), name, value) for name, value in spec.fixed.items()]
+    given += [(("variables", v.name), v.name, c) for v in spec.variables for c in v.choices]
+    given += [(("robustness", name), name, value) for name, values in spec.robustness.items()
+              for value in values]
+    for key, name, value in given:
+        try:
+            checked_value(deck, name, value_text(value))
+        except ParameterError as exc:
+            what = {"fixed": "", "variables": f"variable {name}: a choice: ",
+                    "robustness": f"robustness {name}: "}[key[0]]
+            raise ParameterError(f"{spec.where(*key)}: {what}{exc}") from None
+    outlet = any(name in deck.formulas for name in L.BULK_CONTRACT)
+    shapes = ({value_text(c) for v in spec.variables if v.name == "shape" for c in v.choices}
+              or {value_text(spec.fixed.get("shape", deck.tunables["shape"].default
+                                            if "shape" in deck.tunables else 0))})
+    spheres = {str(int(checked_value(deck, "shape", s))) for s in shapes} == {"0"} \
+        if "shape" in deck.tunables else True
+    named = [(("objective", "maximize"), m) for m in spec.maximize]
+    named += [(("objective", "at_least"), m) for m in spec.at_least]
+    for key, metric in named:
+        if not outlet and metric != "mean_velocity":
+            raise UsageError(f"{spec.where(*key)}: {metric}: deck {deck.name} has no outlet (it is "
+                             "not a bulk feeder), so its runs measure mean_velocity only")
+        if outlet and metric in ("orientation_yield", "oriented_rate") and spheres:
+            raise UsageError(f"{spec.where(*key)}: {metric}: the study's parts are spheres, which "
+                             "have no orientation; it is measured on chips and discs (shape = 1 or 2)")
 
 
 def _forget(folder: Path, made: bool) -> None:

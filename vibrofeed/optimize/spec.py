@@ -53,6 +53,7 @@ import operator
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ..errors import said
 from ..sweep.spec import KeyReader, fingerprint, parse_toml, read_file, scalar, target_error
 
 TOP_KEYS = ("deck", "ranks_per_run", "seed", "description", "target_error", "fixed", "variables",
@@ -60,6 +61,11 @@ TOP_KEYS = ("deck", "ranks_per_run", "seed", "description", "target_error", "fix
 CONSTRAINT_KEYS = ("max_acceleration", "max_displacement", "frequency", "min_model_speed",
                    "no_hopping", "require")
 BUDGET = {"runs": 20, "seeds": 6, "screen": 256, "confirm": 3, "replicates": 3}
+# The most settings the model screen takes: each is checked as vibrofeed run checks it and
+# screened on the models, about 90 ms with the single-part model
+# (studies/line_singulated_rate.toml on a 2-core Xeon, 2026-12-03): 10 000 take 15 minutes
+# before the first DEM run (screen = 1000000000 ended in a memory traceback).
+MAX_SCREEN = 10_000
 # Metrics an objective may name: the sweep's metrics of a bulk result, and two products.
 METRICS = ("parts_per_s", "mass_per_s", "mean_velocity", "singulated_fraction", "orientation_yield",
            "singulated_rate", "oriented_rate", "cv_interarrival", "doubles_rate")
@@ -171,7 +177,7 @@ def parse(text: str, source: Path | str = "study.toml") -> StudySpec:
     r.ONCE = "a parameter is fixed or a design variable, not both"
     for key in data:
         if key not in TOP_KEYS:
-            r.fail((key,), f"unknown key {key!r}; a study file has {', '.join(TOP_KEYS)}")
+            r.fail((key,), f"unknown key {key}; a study file has {', '.join(TOP_KEYS)}")
     for key in ("fixed", "variables", "constraints", "objective", "budget", "robustness"):
         if key in data and not isinstance(data[key], dict):
             r.fail((key,), f"{key} must be a table [{key}]")
@@ -180,11 +186,11 @@ def parse(text: str, source: Path | str = "study.toml") -> StudySpec:
     ranks, seed = data.get("ranks_per_run", 1), data.get("seed", 5489)
     for key, value, low in (("ranks_per_run", ranks, 1), ("seed", seed, 0)):
         if isinstance(value, bool) or not isinstance(value, int) or value < low:
-            r.fail((key,), f"{key} must be a whole number >= {low}, got {value!r}")
+            r.fail((key,), f"{key} must be a whole number >= {low}, got {said(value)}")
     fixed = {}
     for name, value in data.get("fixed", {}).items():
         if not scalar(value):
-            r.fail(("fixed", name), f"[fixed] {name} must be one number or string, got {value!r}")
+            r.fail(("fixed", name), f"[fixed] {name} must be one number or string, got {said(value)}")
         r.claim(name, ("fixed", name))
         fixed[name] = value
     variables = [_variable(name, spec, r) for name, spec in data.get("variables", {}).items()]
@@ -226,17 +232,17 @@ def _variable(name: str, spec, r: KeyReader) -> Variable:
         return Variable(name, "choice", choices=list(choices))
     kind = spec.get("type", "float")
     if kind not in ("float", "int"):
-        r.fail(key, f"variable {name}: type must be \"float\" or \"int\", got {kind!r}")
+        r.fail(key, f"variable {name}: type must be \"float\" or \"int\", got {said(kind)}")
     low, high = spec.get("low"), spec.get("high")
     if not (_number(low) and _number(high)) or not low < high:
-        r.fail(key, f"variable {name}: needs numbers low < high, got low={low!r}, high={high!r}")
+        r.fail(key, f"variable {name}: needs numbers low < high, got low={said(low)}, high={said(high)}")
     if kind == "int" and not (float(low).is_integer() and float(high).is_integer()):
         r.fail(key, f"variable {name}: an int variable needs whole bounds")
     log = spec.get("log", False)
     if not isinstance(log, bool):
         r.fail(key, f"variable {name}: log must be true or false")
     if log and low <= 0:
-        r.fail(key, f"variable {name}: a log scale needs low > 0, got {low!r}")
+        r.fail(key, f"variable {name}: a log scale needs low > 0, got {said(low)}")
     return Variable(name, kind, float(low), float(high), log)
 
 
@@ -245,20 +251,20 @@ def _constraints(table: dict, r: KeyReader) -> tuple[dict, list[Inequality]]:
     for key, value in table.items():
         where = ("constraints", key)
         if key not in CONSTRAINT_KEYS:
-            r.fail(where, f"unknown constraint {key!r}; known: {', '.join(CONSTRAINT_KEYS)}")
+            r.fail(where, f"unknown constraint {key}; known: {', '.join(CONSTRAINT_KEYS)}")
         if key in ("max_acceleration", "max_displacement", "min_model_speed"):
             if not _number(value) or value <= 0:
-                r.fail(where, f"{key} must be a number > 0, got {value!r}")
+                r.fail(where, f"{key} must be a number > 0, got {said(value)}")
         elif key == "frequency":
             if not (isinstance(value, list) and len(value) == 2 and all(_number(v) for v in value)
                     and 0 < value[0] < value[1]):
-                r.fail(where, f"frequency must be [low, high] in Hz with 0 < low < high, got {value!r}")
+                r.fail(where, f"frequency must be [low, high] in Hz with 0 < low < high, got {said(value)}")
         elif key == "no_hopping":
             if not (isinstance(value, list) and all(isinstance(v, int) and not isinstance(v, bool)
                                                     and v >= 1 for v in value)):
-                r.fail(where, f"no_hopping must list section numbers (1, 2), got {value!r}")
+                r.fail(where, f"no_hopping must list section numbers (1, 2), got {said(value)}")
         elif key == "require" and not (isinstance(value, list) and all(isinstance(v, str) for v in value)):
-            r.fail(where, f"require must list inequalities as strings, got {value!r}")
+            r.fail(where, f"require must list inequalities as strings, got {said(value)}")
         out[key] = value
     inequalities = [_inequality(text, r) for text in out.get("require", [])]
     return out, inequalities
@@ -269,19 +275,19 @@ def _inequality(text: str, r: KeyReader) -> Inequality:
     try:
         tree = ast.parse(text, mode="eval")
     except SyntaxError:
-        r.fail(where, f"require: {text!r} is not an inequality such as \"s2_amp_t >= 2 * amp_t\"")
+        r.fail(where, f"require: {said([text])[1:-1]} is not an inequality such as \"s2_amp_t >= 2 * amp_t\"")
     body = tree.body
     if not (isinstance(body, ast.Compare) and len(body.ops) == 1
             and isinstance(body.ops[0], ast.Lt | ast.LtE | ast.Gt | ast.GtE)):
-        r.fail(where, f"require: {text!r} must be one comparison (<, <=, >, >=)")
+        r.fail(where, f"require: {said([text])[1:-1]} must be one comparison (<, <=, >, >=)")
     names = []
     for node in ast.walk(tree):
         if not isinstance(node, _NODES):
-            r.fail(where, f"require: {text!r} may use numbers, parameters, + - * / ** and "
+            r.fail(where, f"require: {said([text])[1:-1]} may use numbers, parameters, + - * / ** and "
                           f"{', '.join(_FUNCTIONS)} only")
         called = isinstance(node, ast.Call)
         if called and not (isinstance(node.func, ast.Name) and node.func.id in _FUNCTIONS):
-            r.fail(where, f"require: {text!r} calls something other than {', '.join(_FUNCTIONS)}")
+            r.fail(where, f"require: {said([text])[1:-1]} calls something other than {', '.join(_FUNCTIONS)}")
         if isinstance(node, ast.Name) and node.id not in _FUNCTIONS:
             names.append(node.id)
     # the names are checked against the deck's parameters once the deck is known (search.optimize)
@@ -300,7 +306,7 @@ def _objective(table: dict, r: KeyReader) -> tuple[list[str], dict]:
                                           f"e.g. maximize = \"singulated_rate\"; known: {', '.join(METRICS)}")
     for g in goals:
         if g not in METRICS:
-            r.fail(("objective", "maximize"), f"unknown metric {g!r}; known: {', '.join(METRICS)}")
+            r.fail(("objective", "maximize"), f"unknown metric {g}; known: {', '.join(METRICS)}")
     if len(set(goals)) != len(goals):
         r.fail(("objective", "maximize"), "the two objectives are the same metric")
     at_least = table.get("at_least", {})
@@ -308,7 +314,7 @@ def _objective(table: dict, r: KeyReader) -> tuple[list[str], dict]:
         r.fail(("objective", "at_least"), "at_least must be a table: { parts_per_s = 25 }")
     for name, value in at_least.items():
         if name not in METRICS or not _number(value):
-            r.fail(("objective", "at_least"), f"at_least: {name} = {value!r} must be a known metric "
+            r.fail(("objective", "at_least"), f"at_least: {name} = {said(value)} must be a known metric "
                                               "and a number")
     return goals, dict(at_least)
 
@@ -317,15 +323,19 @@ def _budget(table: dict, r: KeyReader) -> dict:
     out = dict(BUDGET)
     for key, value in table.items():
         if key not in BUDGET:
-            r.fail(("budget", key), f"unknown key {key!r} in [budget]; known: {', '.join(BUDGET)}")
+            r.fail(("budget", key), f"unknown key {key} in [budget]; known: {', '.join(BUDGET)}")
         low = 0 if key in ("seeds", "confirm") else 1
         if isinstance(value, bool) or not isinstance(value, int) or value < low:
-            r.fail(("budget", key), f"{key} must be a whole number >= {low}, got {value!r}")
+            r.fail(("budget", key), f"{key} must be a whole number >= {low}, got {said(value)}")
         out[key] = value
     for key in ("confirm", "replicates"):  # confirmation runs are jobs 10000 + 100 x rank + replicate
         if out[key] > 100:
             r.fail(("budget", key), f"{key} must be at most 100 (confirmation runs are numbered "
                                     f"10000 + 100 x rank + replicate), got {out[key]}")
+    if out["screen"] > MAX_SCREEN:
+        r.fail(("budget", "screen"), f"screen = {out['screen']} is more settings than the models screen "
+                                     f"in reasonable time: at most {MAX_SCREEN} (about 90 ms a setting "
+                                     "with the single-part model: 15 minutes before the first run)")
     if out["seeds"] > out["runs"]:
         r.fail(("budget", "seeds"), f"seeds ({out['seeds']}) exceeds runs ({out['runs']}): the "
                                     "screen's settings are part of the search's runs")
@@ -341,6 +351,6 @@ def _robustness(table: dict, r: KeyReader, variables: set[str]) -> dict:
         if name in variables:
             r.fail(where, f"{name} is a design variable; robustness varies what the design does not fix")
         if not (isinstance(values, list) and values and all(scalar(v) for v in values)):
-            r.fail(where, f"robustness {name} must list the values to try, got {values!r}")
+            r.fail(where, f"robustness {name} must list the values to try, got {said(values)}")
         out[name] = list(values)
     return out

@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import OutputError, UsageError
+from ..errors import OutputError, UsageError, said
 from .caption import run_caption
 from .scene import FrameData, floor_patch, part_shape, read_frame, section_motion, shape_mesh, track_mesh
 
@@ -184,7 +184,7 @@ class _Painter:
 
     def __init__(self, result, color: str, size, frames: np.ndarray, part_color=None):
         if color not in COLORINGS:
-            raise UsageError(f"--color must be one of {', '.join(COLORINGS)}, got {color!r}")
+            raise UsageError(f"--color must be one of {', '.join(COLORINGS)}, got {said(color)}")
         self.pv = pv = _offscreen_pyvista()
         self.result, self.color, self.part_color = result, color, part_color
         self.shape = part_shape(result.parameters, result.body_template)

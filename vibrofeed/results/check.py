@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import h5py
 import numpy as np
 
-from ..errors import ParameterError
+from ..errors import ParameterError, said
 from ..feeders.feeder import Feeder
 from ..models.constants import G
 from . import layout as L
@@ -89,9 +89,9 @@ class _Checker:
     def need_text_attr(self, path, name):
         obj = self.f[path]
         if name not in obj.attrs:
-            self.error(path, f"attribute {name!r} missing")
+            self.error(path, f"attribute '{name}' missing")
         elif not _text(obj.attrs[name]):
-            self.error(path, f"attribute {name!r} is empty")
+            self.error(path, f"attribute '{name}' is empty")
 
     # -- sections -----------------------------------------------------------------
     def h5md(self):
@@ -127,9 +127,9 @@ class _Checker:
         elif comps and value.shape[-1] != comps:
             self.error(f"{path}/value", f"last dimension {value.shape[-1]}, expected {comps}")
         if unit and _text(value.attrs.get("unit", "")) != unit:
-            self.error(f"{path}/value", f"unit attribute must be {unit!r}")
+            self.error(f"{path}/value", f"unit attribute must be '{unit}'")
         if _text(time.attrs.get("unit", "")) != L.TIME_UNIT:
-            self.error(f"{path}/time", f"unit attribute must be {L.TIME_UNIT!r}")
+            self.error(f"{path}/time", f"unit attribute must be '{L.TIME_UNIT}'")
         s, t = step[()], time[()]
         if n > 1 and np.any(np.diff(s) <= 0):
             self.error(f"{path}/step", "not strictly increasing")
@@ -240,7 +240,7 @@ class _Checker:
         g = self.f[where]
         for name in L.OUTLET_ATTRIBUTES:
             if name not in g.attrs:
-                self.error(where, f"attribute {name!r} missing")
+                self.error(where, f"attribute '{name}' missing")
         n = None
         table = {}
         elements = L.REJECT_ELEMENTS if group == L.REJECTS else L.OUTLET_ELEMENTS
@@ -254,7 +254,7 @@ class _Checker:
                 self.error(path, f"shape {ds.shape}, expected (E{', ' + str(comps) if comps else ''})")
                 continue
             if unit and _text(ds.attrs.get("unit", "")) != unit:
-                self.error(path, f"unit attribute must be {unit!r}")
+                self.error(path, f"unit attribute must be '{unit}'")
             if n is not None and ds.shape[0] != n:
                 self.error(where, "the event datasets differ in length")
                 return 0
@@ -435,11 +435,11 @@ class _Checker:
                              "--reuse cannot recognise this run")
         status = _text(self.f[L.RUN].attrs.get("status", ""))
         if status not in L.STATUSES:
-            self.error(L.RUN, f"unknown status {status!r}")
+            self.error(L.RUN, f"unknown status '{said(status)}'")
         elif status != L.STATUS_COMPLETE:
             msg = _text(self.f[L.RUN].attrs.get("message", ""))
             hint = {L.STATUS_RUNNING: "the run was killed or is still going"}.get(status, msg)
-            text = f"run status is {status!r}" + (f": {hint}" if hint else "")
+            text = f"run status is '{said(status)}'" + (f": {hint}" if hint else "")
             (self.warn if self.allow_incomplete else self.error)(L.RUN, text)
         self.stop()
         return status
@@ -450,13 +450,13 @@ class _Checker:
         target = attrs.get("target_error")
         if target is not None and not (np.ndim(target) == 0 and np.asarray(target).dtype.kind == "f"
                                        and 0 < float(target) < 1):
-            self.error(L.RUN, f"attribute 'target_error' must be a number in (0, 1), got {target!r}")
+            self.error(L.RUN, f"attribute 'target_error' must be a number in (0, 1), got {said(target)}")
         if "stop_reason" not in attrs:
             return
         reason = _text(attrs["stop_reason"])
         if not reason.startswith((L.STOP_AT_END, L.STOP_AT_TARGET)):
-            self.error(L.RUN, f"attribute 'stop_reason' must start with {L.STOP_AT_END!r} or "
-                              f"{L.STOP_AT_TARGET!r}, got {reason!r}")
+            self.error(L.RUN, f"attribute 'stop_reason' must start with '{L.STOP_AT_END}' or "
+                              f"'{L.STOP_AT_TARGET}', got '{said(reason)}'")
         elif L.stopped_early(reason) and target is None:
             self.error(L.RUN, "attribute 'stop_reason' says the target error was reached, but the "
                               "run records no 'target_error'")

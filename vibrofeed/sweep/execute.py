@@ -27,7 +27,7 @@ from pathlib import Path
 
 from ..decks import Deck
 from ..engine import batch
-from ..engine.runner import run_deck
+from ..engine.runner import check_at_once, run_deck
 from ..errors import RunError, UsageError, VibrofeedError
 from . import folder as F
 from . import summary as S
@@ -175,6 +175,8 @@ def sweep(spec_path, output=None, workers: int = 1, retry_failed: bool = False,
                          f"needs at least that many ranks; mpirun started {comm.Get_size()}")
     if comm is not None and workers > 1:
         raise UsageError("-j: under mpirun the groups of ranks_per_run ranks are the workers; drop -j")
+    if comm is None:
+        check_at_once(workers, spec.ranks_per_run)
     lock = None
     if not dry_run:  # from here on this sweep owns the folder: no other one reads or writes it
         folder.mkdir(parents=True, exist_ok=True)

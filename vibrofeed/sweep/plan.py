@@ -69,12 +69,12 @@ def _check_names(spec: SweepSpec, deck: Deck) -> None:
     tunables = deck.tunables
     for name in spec.parameters:
         if name in RESERVED:
-            raise ParameterError(f"{spec.where(*spec.place(name))}: parameter {name!r} is set by "
+            raise ParameterError(f"{spec.where(*spec.place(name))}: parameter {name} is set by "
                                  "vibrofeed itself, not by a sweep")
         if name not in tunables:
             close = difflib.get_close_matches(name, tunables, n=1)
-            hint = f" (did you mean {close[0]!r}?)" if close else ""
-            raise ParameterError(f"{spec.where(*spec.place(name))}: unknown parameter {name!r} for "
+            hint = f" (did you mean {close[0]}?)" if close else ""
+            raise ParameterError(f"{spec.where(*spec.place(name))}: unknown parameter {name} for "
                                  f"deck {deck.name}{hint}; valid parameters: {', '.join(tunables)}")
     if spec.replicates > 1 and "seed" not in tunables:
         raise ParameterError(f"{spec.where('replicates')}: deck {deck.name} has no seed parameter, "
@@ -121,6 +121,34 @@ def _culprit(spec: SweepSpec, message: str, setting: dict) -> tuple:
     return spec.place(name) if name else ()
 
 
+# The most jobs a sweep plans: each is checked as vibrofeed run checks it and kept with its
+# values (about 2.5 ms and 4.3 kB a job: sweeps/example.toml with 1 200 jobs on a 2-core Xeon,
+# 2026-12-03), so 100 000 jobs take about 4 minutes and 0.5 GB before the first run
+# (replicates = 1000000000 was killed by the kernel at 23 GB).
+MAX_JOBS = 100_000
+
+
+def check_size(spec: SweepSpec) -> int:
+    """The number of jobs of ``spec``, counted without making them; UsageError naming the
+    line of what makes them too many (:data:`MAX_JOBS`)."""
+    settings_n = math.prod(len(axis.values) for axis in spec.axes)
+    total = settings_n * spec.replicates
+    if total <= MAX_JOBS:
+        return total
+    if spec.replicates > 1 and settings_n <= MAX_JOBS:
+        key, what = ("replicates",), f"{settings_n} setting(s) x replicates = {spec.replicates}"
+        fits = f"replicates = {max(MAX_JOBS // settings_n, 1)} at most"
+    else:
+        longest = max(spec.axes, key=lambda a: len(a.values))
+        key = ("point",) if longest.kind == "point" else spec.place(longest.keys[0])
+        sizes = " x ".join(str(len(a.values)) for a in spec.axes)
+        what = f"{sizes} settings" + (f" x replicates = {spec.replicates}" if spec.replicates > 1 else "")
+        fits = "fewer values"
+    raise UsageError(f"{spec.where(*key)}: {what} make {total:,} jobs, more than a sweep plans: at most "
+                     f"{MAX_JOBS:,} (each job is checked and kept in memory before the first run: "
+                     f"{MAX_JOBS:,} take about 4 minutes and 0.5 GB); {fits}, or split the sweep")
+
+
 def plan(spec: SweepSpec, deck: Deck | None = None) -> list[Job]:
     """The jobs of ``spec``, each checked; ParameterError naming the line of
     the first parameter that fails (and how many jobs fail in all)."""
@@ -136,8 +164,8 @@ def plan(spec: SweepSpec, deck: Deck | None = None) -> list[Job]:
         check_ranks(spec.ranks_per_run)
     except UsageError as exc:
         raise UsageError(f"{spec.where('ranks_per_run')}: ranks_per_run: {exc}") from None
+    total = check_size(spec)
     combos = settings(spec)
-    total = len(combos) * spec.replicates
     width = max(4, len(str(total - 1)))
     has_seed = "seed" in deck.tunables
     jobs, first_error, bad = [], None, 0

@@ -47,7 +47,7 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..errors import InputError
+from ..errors import InputError, said
 
 TOP_KEYS = ("deck", "ranks_per_run", "replicates", "description", "target_error", "fixed", "grid",
             "zip", "point")
@@ -251,19 +251,19 @@ class KeyReader:
 
     def claim(self, name: str, key: tuple) -> None:
         if name in self.owner:
-            self.fail(key, f"parameter {name!r} is set twice (also at line "
+            self.fail(key, f"parameter {name} is set twice (also at line "
                            f"{self.lines.get(self.owner[name], '?')}); "
                            f"{self.ONCE}")
         self.owner[name] = key
 
     def values_list(self, key: tuple, name: str, value) -> list:
         if not isinstance(value, list) or not value:
-            self.fail(key, f"{name} must be a non-empty list of values, got {value!r}")
+            self.fail(key, f"{name} must be a non-empty list of values, got {said(value)}")
         for v in value:
             if not scalar(v):
-                self.fail(key, f"{name}: {v!r} is not a number or a string")
+                self.fail(key, f"{name}: {said(v)} is not a number or a string")
         if len({json.dumps(v) for v in value}) != len(value):
-            self.fail(key, f"{name} lists a value twice: {value!r} (replicates repeat a setting)")
+            self.fail(key, f"{name} lists a value twice: {said(value)} (replicates repeat a setting)")
         return value
 
 
@@ -282,7 +282,7 @@ def target_error(data: dict, r: KeyReader) -> float | None:
     if target is not None and (isinstance(target, bool) or not isinstance(target, int | float)
                                or not 0 < target < 1):
         r.fail(("target_error",), f"target_error must be a number in (0, 1) (the feed rate's "
-                                  f"relative error a run stops at), got {target!r}")
+                                  f"relative error a run stops at), got {said(target)}")
     return target
 
 
@@ -307,7 +307,7 @@ def _top_level(data: dict, r: KeyReader) -> dict[str, int]:
     """Check the top-level keys, the deck and the sections' types; ranks_per_run and replicates."""
     for key in data:
         if key not in TOP_KEYS:
-            r.fail((key,), f"unknown key {key!r}; a sweep file has {', '.join(TOP_KEYS)} "
+            r.fail((key,), f"unknown key {key}; a sweep file has {', '.join(TOP_KEYS)} "
                            "(deck parameters go in [fixed], [grid], [zip.NAME] or [[point]])")
     if "deck" not in data:
         r.fail((), "no deck: add deck = \"bulk_feeder\" (a deck name or file)")
@@ -317,7 +317,7 @@ def _top_level(data: dict, r: KeyReader) -> dict[str, int]:
     for key, default in (("ranks_per_run", 1), ("replicates", 1)):
         value = data.get(key, default)
         if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-            r.fail((key,), f"{key} must be a whole number >= 1, got {value!r}")
+            r.fail((key,), f"{key} must be a whole number >= 1, got {said(value)}")
         numbers[key] = value
     if not isinstance(data.get("description", ""), str):
         r.fail(("description",), "description must be a string")
@@ -333,7 +333,7 @@ def _fixed(data: dict, r: KeyReader) -> dict:
     fixed = {}
     for name, value in data.get("fixed", {}).items():
         if not scalar(value):
-            r.fail(("fixed", name), f"[fixed] {name} must be one number or string, got {value!r} "
+            r.fail(("fixed", name), f"[fixed] {name} must be one number or string, got {said(value)} "
                                     "(lists of values go in [grid] or [zip.NAME])")
         r.claim(name, ("fixed", name))
         fixed[name] = value
@@ -385,7 +385,7 @@ def _point_axes(data: dict, r: KeyReader) -> list[Axis]:
         for name, value in point.items():
             if not scalar(value):
                 r.fail(("point", i, name), f"[[point]] {name} must be one number or string, "
-                                           f"got {value!r}")
+                                           f"got {said(value)}")
             if name not in keys:  # first [[point]] naming it
                 r.claim(name, ("point", i, name))
                 keys.append(name)

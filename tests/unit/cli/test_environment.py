@@ -24,6 +24,9 @@ def command(env: dict, *args):
     ("VIBROFEED_MAX_RANKS", "0", "must be a whole number of MPI ranks, at least 1"),
     ("VIBROFEED_STALL_SECONDS", "nan", "must be a number of seconds > 0"),
     ("VIBROFEED_STALL_SECONDS", "-5", "must be a number of seconds > 0"),
+    ("VIBROFEED_LONG_RUN_HOURS", "soon", "must be a number of hours > 0"),
+    ("VIBROFEED_LONG_RUN_HOURS", "0", "must be a number of hours > 0"),
+    ("VIBROFEED_LONG_RUN_HOURS", "inf", "must be a number of hours > 0"),
     ("VIBROFEED_DEBUG", "maybe", "must be 1 (show tracebacks) or 0 (do not)"),
     ("VIBROFEED_ABORT_SHIM", "{tmp}/no_shim.so", "names no file: it does not exist"),
     ("VIBROFEED_ABORT_SHIM", "{tmp}", "is not a file"),
@@ -63,7 +66,9 @@ def test_variables_set_to_what_exists_are_taken(tmp_path, monkeypatch):
     monkeypatch.setenv("VIBROFEED_DECKS", str(tmp_path))
     monkeypatch.setenv("VIBROFEED_LIGGGHTS_LIB", "libliggghts.so.3")  # a name: the loader searches
     monkeypatch.setenv("VIBROFEED_STALL_SECONDS", "2.5")
+    monkeypatch.setenv("VIBROFEED_LONG_RUN_HOURS", "0.25")
     environment.check()
+    assert environment.long_run_hours() == 0.25
     from vibrofeed.decks import decks_dir
     from vibrofeed.engine.runner import abort_shim
 
@@ -75,7 +80,7 @@ def test_a_variable_set_to_nothing_is_unset(monkeypatch):
     for name in environment.READERS:
         monkeypatch.setenv(name, "")
     environment.check()
-    assert [read() for read in environment.READERS.values()] == [False] + [None] * 6
+    assert [read() for read in environment.READERS.values()] == [False] + [None] * 7
 
 
 def test_every_variable_the_sources_read_is_read_here():

@@ -122,7 +122,7 @@ def test_outlet_catch_plane_and_box_floor(given):
     ({"shape": "disc", "size_spread": "0.1"}, "size_spread=0.1 applies to spheres only"),
     ({"wall_height": "1e-4"}, "wall_height=0.0001 m is no higher than a part's centre"),
     ({"n_parts": "5000"}, "n_parts=5000 settle"),
-    ({"shape": "cube"}, "shape='cube' must be one of sphere (0), chip (1), disc (2)"),
+    ({"shape": "cube"}, "shape=cube must be one of sphere (0), chip (1), disc (2)"),
     ({"shape": "3"}, "shape=3 must be one of 0, 1, 2"),
     ({"size_spread": "1"}, "size_spread=1"),
     ({"youngs_track": "1e6"}, "youngs_track=1e6"),

@@ -196,7 +196,7 @@ def test_header_drops_one_mark_and_one_space_and_title_is_the_description(tmp_pa
 def test_find_by_name_takes_a_bare_name_only(tmp_path):
     assert Deck.find("single_part").name == "single_part"
     assert Deck.find("single_part.liggghts").name == "single_part"
-    with pytest.raises(DeckError, match=r"no deck 'no_such_deck' \(not a file; decks available by name: .*"
+    with pytest.raises(DeckError, match=r"no deck no_such_deck \(not a file; decks available by name: .*"
                                         r"single_part"):
         Deck.find("no_such_deck")
     # a path in another folder is not a name: no fallback to the project's deck of that name

@@ -17,9 +17,10 @@ def fresh(monkeypatch):
     """The module's process-wide state, empty, and the signal handlers restored after."""
     monkeypatch.setattr(interrupt, "_stoppers", {})
     monkeypatch.setattr(interrupt, "_stopping", None)
-    saved = {s: signal.getsignal(s) for s in (signal.SIGTERM, signal.SIGHUP)}
+    monkeypatch.setattr(interrupt, "_received", None)
+    saved = {s: signal.getsignal(s) for s in (signal.SIGTERM, signal.SIGHUP, signal.SIGINT)}
     for s in saved:  # as a command started from a terminal has them (the suite may run under nohup)
-        signal.signal(s, signal.SIG_DFL)
+        signal.signal(s, signal.default_int_handler if s == signal.SIGINT else signal.SIG_DFL)
     yield
     for s, handler in saved.items():
         signal.signal(s, handler)
@@ -175,3 +176,55 @@ def test_stop_left_waits_thirty_seconds_at_most(fresh, monkeypatch):
     assert interrupt.stop_left("stopped: the command ended on an error") is True
     assert told == ["stopped: the command ended on an error"]
     assert cond.waits == [(False, 30.0)]
+
+
+def test_the_interrupt_that_stops_the_process_keeps_no_frame_alive(fresh):
+    """Render's Ctrl-C printed 27 lines of 'Exception ignored in ... __del__' after
+    'interrupted': the interrupt kept as the process's reason to stop held its traceback, so
+    the plotter in render's frame lived on until the interpreter was half torn down."""
+    import gc
+    import weakref
+
+    class Plotter:
+        pass
+
+    def render():
+        plotter = Plotter()
+        render.plotter = weakref.ref(plotter)
+        raise KeyboardInterrupt
+
+    try:
+        render()
+    except KeyboardInterrupt as exc:
+        interrupt.stop_all(exc)
+    gc.collect()
+    assert render.plotter() is None
+    assert interrupt._stopping.__traceback__ is None
+    with pytest.raises(KeyboardInterrupt):
+        interrupt.check()  # (still stopping: no new run starts)
+
+
+def test_ctrl_c_a_library_turns_into_its_own_error_is_an_interrupt(fresh, monkeypatch, capsys):
+    """Ctrl-C while render loaded VTK ended in a 29-line traceback of VTK's ImportError, exit
+    status 1."""
+    from vibrofeed import cli
+    from vibrofeed.cli import render
+
+    def loading(args):
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(1)  # the handler runs at the next bytecode; never reached
+        except BaseException:  # as VTK's importer does: its own error instead
+            raise ImportError("Failed to load vtkRenderingContextOpenGL2") from None
+
+    monkeypatch.setattr(render, "run", loading)
+    assert cli.main(["render", "r.h5"]) == 130
+    assert capsys.readouterr().err == "vibrofeed: error: interrupted\n"
+    monkeypatch.setattr(interrupt, "_received", None)  # without a signal, the error is the error
+
+    def failing(args):
+        raise ImportError("Failed to load vtkRenderingContextOpenGL2")
+
+    monkeypatch.setattr(render, "run", failing)
+    with pytest.raises(ImportError):
+        cli.main(["render", "r.h5"])

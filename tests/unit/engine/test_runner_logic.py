@@ -29,6 +29,7 @@ from vibrofeed.engine.runner import (
     _prepare_output,
     _reusable,
     _unreadable,
+    check_at_once,
     check_ranks,
     check_target_error,
     clean_environment,
@@ -37,7 +38,7 @@ from vibrofeed.engine.runner import (
     worker_command,
     worker_environment,
 )
-from vibrofeed.errors import EngineError, OutputError, RunError, UsageError
+from vibrofeed.errors import EngineError, OutputError, RunError, UsageError, said
 from vibrofeed.results import layout as L
 from vibrofeed.results.writer import ResultWriter
 
@@ -96,6 +97,21 @@ def test_the_rank_limit_is_four_per_usable_core(three_cores):
     assert max_ranks() == 12  # the 3 cores of the affinity mask, not the 5 of the machine
 
 
+def test_runs_at_once_are_held_to_the_rank_limit_as_one_run_is(three_cores):
+    """sweep and optimize -j 1000 started a thousand LIGGGHTS processes on a 3-core machine."""
+    check_at_once(12, 1)
+    check_at_once(6, 2)
+    check_at_once(1, 12)
+    with pytest.raises(UsageError) as err:
+        check_at_once(13, 1)
+    assert str(err.value) == ("-j 13: 13 runs at once is 13 ranks, more than this machine can run: at "
+                              "most 12 (4 per core; set VIBROFEED_MAX_RANKS to change the limit); give "
+                              "-j 12 or less")
+    with pytest.raises(UsageError, match=r"^-j 5: 5 runs at once of ranks_per_run = 3 ranks each is 15 "
+                                         r"ranks, .*; give -j 4 or less$"):
+        check_at_once(5, 3)
+
+
 def test_without_an_affinity_mask_every_core_counts(three_cores, monkeypatch):
     monkeypatch.delattr(runner.os, "sched_getaffinity")
     assert max_ranks() == 20
@@ -141,7 +157,8 @@ def test_check_ranks_refuses_what_is_not_a_positive_integer(monkeypatch, ranks):
     monkeypatch.setenv("VIBROFEED_MAX_RANKS", "5")
     with pytest.raises(UsageError) as caught:
         check_ranks(ranks)
-    assert str(caught.value) == f"the number of ranks must be a positive integer, got {ranks!r}"
+    assert str(caught.value) == f"the number of ranks must be a positive integer, got {said(ranks)}"
+    assert "'" not in str(caught.value)
 
 
 def test_check_ranks_refuses_one_past_the_limit(monkeypatch):
@@ -588,3 +605,43 @@ def test_a_hung_worker_is_stopped_and_its_output_reader_joined(monkeypatch):
     run.follow()
     assert run.hung == "no heartbeat for 30 s" and run.rc == -signal.SIGTERM
     assert joined == [False]  # joined, and ended: nothing left reading
+
+
+def test_a_run_that_will_take_long_says_so_before_it_starts(monkeypatch):
+    """-p dt=1e-12 started a run of 75 days without a word."""
+    import warnings
+
+    from vibrofeed.decks import Deck
+    from vibrofeed.engine.runner import LongRunWarning, long_run, warn_long_run
+    from vibrofeed.parameters import STEPS_PER_SECOND, contact_times, resolve, run_steps
+
+    monkeypatch.delenv("VIBROFEED_LONG_RUN_HOURS", raising=False)
+    deck = Deck.find("single_part")
+    values = resolve(deck, {"dt": "1e-12", "t_end": "0.2"})
+    assert long_run(values) == (
+        f"this run will take about {0.2 / 1e-12 / STEPS_PER_SECOND / 86400:.3g} days: 2e+11 steps of "
+        "dt=1e-12 s at 31k steps/s (the demo's speed on one core; more parts run slower); "
+        "VIBROFEED_LONG_RUN_HOURS=1 sets when this is said")
+    with pytest.warns(LongRunWarning, match="^this run will take about 74.7 days"):
+        warn_long_run(values)
+    # the deck's own timestep: the output interval in whole steps of at most 1/50 of the
+    # Hertz time (decks/include/contact_time.liggghts, dt_auto)
+    numbers = {}
+    for name, text in resolve(deck, {}).items():
+        try:
+            numbers[name] = float(text)
+        except ValueError:
+            pass
+    steps, dt = run_steps(numbers)
+    hertz = contact_times(numbers)["hertz"]
+    assert dt == numbers["output_dt"] / math.ceil(numbers["output_dt"] / (hertz / 50))
+    assert steps == pytest.approx(numbers["t_end"] / dt, rel=1e-12)  # a count of steps
+    # below the threshold nothing is said; the threshold is the user's
+    assert long_run(resolve(deck, {})) is None
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        warn_long_run(resolve(deck, {}))
+    monkeypatch.setenv("VIBROFEED_LONG_RUN_HOURS", str(steps / STEPS_PER_SECOND / 3600 / 2))
+    assert long_run(resolve(deck, {})).startswith(f"this run will take about {round(steps / 31000)}s: ")
+    monkeypatch.setenv("VIBROFEED_LONG_RUN_HOURS", "2000")
+    assert long_run(values) is None

@@ -79,3 +79,76 @@ def test_optimize_report_of_a_study_stopped_before_its_search_says_so(tmp_path):
     assert proc.stdout.splitlines() == [
         "study s.toml: 0 search runs, 0 proposals ruled out by the models without a DEM run",
         "no confirmed design"]
+
+
+def test_a_robustness_value_run_refuses_is_refused_before_the_first_run(tmp_path):
+    """[robustness] mu = [-1, 0.5] was refused by the robustness run, after the search's and
+    the confirmation's DEM runs."""
+    path = study(tmp_path)
+    path.write_text(path.read_text() + "[robustness]\nmu = [-1, 0.5]\n")
+    out = tmp_path / "out"
+    line = one_line(vibrofeed("optimize", path, "-o", out))
+    assert line == f"{path}:15: robustness mu: parameter mu=-1 must be >= 0"
+    assert not out.exists()
+
+
+def checked(tmp_path, text: str) -> str | None:
+    from vibrofeed.errors import VibrofeedError
+    from vibrofeed.optimize.search import check_values
+    from vibrofeed.optimize.spec import parse
+    from vibrofeed.sweep.plan import find_deck
+
+    spec = parse(text, tmp_path / "s.toml")
+    try:
+        check_values(spec, find_deck(spec))
+    except VibrofeedError as exc:
+        return str(exc)
+    return None
+
+
+SINGLE = """deck = "single_part"
+[fixed]
+FIXED
+[variables]
+phase = { low = 0, high = 90 }
+[objective]
+maximize = GOAL
+"""
+
+
+def test_an_objective_the_deck_never_measures_is_refused_before_the_first_run(tmp_path):
+    """maximize = "parts_per_s" on single_part spent its runs, then said nothing measured it."""
+    s = tmp_path / "s.toml"
+    single = SINGLE.replace("FIXED", "")
+    assert checked(tmp_path, single.replace("GOAL", '"mean_velocity"')) is None
+    assert checked(tmp_path, single.replace("GOAL", '"parts_per_s"')) == (
+        f"{s}:7: parts_per_s: deck single_part has no outlet (it is not a bulk feeder), so its runs "
+        "measure mean_velocity only")
+    targets = single.replace("GOAL", '"mean_velocity"') + "at_least = { singulated_fraction = 0.5 }\n"
+    assert checked(tmp_path, targets).startswith(
+        f"{s}:8: singulated_fraction: deck single_part has no outlet")
+    bulk = STUDY.replace("LIMIT", "8").replace("RUNS", "4")
+    for goal, shape, refused in (("orientation_yield", "", True), ("oriented_rate", "shape = 0", True),
+                                 ("oriented_rate", 'shape = "sphere"', True),
+                                 ("orientation_yield", "shape = 1", False),
+                                 ("orientation_yield", 'shape = "disc"', False),
+                                 ("parts_per_s", "", False)):
+        text = bulk.replace('"parts_per_s"', f'"{goal}"').replace("freq = 100", f"freq = 100\n{shape}")
+        answer = checked(tmp_path, text)
+        assert (answer is not None and "the study's parts are spheres, which have no orientation"
+                in answer) == refused, (goal, shape, answer)
+    chosen = bulk.replace('"parts_per_s"', '"orientation_yield"').replace(
+        "[variables]", "[variables]\nshape = { choices = [0, 1] }")
+    assert checked(tmp_path, chosen) is None
+
+
+def test_fixed_values_and_choices_run_refuses_are_named_at_their_line(tmp_path):
+    s = tmp_path / "s.toml"
+    single = SINGLE.replace("GOAL", '"mean_velocity"')
+    assert checked(tmp_path, single.replace("FIXED", "restitution = 0.01")) == (
+        f"{s}:3: parameter restitution=0.01 must be in (0.05, 1] (LIGGGHTS needs "
+        "coefficientRestitution > 0.05)")
+    choices = single.replace("FIXED", "").replace("[variables]",
+                                                  "[variables]\nwaveform = { choices = [0, 7] }")
+    assert checked(tmp_path, choices) == (f"{s}:5: variable waveform: a choice: parameter waveform=7 must "
+                                          "be one of 0, 1, 2, 3, 4")

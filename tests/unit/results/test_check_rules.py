@@ -830,3 +830,12 @@ def test_the_part_named_is_one_beyond_the_speed_limit_not_one_at_it(tmp_path):
                [[1.0, 0, 0], [1.5, 0, 0]] if k == 1 else [[0, 0, 0], [0, 0, 0]]) for k in range(3)]
     found = errors(sequence(tmp_path / "at.h5", frames))
     assert len(found) == 1 and "part 2 moves at 1.5 m/s at frame 1" in found[0], found
+
+
+@pytest.mark.parametrize("value", [1.0, np.float64(2.5), np.int64(3)])
+def test_a_value_read_from_the_file_is_shown_as_its_number(bulk, tmp_path, value):
+    """h5py reads a number as a numpy scalar: check said 'got np.float64(1.0)'."""
+    path = copy(bulk, tmp_path / "bad.h5")
+    with h5py.File(path, "r+") as f:
+        f[R].attrs["target_error"] = value
+    assert has(errors(path), R, f"{TARGET}, got {value.item() if hasattr(value, 'item') else value}")

@@ -58,7 +58,7 @@ def test_sweeps_product_and_zip(tmp_path):
 
 
 @pytest.mark.parametrize("text, fragment", [
-    ('kind = "transport"\ndeck = "x"\n', "missing 'title'"),
+    ('kind = "transport"\ndeck = "x"\n', "missing title"),
     ('title = "t"\nkind = "transport"\ndeck = "x"\n[tolerance]\nq = 0.1\n', "abs = x"),
     ('title = "t"\nkind = "transport"\ndeck = "x"\n[tolerance]\nq = { rel = -1 }\n', ">= 0"),
     ('title = "t"\nkind = "transport"\ndeck = "x"\n[sweep]\na = []\n', "non-empty"),
@@ -74,7 +74,7 @@ def test_malformed_case_files_are_refused(tmp_path, text, fragment):
 
 
 def test_unknown_case():
-    with pytest.raises(C.CaseError, match="no validation case 'nope'"):
+    with pytest.raises(C.CaseError, match="no validation case nope"):
         C.find("nope")
 
 
