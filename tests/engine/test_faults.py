@@ -66,7 +66,11 @@ def test_sigterm_ends_a_run_as_ctrl_c_does(tmp_path, command):
     seen = wait_until(lambda: frames_now(part) >= 3 and frames_now(part), proc)
     proc.send_signal(signal.SIGTERM)  # what timeout, Slurm and preemption send
     _, err = proc.communicate(timeout=60)
-    assert proc.returncode == 143 and err.strip() == "vibrofeed: error: terminated (SIGTERM)"
+    # one line: why, and what the run left (its frames, marked interrupted)
+    assert proc.returncode == 143 and len(err.strip().splitlines()) == 1
+    assert err.startswith("vibrofeed: error: terminated (SIGTERM); the ")
+    assert err.strip().endswith(f"frames written before the interruption are kept in {part} "
+                                "(status: interrupted)")
     assert not part.with_suffix("").exists() and not scratch_folders(tmp_path)
     assert status(part) == ("interrupted", "terminated by SIGTERM")
     with Result(part, allow_incomplete=True) as r:
@@ -80,12 +84,12 @@ def test_sigterm_ends_a_sweep_and_a_rerun_finishes_it(tmp_path):
                     "[grid]\nphase = [0, 90]\n")
     proc = start(["sweep", spec, "-o", "out", "-j", "2", "-q"], tmp_path)
     jobs = tmp_path / "out" / "jobs"
-    wait_until(lambda: any(frames_now(p) > 10 for p in jobs.glob("*.part")), proc)
+    wait_until(lambda: any(frames_now(p) > 10 for p in jobs.glob("*.h5.part")), proc)
     proc.send_signal(signal.SIGTERM)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 143 and err.strip().endswith("vibrofeed: error: terminated (SIGTERM)")
     assert not scratch_folders(tmp_path)
-    parts = list(jobs.glob("*.part"))
+    parts = list(jobs.glob("*.h5.part"))  # (each beside its log, OUT.log.part)
     assert parts and all(status(p)[0] == "interrupted" for p in parts)
     from vibrofeed.sweep import summary as S
 
@@ -99,12 +103,12 @@ def test_sigterm_ends_a_sweep_and_a_rerun_finishes_it(tmp_path):
 def test_sigterm_ends_a_validation_and_starts_no_further_run(tmp_path):
     proc = start(["validate", "hop_period", "-o", "v", "-j", "1"], tmp_path)
     out = tmp_path / "v"
-    wait_until(lambda: any(frames_now(p) > 10 for p in out.rglob("*.part")), proc)
+    wait_until(lambda: any(frames_now(p) > 10 for p in out.rglob("*.h5.part")), proc)
     proc.send_signal(signal.SIGTERM)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 143 and err.strip().endswith("vibrofeed: error: terminated (SIGTERM)")
     assert not scratch_folders(tmp_path)
-    parts = list(out.rglob("*.part"))
+    parts = list(out.rglob("*.h5.part"))  # (beside its log, OUT.log.part)
     assert len(parts) == 1 and status(parts[0])[0] == "interrupted"
     assert not list(out.rglob("*.h5"))  # the queued runs never started
 
@@ -203,7 +207,7 @@ def test_a_full_disk_keeps_what_was_written_and_says_so(small_disk):
     assert all("HDF5" not in line and "Traceback" not in line for line in lines)
     part = small_disk / "f.h5.part"
     assert part.exists() and not scratch_folders(small_disk)
-    assert f"{part}" in lines[0] and len(lines) == 2  # the error, and where the frames are
+    assert f"{part}" in lines[0] and len(lines) == 1  # the error and where the frames are, one line
     assert status(part)[0] == "failed"  # it opens (the worker closed it whole) and says so
 
 

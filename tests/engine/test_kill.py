@@ -94,7 +94,10 @@ def test_ctrl_c_marks_the_file_interrupted_and_exits_130(tmp_path):
         if proc.poll() is None:
             proc.kill()
     err = proc.stderr.read().decode()
-    assert proc.returncode == 130 and err.strip() == "vibrofeed: error: interrupted"
+    # one line: why, and what the run left (its frames, marked interrupted)
+    assert proc.returncode == 130 and len(err.strip().splitlines()) == 1
+    assert err.startswith("vibrofeed: error: interrupted; the ")
+    assert err.strip().endswith(f"kept in {part} (status: interrupted)")
     assert not out.exists() and not list(tmp_path.glob(".vibrofeed-*"))  # scratch folder removed
     assert_valid_partial(part, seen, "interrupted")
 

@@ -179,11 +179,8 @@ def main(argv: list[str] | None = None) -> int:
             interrupt.stop_all(exc)
         except KeyboardInterrupt:  # a second signal: leave now
             pass
-        code = fail(interrupt.message(exc), interrupt.exit_code(exc))
-        kept = getattr(exc, "kept", None)  # a run's: what it left behind
-        if kept:
-            print(f"vibrofeed: {kept}", file=sys.stderr)
-        return code
+        kept = getattr(exc, "kept", None)  # a run's: what it left behind, on the same line
+        return fail(interrupt.message(exc) + (f"; {kept}" if kept else ""), interrupt.exit_code(exc))
     except BrokenPipeError:
         # The reader stopped (`vibrofeed ... | head`): no traceback, and none again when
         # Python flushes stdout at exit (the recipe of the signal module's documentation).
@@ -198,12 +195,10 @@ def main(argv: list[str] | None = None) -> int:
     except VibrofeedError as exc:
         if debug:
             raise
-        code = fail(str(exc), exc.exit_code)
-        partial = getattr(exc, "partial", None)
-        if partial:
-            print(f"vibrofeed: the {partial[1]} frames written before the failure are kept in "
-                  f"{partial[0]} (status: failed)", file=sys.stderr)
-        return code
+        partial = getattr(exc, "partial", None)  # the frames a failed run left, on the same line
+        kept = (f"; the {partial[1]} frames written before the failure are kept in {partial[0]} "
+                "(status: failed)") if partial else ""
+        return fail(str(exc) + kept, exc.exit_code)
     finally:
         try:
             interrupt.stop_left("stopped: the command ended on an error")

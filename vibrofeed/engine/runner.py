@@ -473,6 +473,7 @@ class _Run:
         templates, if it declares a prepare hook) and the worker's spec."""
         try:
             self.tmp = scratch.make(self.out.parent)
+            scratch.name_outputs(self.tmp, self.part, self.log_part)
             with open(self.reserve, "wb") as fh:
                 fh.write(bytes(RESERVE_BYTES))
                 fh.flush()

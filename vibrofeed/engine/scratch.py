@@ -18,6 +18,7 @@ from pathlib import Path
 
 PREFIX = ".vibrofeed-"
 OWNER = "owner"
+OUTPUTS = "outputs"  # the run's OUT.h5.part and OUT.log.part, a line each
 # A folder without an owner file (being created, or left by an older vibrofeed)
 # counts as left behind once it is this old.
 UNOWNED_AGE = 600.0
@@ -56,11 +57,31 @@ def _abandoned(tmp: Path) -> bool:
     return _started(int(pid)) != started
 
 
+def name_outputs(tmp: Path, part: Path, log_part: Path) -> None:
+    """Record in scratch folder ``tmp`` the run's unfinished result and log (``OUT.h5.part``,
+    ``OUT.log.part``), so that whoever removes the folder after a kill knows them."""
+    (tmp / OUTPUTS).write_text(f"{part}\n{log_part}\n")
+
+
 def remove_abandoned(folder: Path) -> list[Path]:
-    """Remove the scratch folders in ``folder`` whose owner process is gone; those removed."""
+    """Remove the scratch folders in ``folder`` whose owner process is gone; those removed.
+    A killed run's log (``OUT.log.part``) goes with its folder when the run left no frames
+    (no ``OUT.h5.part``): it belongs to nothing kept; beside a ``.part`` of frames it stays."""
     gone = []
     for tmp in folder.glob(PREFIX + "*"):
         if tmp.is_dir() and _abandoned(tmp):
-            shutil.rmtree(tmp, ignore_errors=True)
+            remove(tmp)
             gone.append(tmp)
     return gone
+
+
+def remove(tmp: Path) -> None:
+    """Remove a killed run's scratch folder ``tmp``, and its log when it left no frames
+    (:func:`remove_abandoned`)."""
+    try:
+        part, log_part = (tmp / OUTPUTS).read_text().split("\n")[:2]
+    except (OSError, ValueError):
+        part = log_part = ""
+    if part and log_part and not Path(part).exists():
+        Path(log_part).unlink(missing_ok=True)
+    shutil.rmtree(tmp, ignore_errors=True)

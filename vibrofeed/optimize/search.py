@@ -465,7 +465,10 @@ def optimize(spec_path, output=None, workers: int = 1, budget: int | None = None
     lock = F.lock(folder, "study")
     try:
         F.clear_leftovers(folder, "runs")
-        return _run(spec, deck, folder, runs, workers, quiet, comm, out, spec_path)
+        done = _run(spec, deck, folder, runs, workers, quiet, comm, out, spec_path)
+        if comm is None:  # again at the end: a worker whose parent was killed may have ended
+            F.clear_leftovers(folder, "runs")  # after the start (under mpirun a group may still run)
+        return done
     except UsageError as exc:
         if fresh and getattr(exc, "before_any_run", False):  # (still locked) nothing left behind:
             _forget(folder, made)                             # the file corrected is not "another study"

@@ -84,15 +84,20 @@ def lock(folder: Path, what: str = "sweep"):
 
 def clear_leftovers(folder: Path, runs: str = "jobs") -> list[Path]:
     """Remove what a killed sweep (or study) can leave behind: half-written summary or
-    manifest copies (``.NAME.*.tmp``, never renamed into place) and the runs'
-    scratch folders (``<runs>/.vibrofeed-*``). Call with the lock held."""
-    import shutil
+    manifest copies (``.NAME.*.tmp``, never renamed into place), the runs' scratch
+    folders (``<runs>/.vibrofeed-*``) and the logs of killed runs that left no frames
+    (``<runs>/*.log.part`` without an ``.h5.part``). Call with the lock held."""
+    from ..engine import scratch
 
     gone = [p for p in folder.glob(".*.tmp") if p.is_file()]
-    gone += [p for p in (folder / runs).glob(".vibrofeed-*") if p.is_dir()]
+    gone += [p for p in (folder / runs).glob(scratch.PREFIX + "*") if p.is_dir()]
+    # a killed run's log (OUT.log.part) without frames beside it (no OUT.h5.part): nothing runs
+    # while the lock is held, so it belongs to no run, and no result keeps it company
+    gone += [p for p in (folder / runs).glob("*.log.part")
+             if not p.with_name(p.name.removesuffix(".log.part") + ".h5.part").exists()]
     for p in gone:
         if p.is_dir():
-            shutil.rmtree(p, ignore_errors=True)
+            scratch.remove(p)  # (and a killed run's log, when it left no frames)
         else:
             p.unlink(missing_ok=True)
     return gone

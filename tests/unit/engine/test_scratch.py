@@ -137,3 +137,19 @@ def test_two_runs_sweeping_the_same_place_at_once_do_not_fail(tmp_path, monkeypa
     assert len(raced) == 1 and not any(p.exists() for p in left)
     second = next(p for p in left if p not in raced)
     assert second in gone
+
+
+def test_a_killed_runs_log_goes_with_its_folder_only_when_it_left_no_frames(tmp_path):
+    logs = {}
+    for name, frames in (("bare", False), ("framed", True)):
+        tmp = tmp_path / f"{scratch.PREFIX}{name}"
+        tmp.mkdir()
+        part, log_part = tmp_path / f"{name}.h5.part", tmp_path / f"{name}.log.part"
+        log_part.write_text("LIGGGHTS log")
+        if frames:
+            part.write_bytes(b"frames")
+        scratch.name_outputs(tmp, part, log_part)
+        scratch.remove(tmp)
+        assert not tmp.exists()
+        logs[name] = log_part.exists()
+    assert logs == {"bare": False, "framed": True}  # beside its frames the log stays

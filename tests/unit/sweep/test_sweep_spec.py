@@ -867,11 +867,14 @@ def test_clear_leftovers_removes_temporary_copies_and_scratch_folders_only(tmp_p
     (tmp_path / "jobs" / ".vibrofeed-abc" / "log.lammps").write_text("x")
     (tmp_path / ".summary.h5.x1.tmp").write_text("half")
     (tmp_path / ".sweep.json.x2.tmp").write_text("half")
-    kept = [tmp_path / "summary.h5", tmp_path / "jobs" / "job-0000.h5", tmp_path / "jobs" / ".vibrofeed-x.h5"]
+    kept = [tmp_path / "summary.h5", tmp_path / "jobs" / "job-0000.h5", tmp_path / "jobs" / ".vibrofeed-x.h5",
+            tmp_path / "jobs" / "job-0001.h5.part", tmp_path / "jobs" / "job-0001.log.part"]
     for p in kept:
         p.write_text("keep")
+    (tmp_path / "jobs" / "job-0002.log.part").write_text("a killed run's, without frames")
     gone = F.clear_leftovers(tmp_path)
-    assert sorted(p.name for p in gone) == [".summary.h5.x1.tmp", ".sweep.json.x2.tmp", ".vibrofeed-abc"]
+    assert sorted(p.name for p in gone) == [".summary.h5.x1.tmp", ".sweep.json.x2.tmp", ".vibrofeed-abc",
+                                            "job-0002.log.part"]
     assert not any(p.exists() for p in gone) and all(p.exists() for p in kept)
 
 
