@@ -223,11 +223,6 @@ class Feeder:
         return len(self.elements) > 1
 
     @property
-    def line_elements(self) -> list:
-        """The elements after a bowl or the whole line, in conveying order."""
-        return [e for e in self.elements if not isinstance(e, BowlElement)]
-
-    @property
     def linear_sections(self) -> list[LinearSection]:
         return [e for e in self.elements if isinstance(e, LinearSection)]
 

@@ -566,7 +566,7 @@ class _Physics:
             if any(not isinstance(m, h5py.Dataset) or m.shape != (len(step), 3) for m in motion):
                 continue  # missing or misshapen: reported with the layout
             where = L.surface_path(k)
-            if feeder is not None and k <= len(feeder.line_elements) and not feeder.moves(k):
+            if feeder is not None and k <= len(feeder.elements) and not feeder.moves(k):
                 # an undriven element (a chute) stands still
                 zero = np.zeros((len(step), 3))
                 for element, got in zip(("position", "velocity"), motion):

@@ -135,3 +135,29 @@ def test_a_bowl_without_any_time_step_cannot_be_verified(tmp_path):
     assert errors(write(tmp_path / "first.h5", frames=1, derived={})) == [
         "error: /observables/surface: no time step recorded (derived/dt_used): the bowl's motion "
         "cannot be verified"]
+
+
+def test_a_chute_after_the_bowl_is_checked_standing_still_not_against_a_drive(tmp_path):
+    """Element 2 of a bowl's exit line is a chute: check asks the feeder which element it is
+    (the bowl is element 1) and holds its recorded motion to zero, not to a drive it has none of."""
+    chute = {**DRIVE, "helix_angle": 3.0, "turns": 0.5, "wall_height": 1e-3, "chute_length": 8e-3,
+             "part_size": 3e-4, "sections": 2.0, "s2_kind": 1.0, "s2_length": 3e-3, "s2_width": 2e-3,
+             "s2_wall_height": 1e-3, "s2_step": 5e-5, "s2_slope": 5.0}
+    steps = np.arange(12) * EVERY
+    angle, rate, lift, vz = motion(steps)
+
+    def written(path, moved):
+        variables = {k: (repr(v), "", k, repr(v)) for k, v in chute.items()}
+        w = ResultWriter(path, deck_name="bowl_feeder", deck_path="bowl_feeder.liggghts", deck_text="#\n",
+                         variables=variables, derived={"dt_used": DT}, engine_version=ENGINE,
+                         seed=1, run_id="y" * 64, rotating=True, sections=2)
+        for k, s in enumerate(steps):
+            w.write_frame(int(s), float(s * DT), parts([1], [[0.0, -9.4e-3, 1e-3 + lift[k]]], radius=1.5e-4),
+                          [0, 0, lift[k]], [0, 0, vz[k]], surface_rotation=([0, 0, angle[k]], [0, 0, rate[k]]),
+                          section_surfaces=[([moved * k, 0, 0], [0, 0, 0])])
+        w.finish("complete")
+        return errors(check_file(path))
+
+    assert written(tmp_path / "still.h5", 0.0) == []
+    moved = written(tmp_path / "moved.h5", 1e-6)
+    assert len(moved) == 1 and "section 2's position (a chute, which does not move)" in moved[0]
