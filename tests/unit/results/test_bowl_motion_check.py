@@ -152,8 +152,9 @@ def test_a_chute_after_the_bowl_is_checked_standing_still_not_against_a_drive(tm
                          variables=variables, derived={"dt_used": DT}, engine_version=ENGINE,
                          seed=1, run_id="y" * 64, rotating=True, sections=2)
         for k, s in enumerate(steps):
+            turn = ([0, 0, angle[k]], [0, 0, rate[k]])
             w.write_frame(int(s), float(s * DT), parts([1], [[0.0, -9.4e-3, 1e-3 + lift[k]]], radius=1.5e-4),
-                          [0, 0, lift[k]], [0, 0, vz[k]], surface_rotation=([0, 0, angle[k]], [0, 0, rate[k]]),
+                          [0, 0, lift[k]], [0, 0, vz[k]], surface_rotation=turn,
                           section_surfaces=[([moved * k, 0, 0], [0, 0, 0])])
         w.finish("complete")
         return errors(check_file(path))
