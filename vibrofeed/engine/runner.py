@@ -139,14 +139,13 @@ class LongRunWarning(UserWarning):
     """A run estimated to take longer than ``VIBROFEED_LONG_RUN_HOURS`` (:func:`warn_long_run`)."""
 
 
-def long_run(values: Mapping[str, str]) -> str | None:
-    """How long a run of resolved ``values`` will take, when more than
-    ``VIBROFEED_LONG_RUN_HOURS`` (:func:`vibrofeed.parameters.run_steps` at
-    :data:`~vibrofeed.parameters.STEPS_PER_SECOND`); None when less, or not estimated."""
+def estimated_seconds(values: Mapping[str, str]) -> tuple[float, float, float] | None:
+    """(wall seconds, steps, timestep [s]) a run of resolved ``values`` is estimated to take on
+    one core (:func:`vibrofeed.parameters.run_steps` at
+    :data:`~vibrofeed.parameters.STEPS_PER_SECOND`); None when it cannot be estimated."""
     import math
 
     from ..parameters import STEPS_PER_SECOND, run_steps
-    from ..values import duration
 
     numbers = {}
     for name, text in values.items():
@@ -155,11 +154,23 @@ def long_run(values: Mapping[str, str]) -> str | None:
         except (TypeError, ValueError):
             continue
     estimate = run_steps(numbers)
-    hours = environment.long_run_hours() or LONG_RUN_HOURS
     if estimate is None or not math.isfinite(estimate[0]):
         return None
     steps, dt = estimate
-    seconds = steps / STEPS_PER_SECOND
+    return steps / STEPS_PER_SECOND, steps, dt
+
+
+def long_run(values: Mapping[str, str]) -> str | None:
+    """How long a run of resolved ``values`` will take, when more than
+    ``VIBROFEED_LONG_RUN_HOURS`` (:func:`estimated_seconds`); None when less, or not estimated."""
+    from ..parameters import STEPS_PER_SECOND
+    from ..values import duration
+
+    estimate = estimated_seconds(values)
+    hours = environment.long_run_hours() or LONG_RUN_HOURS
+    if estimate is None:
+        return None
+    seconds, steps, dt = estimate
     if seconds <= hours * 3600:
         return None
     span = f"{seconds / 86400:.3g} days" if seconds >= 2 * 86400 else duration(seconds)

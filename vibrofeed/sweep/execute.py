@@ -156,6 +156,24 @@ def describe(jobs: list[Job], spec: SweepSpec, states: dict[int, str]) -> str:
     return "\n".join("  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip() for r in [head] + rows)
 
 
+def time_estimate(todo: list, at_once: int) -> str:
+    """What the sweep's runs still to do are estimated to take (each as a lone run would,
+    :func:`~vibrofeed.engine.runner.estimated_seconds`, ``at_once`` at a time), in words for
+    its head line; empty when none can be estimated."""
+    from ..engine.runner import estimated_seconds
+    from ..parameters import STEPS_PER_SECOND
+    from ..values import duration
+
+    seconds = [e[0] for job in todo if (e := estimated_seconds(job.values)) is not None]
+    if not seconds:
+        return ""
+    # the longest run bounds the wall time from below however the rest are shared out
+    total = max(sum(seconds) / max(at_once, 1), max(seconds))
+    some = "" if len(seconds) == len(todo) else f" ({len(todo) - len(seconds)} not estimated)"
+    return (f"about {duration(total)} to run{some} at {STEPS_PER_SECOND / 1e3:.0f}k steps/s per run "
+            "(more parts run slower)")
+
+
 def sweep(spec_path, output=None, workers: int = 1, retry_failed: bool = False,
           dry_run: bool = False, quiet: bool = False, comm=None, out=None) -> int:
     """``vibrofeed sweep``: returns the exit status (or raises a VibrofeedError).
@@ -206,6 +224,9 @@ def _run(spec, deck, jobs, folder, ours, parameters, groups, workers, retry_fail
             f"replicates) of deck {deck.name} -> {folder}; {n_done} done, {n_failed} failed kept, "
             f"{len(todo)} to run ({'workers: ' + str(workers) if comm is None else where}, "
             f"{spec.ranks_per_run} rank{'s' * (spec.ranks_per_run > 1)} per run)")
+    estimate = time_estimate(todo, groups if comm is not None else workers)
+    if estimate:
+        head += f"; {estimate}"
     if dry_run:
         print(head, file=out)
         print(describe(jobs, spec, states), file=out)
