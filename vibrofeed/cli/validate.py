@@ -96,8 +96,10 @@ def run(args) -> int:
         for case in cases:
             print(f"{case.name:<{width}}  [{case.kind}] {case.title}")
         return 0
+    from ..engine.runner import check_at_once
     from .outputs import folder_destination, os_error, written
 
+    check_at_once(args.jobs, args.ranks, ranks_name="-n ")
     selected = [C.find(n) for n in (args.cases or C.available())]
     folder_destination("-o", args.output, create=False, parents=True)
     say = (lambda *a: None) if args.json else (lambda text: print(text, file=sys.stderr))

@@ -119,14 +119,21 @@ def max_ranks() -> int:
     return max(RANKS_PER_CORE * cores, int(slurm) if slurm.isdigit() else 0)
 
 
+def _limit_said(limit: int) -> str:
+    """Where the rank limit ``limit`` comes from, in words for an error."""
+    if environment.max_ranks() is not None:
+        return f"at most {limit} (VIBROFEED_MAX_RANKS={limit})"
+    return (f"at most {limit} ({RANKS_PER_CORE} per core or the Slurm tasks; set VIBROFEED_MAX_RANKS "
+            "to change the limit)")
+
+
 def check_ranks(ranks) -> int:
     """``ranks`` if it is a number of MPI ranks this machine can start, else UsageError."""
     if isinstance(ranks, bool) or not isinstance(ranks, int) or ranks < 1:
         raise UsageError(f"the number of ranks must be a positive integer, got {said(ranks)}")
     limit = max_ranks()
     if ranks > limit:
-        raise UsageError(f"{ranks} ranks is more than this machine can run: at most {limit} "
-                         f"({RANKS_PER_CORE} per core; set VIBROFEED_MAX_RANKS to change the limit)")
+        raise UsageError(f"{ranks} ranks is more than this machine can run: {_limit_said(limit)}")
     return ranks
 
 
@@ -189,16 +196,16 @@ def warn_long_run(values: Mapping[str, str]) -> None:
         warnings.warn(text, LongRunWarning, stacklevel=3)
 
 
-def check_at_once(workers: int, ranks: int) -> None:
+def check_at_once(workers: int, ranks: int, ranks_name: str = "ranks_per_run = ") -> None:
     """``-j workers`` runs of ``ranks`` MPI ranks each, at once: UsageError when that is more
-    ranks than this machine can run (:func:`max_ranks`), as one run of that many is."""
+    ranks than this machine can run (:func:`max_ranks`), as one run of that many is.
+    ``ranks_name``: how the user gave ``ranks`` (a sweep's key, a command's ``-n``)."""
     limit = max_ranks()
     if workers > 1 and workers * ranks > limit:
-        each = f" of ranks_per_run = {ranks} ranks each" if ranks > 1 else ""
+        each = f" of {ranks_name}{ranks} ranks each" if ranks > 1 else ""
         raise UsageError(f"-j {workers}: {workers} runs at once{each} is {workers * ranks} ranks, more "
-                         f"than this machine can run: at most {limit} ({RANKS_PER_CORE} per core; set "
-                         f"VIBROFEED_MAX_RANKS to change the limit); give -j {max(limit // ranks, 1)} "
-                         "or less")
+                         f"than this machine can run: {_limit_said(limit)}; give -j "
+                         f"{max(limit // ranks, 1)} or less")
 
 
 def run_id(deck: Deck, values: Mapping[str, str], before_run=None, schedule=None,

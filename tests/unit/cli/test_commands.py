@@ -140,3 +140,12 @@ def test_validate_list_and_unknown_case():
     assert all(c["kind"] and c["title"] for c in listed)
     proc = vibrofeed("validate", "no_such_case")
     assert proc.returncode == 2 and "no validation case no_such_case;" in proc.stderr
+
+
+def test_validate_runs_at_once_are_held_to_the_rank_limit(tmp_path, monkeypatch):
+    """validate -j 3 -n 2 on a 4-rank limit started 6 ranks; now refused before any case runs."""
+    monkeypatch.setenv("VIBROFEED_MAX_RANKS", "4")
+    proc = vibrofeed("validate", "hop_speed", "-j", "3", "-n", "2", "-o", tmp_path / "v")
+    assert proc.returncode == 2
+    assert proc.stderr.startswith("vibrofeed: error: -j 3: 3 runs at once of -n 2 ranks each is 6 ranks")
+    assert "give -j 2 or less" in proc.stderr and not (tmp_path / "v").exists()

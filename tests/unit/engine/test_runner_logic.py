@@ -105,8 +105,11 @@ def test_runs_at_once_are_held_to_the_rank_limit_as_one_run_is(three_cores):
     with pytest.raises(UsageError) as err:
         check_at_once(13, 1)
     assert str(err.value) == ("-j 13: 13 runs at once is 13 ranks, more than this machine can run: at "
-                              "most 12 (4 per core; set VIBROFEED_MAX_RANKS to change the limit); give "
-                              "-j 12 or less")
+                              "most 12 (4 per core or the Slurm tasks; set VIBROFEED_MAX_RANKS to change "
+                              "the limit); give -j 12 or less")
+    # a command whose ranks are its -n says so
+    with pytest.raises(UsageError, match=r"^-j 5: 5 runs at once of -n 3 ranks each is 15 "):
+        check_at_once(5, 3, ranks_name="-n ")
     with pytest.raises(UsageError, match=r"^-j 5: 5 runs at once of ranks_per_run = 3 ranks each is 15 "
                                          r"ranks, .*; give -j 4 or less$"):
         check_at_once(5, 3)
@@ -165,8 +168,8 @@ def test_check_ranks_refuses_one_past_the_limit(monkeypatch):
     monkeypatch.setenv("VIBROFEED_MAX_RANKS", "5")
     with pytest.raises(UsageError) as caught:
         check_ranks(6)
-    assert str(caught.value) == ("6 ranks is more than this machine can run: at most 5 (4 per core; "
-                                 "set VIBROFEED_MAX_RANKS to change the limit)")
+    # the limit set by the variable is said as that, not as ranks per core
+    assert str(caught.value) == "6 ranks is more than this machine can run: at most 5 (VIBROFEED_MAX_RANKS=5)"
     monkeypatch.delenv("VIBROFEED_MAX_RANKS")
     monkeypatch.setenv("SLURM_NTASKS", "100000")  # a huge allocation: its tasks are the limit
     assert check_ranks(100000) == 100000
