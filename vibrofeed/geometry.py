@@ -307,7 +307,8 @@ def prepare_bowl_feeder(values: Mapping[str, str], folder: str | Path) -> Prepar
     feeder = Feeder.from_values(values)
     feeder.check()
     box = list(BOX_PART) + ["density"] if numbers["shape"] == 3 else []
-    lines += guard_lines(values, ["sections"] + box + [n for e in feeder.elements[1:] for n in e.deck_names()])
+    line_names = [n for e in feeder.elements[1:] for n in e.deck_names()]
+    lines += guard_lines(values, ["sections"] + box + line_names)
     (folder / "prepared.in").write_text("".join(lines))
     track = bowl_mesh(bowl_from(numbers))
     further = write_line_files(feeder, folder)

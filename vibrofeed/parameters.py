@@ -17,8 +17,8 @@ from .bowl import check_bowl, climb_advice
 from .decks import RESERVED, Deck
 from .errors import ParameterError
 from .feeders.feeder import Feeder
-from .feeders.records import Part
 from .feeders.linear import MAX_SECTIONS
+from .feeders.records import Part
 from .parts import Box, box_template, check_box, mass_properties
 from .plausibility import DENSITY_MAX, PART_MAX, advice
 
@@ -432,7 +432,7 @@ def inlet_capacity(p: Mapping[str, float]) -> tuple[float, float]:
     settled fill (FILL_PACKING); the time [s] a part dropped at rest from its top takes to
     fall out of it). A part is in the block a fall time at most, so the inlet drops at most
     capacity / time parts a second (:func:`_check_inlet`)."""
-    size, shape = p["part_size"], int(p.get("shape", 0))
+    size = p["part_size"]
     width = p["track_width"] - 2 * INLET_MARGIN * size
     block = INLET_LENGTH * size * max(width, 0.0) * INLET_HEIGHT * size
     parts = FILL_PACKING * block / volume_of(p)

@@ -259,13 +259,18 @@ def box_reach(box: Box) -> float:
 
 
 # ------------------------------------------------------------------ fidelity
-def _voxel_grid(lo, hi, step):
-    """Cell centres of a grid filling the block lo..hi exactly, cells at most ``step``."""
-    axes = []
-    for a, b in zip(lo, hi):
-        n = max(1, math.ceil((b - a) / step - 1e-9))
-        axes.append(a + (np.arange(n) + 0.5) * (b - a) / n)
-    cell = np.prod([(b - a) / len(ax) for a, b, ax in zip(lo, hi, axes)])
+def voxel_grid(box: Box, cells: int = 40):
+    """Cell centres (box frame) of a grid over the solid: the box's L, W, T whole numbers of
+    cells of about T/``cells`` each (its faces on cell faces), and more cells above up to
+    the bump's top. Returns (x, y, z arrays, the cell's volume)."""
+    top = box.bump_height if box.has_bump else 0.0
+    axes, cell = [], 1.0
+    for extent, above in ((box.length, 0.0), (box.width, 0.0), (box.thickness, top)):
+        n = max(1, math.ceil(extent / (box.thickness / cells) - 1e-9))
+        size = extent / n
+        n += math.ceil(above / size - 1e-9)
+        axes.append(-extent / 2 + (np.arange(n) + 0.5) * size)
+        cell *= size
     return np.meshgrid(*axes, indexing="ij"), cell
 
 
@@ -320,9 +325,7 @@ def clump_fidelity(box: Box, cells: int = 40) -> dict:
     rows = box_template_box_frame(box)
     d = box.sphere_diameter
     core = tuple((e - d) / 2 for e in (box.length, box.width, box.thickness))
-    top = box.thickness / 2 + (box.bump_height if box.has_bump else 0.0)
-    grid, cell = _voxel_grid((-box.length / 2, -box.width / 2, -box.thickness / 2),
-                             (box.length / 2, box.width / 2, top), box.thickness / cells)
+    grid, cell = voxel_grid(box, cells)
     volume, com, inertia = _moments(clump_inside(rows, grid, core), grid, cell)
     solid = mass_properties(box, 1.0)
     axes = principal_frame(solid.inertia)
