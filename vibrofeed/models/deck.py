@@ -101,11 +101,10 @@ def mass(p: Mapping) -> float:
         return size ** 2 * thickness * rho
     if shape == 2:
         return math.pi / 4.0 * size ** 2 * thickness * rho
-    if shape == 3:
-        from ..feeders.records import Part
-        from ..parts import Box, mass_properties
-
-        return mass_properties(Box.of(Part.from_values(p)), rho).mass
+    if shape == 3:  # a box and its bump's cap above the face (vibrofeed.parts)
+        h, r = _f(p, "bump_height", 0.0), _f(p, "bump_diameter", 0.0) / 2
+        cap = math.pi * h * h * (3 * r - h) / 3 if h > 0 else 0.0
+        return (size * _f(p, "part_width") * thickness + cap) * rho
     raise ValueError(f"shape must be 0, 1, 2 or 3, got {shape}")
 
 
