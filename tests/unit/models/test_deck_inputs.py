@@ -160,8 +160,14 @@ def test_the_mass_of_a_bulk_part_by_shape():
     assert deck.mass({**base, "shape": 0}) == pytest.approx(sphere, rel=1e-12)
     assert deck.mass({**base, "shape": 1}) == pytest.approx(1e-6 * 2e-4 * 2000, rel=1e-12)
     assert deck.mass({**base, "shape": 2}) == pytest.approx(math.pi / 4 * 1e-6 * 2e-4 * 2000, rel=1e-12)
-    with pytest.raises(ValueError, match="shape must be 0, 1 or 2"):
-        deck.mass({**base, "shape": 3})
+    # a box L x W x T, with a bump: plus the cap pi h^2 (3r - h)/3 above its face
+    box = {**base, "shape": 3, "part_width": 5e-4}
+    assert deck.mass(box) == pytest.approx(1e-3 * 5e-4 * 2e-4 * 2000, rel=1e-12)
+    cap = math.pi * 5e-5 ** 2 * (3e-4 - 5e-5) / 3
+    assert deck.mass({**box, "bump_height": 5e-5, "bump_diameter": 2e-4}) == pytest.approx(
+        (1e-3 * 5e-4 * 2e-4 + cap) * 2000, rel=1e-12)
+    with pytest.raises(ValueError, match="shape must be 0, 1, 2 or 3"):
+        deck.mass({**base, "shape": 4})
 
 
 # -- adhesion and the air film ---------------------------------------------------------------
