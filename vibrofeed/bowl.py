@@ -394,7 +394,8 @@ GEOMETRY = ("bowl_diameter", "track_width", "helix_angle", "turns", "wall_height
             "wiper_height", "wiper_at")
 PART = ("part_size", "part_thickness", "shape", "size_spread")
 # a box's further dimensions (shape 3, vibrofeed.parts), optional: the deck's defaults
-BOX_PART = {"part_width": None, "bump_height": 0.0, "bump_diameter": 0.0, "bump_at": 0.5}
+BOX_PART = {"part_width": None, "bump_height": 0.0, "bump_diameter": 0.0, "bump_at": 0.5,
+            "clump_spacing": 0.75}
 
 
 def bowl_from(p: Mapping) -> Bowl:

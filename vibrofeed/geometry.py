@@ -276,7 +276,7 @@ def feeder_names(feeder: Feeder) -> list[str]:
     by hand to (the part, section 1's track, and a line's every element and drive)."""
     names = ["shape", "part_size", "part_thickness", "size_spread", "sections"]
     if feeder.part.shape == 3:  # (the box's template and mass are written for these)
-        names += ["part_width", "bump_height", "bump_diameter", "bump_at", "density"]
+        names += ["part_width", "bump_height", "bump_diameter", "bump_at", "clump_spacing", "density"]
     for e in feeder.elements:
         names += e.deck_names(drive=feeder.is_line)
     return names

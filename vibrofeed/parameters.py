@@ -129,6 +129,7 @@ RULES: dict[str, Callable[[float], str | None]] = {
     "bump_height": _non_negative,
     "bump_diameter": _non_negative,
     "bump_at": _between(-1, 1, lo_open=False, hi_open=False),
+    "clump_spacing": _between(0.5, 1, lo_open=False, hi_open=False),
     "size_spread": _between(0, 1, lo_open=False),
     "n_parts": _integer(lo=0),
     "fill_from": _between(0, 1, lo_open=False, hi_open=False),

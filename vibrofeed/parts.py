@@ -64,12 +64,13 @@ class Box:
     bump_height: float = 0.0
     bump_diameter: float = 0.0
     bump_at: float = 0.5
+    spacing: float = CLUMP_SPACING  # the clump's largest sphere spacing, in sphere diameters
 
     @classmethod
     def of(cls, part) -> Box:
         """The box of a :class:`vibrofeed.feeders.records.Part` (shape 3)."""
         return cls(part.size, part.width, part.thickness, part.bump_height, part.bump_diameter,
-                   part.bump_at)
+                   part.bump_at, part.clump_spacing)
 
     @property
     def has_bump(self) -> bool:
@@ -96,6 +97,9 @@ def check_box(box: Box) -> None:
     if not L >= W >= T:
         raise ParameterError(f"a box needs part_size >= part_width >= part_thickness (L >= W >= T), "
                              f"got {L:g} m, {W:g} m, {T:g} m")
+    if not 0.5 <= box.spacing <= 1.0:
+        raise ParameterError(f"clump_spacing={box.spacing:g} must be in [0.5, 1]: spheres further apart "
+                             "than their diameter leave gaps a neighbour's sphere enters")
     h, db, at = box.bump_height, box.bump_diameter, box.bump_at
     if h < 0 or db < 0:
         raise ParameterError(f"bump_height={h:g} m and bump_diameter={db:g} m must be >= 0")
@@ -213,15 +217,15 @@ def box_frame_orientation(quaternions, box: Box) -> np.ndarray:
 
 
 # ------------------------------------------------------------------ the clump
-def _axis(span: float, d: float) -> np.ndarray:
-    n = max(2, math.ceil(span / (CLUMP_SPACING * d) - 1e-9) + 1) if span > 0 else 1
+def _axis(span: float, d: float, spacing: float = CLUMP_SPACING) -> np.ndarray:
+    n = max(2, math.ceil(span / (spacing * d) - 1e-9) + 1) if span > 0 else 1
     return np.linspace(-span / 2, span / 2, n)
 
 
 def box_template_box_frame(box: Box) -> np.ndarray:
     """The clump in the box frame, about the box's centre: (n, 4) x y z r (see box_template)."""
     d = box.sphere_diameter
-    xs, ys, zs = (_axis(e - d, d) for e in (box.length, box.width, box.thickness))
+    xs, ys, zs = (_axis(e - d, d, box.spacing) for e in (box.length, box.width, box.thickness))
     gx, gy, gz = np.meshgrid(xs, ys, zs, indexing="ij")
     ix, iy, iz = np.meshgrid(*(np.arange(len(a)) for a in (xs, ys, zs)), indexing="ij")
     shell = ((ix == 0) | (ix == len(xs) - 1) | (iy == 0) | (iy == len(ys) - 1)

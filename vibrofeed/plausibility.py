@@ -145,7 +145,7 @@ def _without_effect(p: Mapping[str, float], given: Collection[str]) -> list[str]
     if "part_size" in p and int(p.get("shape", 0)) == 0:
         idle["part_thickness"] = "applies to chips, discs and boxes (shape 1, 2, 3), not to spheres"
     if "part_size" in p and int(p.get("shape", 0)) != 3:
-        for name in ("part_width", "bump_height", "bump_diameter", "bump_at"):
+        for name in ("part_width", "bump_height", "bump_diameter", "bump_at", "clump_spacing"):
             idle[name] = "shapes a box (shape 3) only"
     elif "part_size" in p and p.get("bump_height", 0.0) == 0:
         for name in ("bump_diameter", "bump_at"):

@@ -51,6 +51,7 @@ TABLES: dict[str, dict[str, str]] = {
     "feeder": {"incline": "incline"},
     "parts": {"shape": "shape", "size": "part_size", "thickness": "part_thickness", "width": "part_width",
               "bump_height": "bump_height", "bump_diameter": "bump_diameter", "bump_at": "bump_at",
+              "clump_spacing": "clump_spacing",
               "size_spread": "size_spread", "density": "density", "youngs": "youngs",
               "poisson": "poisson", "restitution": "restitution", "restitution_pp": "restitution_pp",
               "mu": "mu", "mu_pp": "mu_pp", "rolling_friction": "rolling_friction",

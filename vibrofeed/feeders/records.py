@@ -48,8 +48,8 @@ class Part:
     """The parts a feeder conveys: ``shape`` (0 sphere, 1 chip, 2 disc, 3 box), ``size`` (a
     sphere's diameter, a chip's edge, a disc's diameter, a box's length L), ``thickness``
     (a chip's, disc's or box's), ``size_spread`` (spheres: radii R(1-s), R, R(1+s)); a
-    box's ``width`` W and its bump (``bump_height`` 0: none, ``bump_diameter``, ``bump_at``;
-    vibrofeed.parts)."""
+    box's ``width`` W, its bump (``bump_height`` 0: none, ``bump_diameter``, ``bump_at``) and
+    its clump's ``clump_spacing`` (vibrofeed.parts)."""
 
     shape: int
     size: float
@@ -59,6 +59,7 @@ class Part:
     bump_height: float = 0.0
     bump_diameter: float = 0.0
     bump_at: float = 0.5
+    clump_spacing: float = 0.75
 
     @classmethod
     def from_values(cls, values: Mapping) -> Part:
@@ -69,7 +70,8 @@ class Part:
                    width=number(values, "part_width", thickness),
                    bump_height=number(values, "bump_height", 0.0),
                    bump_diameter=number(values, "bump_diameter", 0.0),
-                   bump_at=number(values, "bump_at", 0.5))
+                   bump_at=number(values, "bump_at", 0.5),
+                   clump_spacing=number(values, "clump_spacing", 0.75))
 
     @property
     def widest(self) -> float:

@@ -240,3 +240,17 @@ def test_prepare_writes_the_box_template_and_its_mass(tmp_path):
     assert float(numbers["m_box"]) == pytest.approx(2330 * (1e-3 * 5e-4 * 3.5e-4 + v_cap), rel=1e-12)
     assert float(numbers["n_sph_box"]) == 85 and float(numbers["I_box_xz"]) == 0
     assert "Invalid bump_at" in text  # a run by hand is held to the box it was built for
+
+
+def test_clump_spacing_sets_the_lattice():
+    """spacing 1.0: spheres touching along each edge; 1.0 x 0.5 x 0.35 mm, d = 0.175 mm: centres
+    span 0.825, 0.325 and 0.175 mm, so 6 x 3 x 2 positions, all on the surface: 36 spheres."""
+    from vibrofeed.parts import Box, box_template_box_frame, check_box
+
+    rows = box_template_box_frame(Box(1e-3, 5e-4, 3.5e-4, spacing=1.0))
+    assert len(rows) == 6 * 3 * 2
+    xs = np.unique(np.round(rows[:, 0], 12))
+    assert np.diff(xs).max() <= 1.75e-4 * (1 + 1e-9)  # at most one diameter apart
+    for bad in (0.4, 1.2):
+        with pytest.raises(ParameterError, match=rf"^clump_spacing={bad:g} must be in \[0.5, 1\]"):
+            check_box(Box(1e-3, 5e-4, 3.5e-4, spacing=bad))

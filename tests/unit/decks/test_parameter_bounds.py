@@ -62,6 +62,7 @@ BULK = {
     "bump_height": (0, True, INF, False, None),
     "bump_diameter": (0, True, INF, False, None),
     "bump_at": (-1, True, 1, True, None),
+    "clump_spacing": (0.5, True, 1, True, None),
     "size_spread": (0, True, 1, False, None),
     "n_parts": (0, True, INF, False, "integers"),
     "fill_from": (0, True, 1, True, None),
