@@ -5,6 +5,7 @@ dropped on the still floor comes to rest with its centre half its vertical exten
 import numpy as np
 
 from helpers import vibrofeed
+from vibrofeed.models.deck import transport
 from vibrofeed.results.reader import Result
 from vibrofeed.rotations import quaternion_matrices
 
@@ -29,10 +30,14 @@ def test_boxes_with_a_bump_convey_with_the_mass_balance_exact(tmp_path):
         assert np.all(counts["on_track"] + counts["exited"] == counts["inserted"])
         assert r.derived["body_spheres"] == 85  # 84 on the shell and the bump
         assert len(r.body_template) == 85
-        x = r.read("position")[:, :, 0]
+        x, t = r.read("position")[:, :, 0], r.time
         on = ~np.isnan(x[0]) & ~np.isnan(x[-2])
-        # Gamma_n 2 at 100 Hz carries them forward: more than a millimetre in 0.05 s on average
-        assert np.mean(x[-2, on] - x[0, on]) > 1e-3 or counts["exited"][-1] > 0
+        model = transport(r.parameters).velocity  # one part alone, sliding and hopping
+        advance = np.mean(x[-2, on] - x[0, on]) / (t[-2] - t[0])
+    # forward at the model's scale: the boxes are inserted turned at random, and one on its end
+    # or leaning on a neighbour conveys slower than a block lying alone; a third of the model's
+    # speed at least, and not beyond it by more than its own error of a few per cent
+    assert model > 0 and 0.3 * model < advance < 1.1 * model, (advance, model)
 
 
 def test_a_dropped_box_rests_half_its_vertical_extent_above_the_floor(tmp_path):

@@ -78,7 +78,8 @@ class Returns:
         commands += [
             f"fix {fix} all insert/rate/region seed {seed} distributiontemplate pdd "
             f"nparticles {due} particlerate {rate:.17g} insert_every 1 "
-            "overlapcheck yes all_in yes vel constant 0 0 0 region inlet",
+            "overlapcheck yes all_in yes vel constant 0 0 0 orientation ${insert_orientation} "
+            "region inlet",  # (the deck's: a box turned at random, others as their template)
             f"variable {fix}_n equal f_{fix}[1]",
         ]
         self.active.append((fix, due))

@@ -20,7 +20,7 @@ import numpy as np
 from ..rotations import quaternion_matrices
 
 # The deck's integer codes of `shape` (LIGGGHTS compares numbers, not strings).
-SHAPE_CODES = {0: "sphere", 1: "chip", 2: "disc"}
+SHAPE_CODES = {0: "sphere", 1: "chip", 2: "disc", 3: "box"}
 
 # Facets of the drawn shapes: enough for round outlines at a picture's scale,
 # few enough that a thousand parts stay a few hundred thousand triangles.
@@ -35,18 +35,22 @@ class PartShape:
     """The real shape of the parts of a run.
 
     kind: ``sphere``, ``chip`` (a flat square die: a box ``size`` x ``size`` x
-    ``thickness``) or ``disc`` (a cylinder of diameter ``size`` and height
-    ``thickness``); ``axis``: the body-frame axis (0, 1, 2) normal to a chip's
-    or disc's faces. Spheres take each part's own radius.
+    ``thickness``), ``disc`` (a cylinder of diameter ``size`` and height
+    ``thickness``) or ``box`` (``size`` x ``width`` x ``thickness`` along body x, y, z:
+    vibrofeed.parts); ``axis``: the body-frame axis (0, 1, 2) normal to a chip's or disc's
+    faces. Spheres take each part's own radius.
     """
 
     kind: str = "sphere"
     size: float = 0.0
     thickness: float = 0.0
     axis: int = 2
+    width: float = 0.0
 
     def extents(self) -> np.ndarray:
-        """(3,) edge lengths of the shape's box in the body frame [m] (chips and discs)."""
+        """(3,) edge lengths of the shape's box in the body frame [m] (chips, discs, boxes)."""
+        if self.kind == "box":
+            return np.array([self.size, self.width, self.thickness])
         out = np.full(3, self.size)
         out[self.axis] = self.thickness
         return out
@@ -126,6 +130,9 @@ def part_shape(parameters: dict, template: np.ndarray | None = None) -> PartShap
         axis = int(np.argmin(extents))
     size = parameters.get("part_size")
     thickness = parameters.get("part_thickness")
+    if kind == "box":  # its body frame is the box's (x along L, z through T): no axis to find
+        width = float(parameters.get("part_width", thickness))
+        return PartShape(kind, float(size), float(thickness), 2, width)
     if not isinstance(size, float):
         size = float(np.max(extents)) if extents is not None else 0.0
     if not isinstance(thickness, float):
@@ -251,7 +258,7 @@ def cylinder(diameter: float, height: float, axis: int = 2, around: int = DISC_R
 def template_mesh(shape: PartShape):
     """(points, triangles, normals) of one part in its body frame; spheres have radius 1
     (scaled per part)."""
-    if shape.kind == "chip":
+    if shape.kind in ("chip", "box"):
         return box(shape.extents())
     if shape.kind == "disc":
         return cylinder(shape.size, shape.thickness, shape.axis)

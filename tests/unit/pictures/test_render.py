@@ -76,6 +76,12 @@ def test_shape_from_deck_variables():
     s = scene.part_shape({"shape": 1.0}, template)
     assert s.axis == 1
     assert (s.size, s.thickness) == pytest.approx((3e-4, 1e-4), rel=1e-12, abs=0)  # m: rounding
+    # a box keeps its own frame: L along x, W along y, T along z
+    b = scene.part_shape({"shape": 3.0, "part_size": 1e-3, "part_width": 5e-4, "part_thickness": 3.5e-4})
+    assert b.kind == "box" and b.extents().tolist() == [1e-3, 5e-4, 3.5e-4]
+    points = scene.template_mesh(b)[0]
+    assert (points.max(axis=0) - points.min(axis=0)).tolist() == pytest.approx([1e-3, 5e-4, 3.5e-4],
+                                                                                 rel=1e-12, abs=0)
 
 
 def test_rotation_matrices_are_rotations_and_nan_is_identity():
