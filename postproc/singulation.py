@@ -74,11 +74,20 @@ ALIGNED_ANGLE = 10.0
 
 def thin_axis(template) -> np.ndarray:
     """The body axis along which a clump template is thinnest (its face normal),
-    as a unit vector with its largest component positive."""
-    xyz = np.asarray(template, dtype=float)[:, :3]
+    as a unit vector with its largest component positive. The spread is the spheres
+    of the template's most common radius (a box's lattice, not its bump); when two
+    spreads tie (a box as wide as thick), the axis nearest body z (a box's marked
+    face's normal, vibrofeed.parts)."""
+    rows = np.asarray(template, dtype=float)
+    radii, counts = np.unique(rows[:, 3], return_counts=True)
+    xyz = rows[rows[:, 3] == radii[np.argmax(counts)], :3]
     xyz = xyz - xyz.mean(axis=0)
-    _, vectors = np.linalg.eigh(xyz.T @ xyz)
+    values, vectors = np.linalg.eigh(xyz.T @ xyz)
     axis = vectors[:, 0]  # the smallest spread
+    if values[1] - values[0] <= 1e-9 * values[2]:
+        z = vectors[:, :2] @ vectors[2, :2]  # body z projected into the tied plane
+        if np.linalg.norm(z) > 0:
+            axis = z / np.linalg.norm(z)
     return axis * np.sign(axis[np.argmax(np.abs(axis))])
 
 

@@ -635,10 +635,14 @@ def whole_period_stride(frame_dt: float, freqs, tol: float = 1e-4, max_stride: i
 
 def part_span(p: dict) -> float:
     """Diameter [m] of the sphere around a bulk-deck part: two parts whose centres are
-    farther apart cannot touch (sphere, chip box, disc cylinder)."""
+    farther apart cannot touch (sphere, chip box, disc cylinder, box clump)."""
     shape, size = int(float(p.get("shape", 0))), float(p["part_size"])
     if shape == 0:
         return size * (1 + float(p.get("size_spread", 0.0)))
+    if shape == 3:  # a box: its clump's circumscribed sphere about the centre of mass
+        from vibrofeed.feeders.records import Part
+
+        return 2 * Part.from_values(p).reach
     t = float(p["part_thickness"])
     return math.sqrt(2 * size ** 2 + t ** 2) if shape == 1 else math.hypot(size, t)
 

@@ -393,6 +393,8 @@ GEOMETRY = ("bowl_diameter", "track_width", "helix_angle", "turns", "wall_height
             "cross_tilt", "lip_height", "chute_length", "drop_from", "drop_to", "drop_width",
             "wiper_height", "wiper_at")
 PART = ("part_size", "part_thickness", "shape", "size_spread")
+# a box's further dimensions (shape 3, vibrofeed.parts), optional: the deck's defaults
+BOX_PART = {"part_width": None, "bump_height": 0.0, "bump_diameter": 0.0, "bump_at": 0.5}
 
 
 def bowl_from(p: Mapping) -> Bowl:
@@ -416,7 +418,8 @@ def widest_part(p: Mapping) -> float:
 
 
 def tallest_part(p: Mapping) -> float:
-    """A part's height lying flat (a sphere's diameter, a chip's or disc's thickness)."""
+    """A part's height lying flat (a sphere's diameter, a chip's, disc's or box's thickness,
+    a box's bump up)."""
     return Part.from_values(p).tallest
 
 
@@ -637,7 +640,7 @@ def _highest_floor(b: Bowl, x0: float, x1: float, y0: float, y1: float, theta: f
 def write_bowl(values: Mapping[str, str], folder: Path) -> list[str]:
     """Write the bowl's mesh (``bowl.stl``) and return ``prepared.in`` lines: the derived
     geometry the deck reads and the regions along the track for its pre-fill."""
-    p = {k: float(v) for k, v in values.items() if k in GEOMETRY + PART}
+    p = {k: float(v) for k, v in values.items() if k in GEOMETRY + PART + tuple(BOX_PART)}
     b = bowl_from(p)
     write_stl(*bowl_mesh(b), folder / "bowl.stl", "bowl")
     # room for a part however it is turned (LIGGGHTS inserts its bounding sphere), under

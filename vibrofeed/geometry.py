@@ -12,7 +12,8 @@ are the outlet edge and the walls' top edges (LIGGGHTS' mesh/surface then sees o
 connected surface, without seams between floor and walls). They are written as binary STL
 (:func:`vibrofeed.mesh.write_stl`). Multisphere parts (chips, discs) are clumps of spheres of diameter
 ``part_thickness`` whose outline is the part's, given as ``(n, 4)`` rows x, y, z, r in
-the body frame (the part's centre at the origin, its flat faces normal to z).
+the body frame (the part's centre at the origin, its flat faces normal to z); boxes
+(shape 3) are vibrofeed.parts' clumps, about the solid's centre of mass.
 
 :func:`prepare_bulk_feeder` is the prepare hook that decks/bulk_feeder.liggghts declares:
 the runner calls it before a run (and ``vibrofeed prepare`` for a run by hand).
@@ -190,20 +191,45 @@ def insertion_seeds(seed: int, count: int) -> list[int]:
 
 
 # ------------------------------------------------------------------ the hook
+def box_lines(values: Mapping[str, str], folder: Path) -> tuple[list[str], np.ndarray | None]:
+    """A box part's (shape 3, vibrofeed.parts) template file ``box.multisphere`` and
+    prepared.in's lines of its sphere count, contact sphere, reach, mass and inertia tensor
+    (the body frame's six components, xx xy xz yy yz zz); for other shapes the same
+    variables at 0 (the decks read them for shape 3 only) and no file."""
+    from .feeders.records import Part
+    from .parts import Box, box_template, check_box, engine_inertia
+
+    names = ["n_sph_box", "r_sph_box", "r_min_box", "r_ext_box", "m_box"] + [
+        f"I_box_{c}" for c in ("xx", "xy", "xz", "yy", "yz", "zz")]
+    if shape_code(values.get("shape", "0")) != 3:
+        return [f"variable {n} equal 0\n" for n in names], None
+    part = Part.from_values(values)
+    box = Box.of(part)
+    check_box(box)
+    rows = box_template(box)
+    write_template(rows, folder / "box.multisphere", "box")
+    mass, inertia = engine_inertia(box, number(values, "density", 2330.0))
+    numbers = [len(rows), box.sphere_diameter / 2, float(rows[:, 3].min()), part.reach, mass, *inertia]
+    return [f"variable {n} equal {float(v)!r}\n" for n, v in zip(names, numbers)], rows
+
+
 def _part_files(values: Mapping[str, str], folder: Path, hook: str, shape: int, size: float,
                 thickness: float) -> tuple[list[str], np.ndarray | None]:
     """What every feeder deck's prepare hook writes for its parts: the catch face, the clump
-    templates; and the first lines of its prepared.in (the templates' sphere counts, the
-    insertion seeds). Returns (those lines, the body template of ``shape`` or None)."""
+    templates; and the first lines of its prepared.in (the templates' sphere counts, a box's
+    mass and inertia, the insertion seeds). Returns (those lines, the body template of
+    ``shape`` or None)."""
     write_stl(*catch_face(), folder / "catch.stl", "catch")
     templates = {"chip": chip_template(size, thickness), "disc": disc_template(size, thickness)}
     for name, rows in templates.items():
         write_template(rows, folder / f"{name}.multisphere", name)
     lines = [f"# written by vibrofeed.geometry.{hook} for one run\n"]
     lines += [f"variable n_sph_{name} equal {len(rows)}\n" for name, rows in templates.items()]
+    box, box_rows = box_lines({**values, "shape": str(shape)}, folder)
+    lines += box
     seed = int(number(values, "seed")) if "seed" in values else 5489
     lines += [f"variable seed_{k} equal {p}\n" for k, p in enumerate(insertion_seeds(seed, 6), 1)]
-    return lines, {0: None, 1: templates["chip"], 2: templates["disc"]}[shape]
+    return lines, {0: None, 1: templates["chip"], 2: templates["disc"], 3: box_rows}[shape]
 
 
 def prepare_bulk_feeder(values: Mapping[str, str], folder: str | Path) -> Prepared:
@@ -249,6 +275,8 @@ def feeder_names(feeder: Feeder) -> list[str]:
     """The parameters a line's geometry and its checks read: what prepared.in holds a run
     by hand to (the part, section 1's track, and a line's every element and drive)."""
     names = ["shape", "part_size", "part_thickness", "size_spread", "sections"]
+    if feeder.part.shape == 3:  # (the box's template and mass are written for these)
+        names += ["part_width", "bump_height", "bump_diameter", "bump_at", "density"]
     for e in feeder.elements:
         names += e.deck_names(drive=feeder.is_line)
     return names
@@ -262,12 +290,14 @@ def prepare_bowl_feeder(values: Mapping[str, str], folder: str | Path) -> Prepar
     derived geometry (``bowl_*``) and the region ``track_fill`` of the pre-fill along the
     track. The bowl's parameters are checked first (vibrofeed.bowl.check_bowl).
     """
-    from .bowl import GEOMETRY, PART, bowl_from, bowl_mesh, check_bowl, write_bowl
+    from .bowl import BOX_PART, GEOMETRY, PART, bowl_from, bowl_mesh, check_bowl, write_bowl
 
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     numbers = {name: number(values, name) for name in GEOMETRY + PART if name != "shape"}
     numbers["shape"] = shape_code(values.get("shape", "0"))
+    numbers.update({name: number(values, name, default) for name, default in BOX_PART.items()
+                    if default is not None or name in values})
     check_bowl(numbers)
     lines, template = _part_files(values, folder, "prepare_bowl_feeder", numbers["shape"],
                                   numbers["part_size"], numbers["part_thickness"])
@@ -276,7 +306,9 @@ def prepare_bowl_feeder(values: Mapping[str, str], folder: str | Path) -> Prepar
     # deck's line files written, a run by hand held to their values, as for a line
     feeder = Feeder.from_values(values)
     feeder.check()
-    lines += guard_lines(values, ["sections"] + [n for e in feeder.elements[1:] for n in e.deck_names()])
+    box = list(BOX_PART) + ["density"] if numbers["shape"] == 3 else []
+    line_names = [n for e in feeder.elements[1:] for n in e.deck_names()]
+    lines += guard_lines(values, ["sections"] + box + line_names)
     (folder / "prepared.in").write_text("".join(lines))
     track = bowl_mesh(bowl_from(numbers))
     further = write_line_files(feeder, folder)

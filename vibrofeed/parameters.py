@@ -18,6 +18,8 @@ from .decks import RESERVED, Deck
 from .errors import ParameterError
 from .feeders.feeder import Feeder
 from .feeders.linear import MAX_SECTIONS
+from .feeders.records import Part
+from .parts import Box, box_template, check_box, mass_properties
 from .plausibility import DENSITY_MAX, PART_MAX, advice
 
 NO_MICRO_PART = "a metre is no micro-part; lengths are in metres"
@@ -117,12 +119,16 @@ RULES: dict[str, Callable[[float], str | None]] = {
     "dt": _non_negative,
     "seed": _integer(lo=1),
     # the bulk feeder (decks/bulk_feeder.liggghts)
-    "shape": _integer(choices=(0, 1, 2)),
+    "shape": _integer(choices=(0, 1, 2, 3)),
     "pair": _integer(choices=(0, 1)),
     "pull_speed": _positive,
     "overlap0": _positive,
     "part_size": _positive_up_to(PART_MAX, NO_MICRO_PART),
     "part_thickness": _positive_up_to(PART_MAX, NO_MICRO_PART),
+    "part_width": _positive_up_to(PART_MAX, NO_MICRO_PART),
+    "bump_height": _non_negative,
+    "bump_diameter": _non_negative,
+    "bump_at": _between(-1, 1, lo_open=False, hi_open=False),
     "size_spread": _between(0, 1, lo_open=False),
     "n_parts": _integer(lo=0),
     "fill_from": _between(0, 1, lo_open=False, hi_open=False),
@@ -190,7 +196,7 @@ def rule_for(name: str) -> Callable[[float], str | None] | None:
 
 # Parameters that also take names; a name is replaced by the deck's number.
 NAMED_VALUES: dict[str, dict[str, str]] = {
-    "shape": {"sphere": "0", "chip": "1", "disc": "2"},
+    "shape": {"sphere": "0", "chip": "1", "disc": "2", "box": "3"},
 }
 
 
@@ -383,8 +389,11 @@ def _check_feeder(p: Mapping[str, float]) -> None:
 
 def circumscribed_radius(p: Mapping[str, float]) -> float:
     """A bulk feeder's part's circumscribed radius [m], as decks/include/part_shape.liggghts
-    takes it (r_ext): a sphere's with its size spread, a chip's corner sphere, a disc's rim."""
+    takes it (r_ext): a sphere's with its size spread, a chip's corner sphere, a disc's rim,
+    a box's clump about its centre of mass."""
     size, shape = p["part_size"], int(p.get("shape", 0))
+    if shape == 3:
+        return Part.from_values(p).reach
     if shape == 0:
         return size / 2 * (1 + p.get("size_spread", 0.0))
     if shape == 1:
@@ -423,10 +432,10 @@ def inlet_capacity(p: Mapping[str, float]) -> tuple[float, float]:
     settled fill (FILL_PACKING); the time [s] a part dropped at rest from its top takes to
     fall out of it). A part is in the block a fall time at most, so the inlet drops at most
     capacity / time parts a second (:func:`_check_inlet`)."""
-    size, shape = p["part_size"], int(p.get("shape", 0))
+    size = p["part_size"]
     width = p["track_width"] - 2 * INLET_MARGIN * size
     block = INLET_LENGTH * size * max(width, 0.0) * INLET_HEIGHT * size
-    parts = FILL_PACKING * block / part_volume(shape, size, p.get("part_thickness", size))
+    parts = FILL_PACKING * block / volume_of(p)
     return parts, math.sqrt(2 * INLET_HEIGHT * size / GRAVITY)
 
 
@@ -452,6 +461,14 @@ def _check_inlet(p: Mapping[str, float]) -> None:
             f"start holds at most {capacity:.0f} parts of {size} on track_width="
             f"{p['track_width']:g} m, and a part falls through it in {fall * 1e3:.2g} ms, so at most "
             f"{most:.3g} parts/s; lower inlet_rate, or pre-fill the track (n_parts)")
+
+
+def volume_of(p: Mapping[str, float]) -> float:
+    """A part's volume [m^3] from a deck's parameters (a box's with its bump's cap)."""
+    if int(p.get("shape", 0)) == 3:
+        return mass_properties(Box.of(Part.from_values(p)), 1.0).mass
+    size = p["part_size"]
+    return part_volume(int(p.get("shape", 0)), size, p.get("part_thickness", size))
 
 
 # Random loose packing of a settled pre-fill, to tell whether it stays between the walls.
@@ -491,6 +508,11 @@ def _check_bulk_feeder(p: Mapping[str, float]) -> None:
             f"rate was measured independent of youngs from {BULK_MIN_YOUNGS:g} to 1e9 Pa "
             "(vibrofeed validate stiffness_independence); stiffer is closer to silicon")
     widest = size * (1 + spread) if shape == 0 else size
+    if shape == 3:
+        check_box(Box.of(Part.from_values(p)))
+        if p.get("hamaker", 0.0) > 0 or p.get("air_viscosity", 0.0) > 0:
+            raise ParameterError("hamaker and air_viscosity act on spheres, chips and discs: a box "
+                                 "(shape 3) runs without them in this version")
     if p.get("n_parts", 1) <= 0 and p.get("inlet_rate", 1) <= 0:
         raise ParameterError("n_parts=0 and inlet_rate=0: no part would ever be fed; "
                              "set n_parts (pre-fill) or inlet_rate")
@@ -524,13 +546,13 @@ def _check_bulk_feeder(p: Mapping[str, float]) -> None:
     fill_from, fill_to = p.get("fill_from", 0.0), p.get("fill_to", 1.0)
     if p.get("n_parts", 1) > 0 and fill_from >= fill_to:  # (only a pre-fill has a place)
         raise ParameterError(f"fill_from={fill_from:g} must be below fill_to={fill_to:g}")
-    radius = size / 2 if shape == 0 else p.get("part_thickness", size) / 2
+    radius = size / 2 if shape == 0 else (p.get("part_thickness", size) + p.get("bump_height", 0.0)) / 2
     if "wall_height" in p and p["wall_height"] <= radius:
         raise ParameterError(f"wall_height={p['wall_height']:g} m is no higher than a part's centre "
                              f"({radius:g} m): parts would leave over the walls")
     n = p.get("n_parts", 0)
     if n > 0 and "wall_height" in p and math.isfinite(length):
-        volume = part_volume(shape, size, p.get("part_thickness", size))
+        volume = volume_of(p)
         pile = n * volume / (FILL_PACKING * (fill_to - fill_from) * length * p["track_width"])
         if pile > p["wall_height"]:
             raise ParameterError(f"n_parts={n:g} settle {pile:.3g} m high, above the walls "
@@ -577,6 +599,8 @@ def surface_forces_part(p: Mapping[str, float]) -> dict | None:
         smallest = size * (1 - p.get("size_spread", 0.0))
         return {"mass": part_volume(0, smallest) * rho, "radius": smallest / 2}
     thickness = p.get("part_thickness", size)
+    if shape == 3:  # (refused with the surface forces: no face of its own here)
+        return {"mass": volume_of(p) * rho, "radius": Box.of(Part.from_values(p)).sphere_diameter / 2}
     mass = part_volume(shape, size, thickness) * rho
     if shape == 1:
         return {"mass": mass, "radius": thickness / 2, "area": size ** 2,
@@ -673,9 +697,12 @@ def contact_times(p: Mapping[str, float]) -> dict[str, float] | None:
     thickness = p.get("part_thickness", size)
     r_sph = size / 2 if shape == 0 else thickness / 2
     r_min = r_sph * (1 - p.get("size_spread", 0.0))
-    mass = part_volume(shape, size, thickness) * rho
+    mass = part_volume(shape, size, thickness) * rho if shape != 3 else volume_of(p) * rho
     spheres = 1
-    if shape != 0:  # a clump: its spheres share the mass (vibrofeed.geometry builds them)
+    if shape == 3:  # the box's clump: spheres of T/2, a bump's maybe smaller (vibrofeed.parts)
+        rows = box_template(Box.of(Part.from_values(p)))
+        r_sph, r_min, spheres = rows[0, 3], float(rows[:, 3].min()), len(rows)
+    elif shape != 0:  # a clump: its spheres share the mass (vibrofeed.geometry builds them)
         from .geometry import chip_template, disc_template
 
         spheres = len((chip_template if shape == 1 else disc_template)(size, thickness))

@@ -38,7 +38,7 @@ MU_PLAUSIBLE_MAX = 2.0
 # Surface energies of solids: 0.01 to 2 J/m² (silicon ~1.4).
 SURFACE_ENERGY_PLAUSIBLE_MAX = 10.0  # J/m²
 
-PART_LENGTHS = ("radius", "part_size", "part_thickness", "face_radius")
+PART_LENGTHS = ("radius", "part_size", "part_thickness", "part_width", "face_radius")
 # A feeder line's section 2 (s2_*) takes section 1's units: its twins share its limits.
 TRACK_LENGTHS = {
     "track_length": TRACK_PLAUSIBLE, "s2_length": TRACK_PLAUSIBLE,
@@ -143,7 +143,13 @@ def _without_effect(p: Mapping[str, float], given: Collection[str]) -> list[str]
         if phase in p and waveform in (0, 1) and (p.get(amp_t, 1.0) == 0 or p.get(amp_n, 1.0) == 0):
             idle[phase] = "shifts the normal motion against the tangential one: one of them is 0"
     if "part_size" in p and int(p.get("shape", 0)) == 0:
-        idle["part_thickness"] = "applies to chips and discs (shape 1, 2), not to spheres"
+        idle["part_thickness"] = "applies to chips, discs and boxes (shape 1, 2, 3), not to spheres"
+    if "part_size" in p and int(p.get("shape", 0)) != 3:
+        for name in ("part_width", "bump_height", "bump_diameter", "bump_at"):
+            idle[name] = "shapes a box (shape 3) only"
+    elif "part_size" in p and p.get("bump_height", 0.0) == 0:
+        for name in ("bump_diameter", "bump_at"):
+            idle[name] = "shapes the bump: bump_height=0 has none"
     if "gate_at" in p and p.get("gate_width", 0.0) == 0:
         idle["gate_at"] = "places the gate: gate_width=0 has none"
     if p.get("inlet_rate", 1.0) == 0:

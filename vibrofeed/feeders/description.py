@@ -49,7 +49,8 @@ TEMPLATES = {"linear": "bulk_feeder", "bowl": "bowl_feeder"}
 # table -> {key: deck name}; the element's keys are vibrofeed.feeders.linear.KEYS
 TABLES: dict[str, dict[str, str]] = {
     "feeder": {"incline": "incline"},
-    "parts": {"shape": "shape", "size": "part_size", "thickness": "part_thickness",
+    "parts": {"shape": "shape", "size": "part_size", "thickness": "part_thickness", "width": "part_width",
+              "bump_height": "bump_height", "bump_diameter": "bump_diameter", "bump_at": "bump_at",
               "size_spread": "size_spread", "density": "density", "youngs": "youngs",
               "poisson": "poisson", "restitution": "restitution", "restitution_pp": "restitution_pp",
               "mu": "mu", "mu_pp": "mu_pp", "rolling_friction": "rolling_friction",

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 from ..errors import ParameterError
 
-SHAPES = {"sphere": 0, "chip": 1, "disc": 2}
+SHAPES = {"sphere": 0, "chip": 1, "disc": 2, "box": 3}
 
 
 def number(values: Mapping, name: str, default: float | None = None) -> float:
@@ -30,7 +30,7 @@ def number(values: Mapping, name: str, default: float | None = None) -> float:
 
 
 def shape_code(value) -> int:
-    """A part's shape as the deck's code: 0 sphere, 1 chip, 2 disc (names accepted)."""
+    """A part's shape as the deck's code: 0 sphere, 1 chip, 2 disc, 3 box (names accepted)."""
     text = str(value).strip().lower()
     if text in SHAPES:
         return SHAPES[text]
@@ -38,44 +38,63 @@ def shape_code(value) -> int:
         code = float(text)
     except ValueError:
         code = -1.0
-    if code not in (0.0, 1.0, 2.0):
-        raise ParameterError(f"parameter shape={value} must be sphere, chip or disc (0, 1 or 2)")
+    if code not in (0.0, 1.0, 2.0, 3.0):
+        raise ParameterError(f"parameter shape={value} must be sphere, chip, disc or box (0, 1, 2 or 3)")
     return int(code)
 
 
 @dataclass(frozen=True)
 class Part:
-    """The parts a feeder conveys: ``shape`` (0 sphere, 1 chip, 2 disc), ``size`` (a sphere's
-    diameter, a chip's edge, a disc's diameter), ``thickness`` (a chip's or disc's),
-    ``size_spread`` (spheres: radii R(1-s), R, R(1+s))."""
+    """The parts a feeder conveys: ``shape`` (0 sphere, 1 chip, 2 disc, 3 box), ``size`` (a
+    sphere's diameter, a chip's edge, a disc's diameter, a box's length L), ``thickness``
+    (a chip's, disc's or box's), ``size_spread`` (spheres: radii R(1-s), R, R(1+s)); a
+    box's ``width`` W and its bump (``bump_height`` 0: none, ``bump_diameter``, ``bump_at``;
+    vibrofeed.parts)."""
 
     shape: int
     size: float
     thickness: float
     size_spread: float = 0.0
+    width: float = 0.0
+    bump_height: float = 0.0
+    bump_diameter: float = 0.0
+    bump_at: float = 0.5
 
     @classmethod
     def from_values(cls, values: Mapping) -> Part:
         size = number(values, "part_size", 0.0)  # (absent: a result that records no part)
-        return cls(shape=shape_code(values.get("shape", 0)), size=size,
-                   thickness=number(values, "part_thickness", size),
-                   size_spread=number(values, "size_spread", 0.0))
+        thickness = number(values, "part_thickness", size)
+        return cls(shape=shape_code(values.get("shape", 0)), size=size, thickness=thickness,
+                   size_spread=number(values, "size_spread", 0.0),
+                   width=number(values, "part_width", thickness),
+                   bump_height=number(values, "bump_height", 0.0),
+                   bump_diameter=number(values, "bump_diameter", 0.0),
+                   bump_at=number(values, "bump_at", 0.5))
 
     @property
     def widest(self) -> float:
-        """Across a part lying flat: the largest sphere, or the chip's or disc's edge [m]."""
+        """Across a part lying flat: the largest sphere, the chip's or disc's edge, or the box's
+        length [m]."""
         return self.size * (1 + self.size_spread) if self.shape == 0 else self.size
 
     @property
     def tallest(self) -> float:
-        """A part's height lying flat: the largest sphere, or the thickness [m]."""
+        """A part's height lying flat: the largest sphere, or the thickness (a box's with its
+        bump up) [m]."""
+        if self.shape == 3:
+            return self.thickness + self.bump_height
         return self.widest if self.shape == 0 else self.thickness
 
     @property
     def reach(self) -> float:
         """The circumscribed radius [m] (the decks' r_ext): the largest sphere's; a chip's
         corner sphere reaches (size - thickness)/sqrt(2) + thickness/2 from its centre; a
-        disc's rim, size/2."""
+        disc's rim, size/2; a box's clump about its centre of mass, the bump included
+        (vibrofeed.parts.box_reach)."""
+        if self.shape == 3:
+            from ..parts import Box, box_reach
+
+            return box_reach(Box.of(self))
         if self.shape == 0:
             return self.widest / 2
         if self.shape == 1:

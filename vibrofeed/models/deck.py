@@ -89,7 +89,7 @@ def transport(p: Mapping, g: float = G) -> SteadyState:
 def mass(p: Mapping) -> float:
     """Mass [kg] of the deck's part: the single-part deck's sphere of
     ``radius``, or the bulk deck's ``shape`` 0 sphere (diameter ``part_size``,
-    nominal size), 1 chip (part_size^2 x part_thickness) or 2 disc."""
+    nominal size), 1 chip (part_size^2 x part_thickness), 2 disc or 3 box (with its bump)."""
     rho = _f(p, "density")
     if "radius" in p:
         return 4.0 / 3.0 * math.pi * _f(p, "radius") ** 3 * rho
@@ -101,7 +101,11 @@ def mass(p: Mapping) -> float:
         return size ** 2 * thickness * rho
     if shape == 2:
         return math.pi / 4.0 * size ** 2 * thickness * rho
-    raise ValueError(f"shape must be 0, 1 or 2, got {shape}")
+    if shape == 3:  # a box and its bump's cap above the face (vibrofeed.parts)
+        h, r = _f(p, "bump_height", 0.0), _f(p, "bump_diameter", 0.0) / 2
+        cap = math.pi * h * h * (3 * r - h) / 3 if h > 0 else 0.0
+        return (size * _f(p, "part_width") * thickness + cap) * rho
+    raise ValueError(f"shape must be 0, 1, 2 or 3, got {shape}")
 
 
 def adhesion(p: Mapping) -> Adhesion:
@@ -114,7 +118,7 @@ def adhesion(p: Mapping) -> Adhesion:
         return Adhesion(hamaker, roughness, radius=_f(p, "radius"), face_radius=_f(p, "face_radius", 0.0))
     shape, size = int(_f(p, "shape", 0)), _f(p, "part_size")
     if shape not in (0, 1, 2):
-        raise ValueError(f"shape must be 0, 1 or 2, got {shape}")
+        raise ValueError(f"shape must be 0, 1 or 2 (a box's adhesion is not modelled yet), got {shape}")
     face = ({"radius": size / 2}, {"face_side": size}, {"face_radius": size / 2})[shape]
     return Adhesion(hamaker, roughness, **face)
 

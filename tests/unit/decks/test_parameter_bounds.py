@@ -55,9 +55,13 @@ BOUNDS = {
 # The bulk feeder's own parameters (decks/bulk_feeder.liggghts); their relations
 # (_check_bulk_feeder) bind at most edges, so these bounds are checked on the rule itself.
 BULK = {
-    "shape": (0, True, 2, True, (0, 1, 2)),
+    "shape": (0, True, 3, True, (0, 1, 2, 3)),
     "part_size": (0, False, 1, True, None),
     "part_thickness": (0, False, 1, True, None),
+    "part_width": (0, False, 1, True, None),
+    "bump_height": (0, True, INF, False, None),
+    "bump_diameter": (0, True, INF, False, None),
+    "bump_at": (-1, True, 1, True, None),
     "size_spread": (0, True, 1, False, None),
     "n_parts": (0, True, INF, False, "integers"),
     "fill_from": (0, True, 1, True, None),

@@ -41,7 +41,7 @@ def said(deck, given) -> list[str]:
     (BULK, {"surface_energy": "50"}, "surface_energy=50 J/m² exceeds the surface energies of solids"),
     (SINGLE, {"duty": "0.5"}, "duty has no effect: it applies to waveforms 2 and 3"),
     (SINGLE, {"phase": "30", "amp_t": "0"}, "phase has no effect"),
-    (BULK, {"part_thickness": "1e-4"}, "part_thickness has no effect: it applies to chips and discs"),
+    (BULK, {"part_thickness": "1e-4"}, "part_thickness has no effect: it applies to chips, discs and boxes"),
     (BULK, {"gate_at": "0.5"}, "gate_at has no effect: it places the gate: gate_width=0 has none"),
     (BULK, {"fill_to": "0.8", "n_parts": "0", "inlet_rate": "100"}, "fill_to has no effect"),
     (SINGLE, {"roughness": "1e-8"}, "roughness has no effect"),
