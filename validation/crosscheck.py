@@ -52,7 +52,7 @@ from ..feeders.feeder import Feeder
 from ..models import deck as dm
 from ..models.constants import G
 from ..results import layout as L
-from . import micro_checks
+from . import micro_checks, rocking_checks
 from .cases import DERIVED_SWEEP_KEYS, Case
 from .outcome import Outcome, Run, label, row
 
@@ -827,4 +827,4 @@ def _line_continuity(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -
 KINDS = {"flights": _flights, "transport": _transport, "climb": _climb, "chute": _chute, "period": _period,
          "vertical": _vertical, "replay": _replay, "pulloff": _pulloff, "reference": _reference,
          "line_transport": _line_transport, "line_continuity": _line_continuity,
-         **micro_checks.KINDS}
+         **micro_checks.KINDS, **rocking_checks.KINDS}

@@ -171,16 +171,22 @@ def clump_impact_ratio(b: float, h: float, gyration_sq: float) -> float:
     return impact_ratio(1.0, math.sqrt(R2), gyration_sq + R2, slenderness(b, h))
 
 
-def impact_speed(theta0: float, b: float, h: float, gyration_sq: float, g: float = G) -> float:
+def impact_speed(theta0: float, b: float, h: float, gyration_sq: float, g: float = G,
+                 rolling_radius: float = 0.0) -> float:
     """Angular speed [rad/s] at the first impact of a block released at rest tilted by
-    ``theta0`` [rad] (0 < theta0 < alpha) about a pivot edge: energy, with the COM falling
-    by R (cos(alpha - theta0) - cos alpha):  w^2 = 2 g R (cos(alpha - theta0) - cos alpha)
-    / (gyration_sq + R^2)."""
+    ``theta0`` [rad] (0 < theta0 < alpha) on its pivot, from energy: w^2 = 2 g dz /
+    (gyration_sq + R^2), dz the COM's fall. On a sharp edge dz = R (cos(alpha - theta0) -
+    cos alpha) = h cos theta0 + b sin theta0 - h. A clump's pivot is a sphere of radius
+    ``rolling_radius`` rolling on the plate: the COM stands at rho + (h - rho) cos theta +
+    b sin theta, so dz gains rho (1 - cos theta0) (3 % more speed for the 1 x 0.5 x 0.35 mm
+    box on its end released at 10 degrees)."""
     R = math.hypot(b, h)
     alpha = slenderness(b, h)
     if not 0 < theta0 < alpha:
         raise ValueError(f"release tilt {theta0:g} rad must be in (0, alpha = {alpha:g}) rad")
-    return math.sqrt(2 * g * R * (math.cos(alpha - theta0) - math.cos(alpha)) / (gyration_sq + R * R))
+    rho = rolling_radius
+    dz = (h - rho) * math.cos(theta0) + b * math.sin(theta0) + rho - h
+    return math.sqrt(2 * g * dz / (gyration_sq + R * R))
 
 
 # ------------------------------------------------------------------ incline
