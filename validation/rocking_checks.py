@@ -17,7 +17,8 @@ recorded body's.
     impacts (the signed tilt crossing 0) the ratio of the angular velocity just after to
     just before, each a straight-line fit of w_y over ``window`` [s] on its side of the
     impact, leaving out ``gap_before`` and ``gap_after`` [s] next to it (the landing face's
-    contacts ring for ~0.4 ms at the default stiffness), evaluated at the crossing; rows ``impact_ratio`` (Housner's r with the box's true inertia,
+    contacts ring for ~0.4 ms at the default stiffness), evaluated at the crossing; rows
+    ``impact_ratio`` (Housner's r with the box's true inertia,
     rocking.clump_impact_ratio) and ``impact_speed`` (w just before the first impact
     against energy conservation, rocking.impact_speed).
 ``tip_or_slide``

@@ -63,6 +63,8 @@ def test_impact_speed_from_energy():
     assert K.impact_speed(0.1, 1.0, 2.0, 5 / 3) == pytest.approx(0.514203, abs=1e-6)
     with pytest.raises(ValueError):
         K.impact_speed(0.6, 1.0, 2.0, 5 / 3)  # beyond alpha = 0.4636: it topples
+    # a pivot sphere of radius 0.5 rolling: the COM falls 1.5 cos 0.1 + sin 0.1 + 0.5 - 2 = 0.092339
+    assert K.impact_speed(0.1, 1.0, 2.0, 5 / 3, rolling_radius=0.5) == pytest.approx(0.521302, abs=1e-6)
 
 
 @pytest.mark.parametrize("incline, mu, regime", [
