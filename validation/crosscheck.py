@@ -37,6 +37,9 @@ case's ``kind``:
     against the inlet's rate (``feed_flux``), and the density ratio against
     the speed ratio (``density_ratio``), DEM against DEM within a multiple of
     the combined errors.
+
+The micro-scale kinds are ``micro_checks``'s, the box parts' rocking, free rocking and
+tipping-or-sliding (``rocking_onset``, ``free_rocking``, ``tip_or_slide``) ``rocking_checks``'s.
 """
 
 from __future__ import annotations
