@@ -37,6 +37,9 @@ case's ``kind``:
     against the inlet's rate (``feed_flux``), and the density ratio against
     the speed ratio (``density_ratio``), DEM against DEM within a multiple of
     the combined errors.
+
+The micro-scale kinds are ``micro_checks``'s, the box parts' rocking, free rocking and
+tipping-or-sliding (``rocking_onset``, ``free_rocking``, ``tip_or_slide``) ``rocking_checks``'s.
 """
 
 from __future__ import annotations
@@ -52,7 +55,7 @@ from ..feeders.feeder import Feeder
 from ..models import deck as dm
 from ..models.constants import G
 from ..results import layout as L
-from . import micro_checks
+from . import micro_checks, rocking_checks
 from .cases import DERIVED_SWEEP_KEYS, Case
 from .outcome import Outcome, Run, label, row
 
@@ -827,4 +830,4 @@ def _line_continuity(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -
 KINDS = {"flights": _flights, "transport": _transport, "climb": _climb, "chute": _chute, "period": _period,
          "vertical": _vertical, "replay": _replay, "pulloff": _pulloff, "reference": _reference,
          "line_transport": _line_transport, "line_continuity": _line_continuity,
-         **micro_checks.KINDS}
+         **micro_checks.KINDS, **rocking_checks.KINDS}

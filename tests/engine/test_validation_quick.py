@@ -42,3 +42,12 @@ def test_quick_cross_check(tmp_path, name, key, value):
     assert not failed, failed
     assert proc.returncode == 0
     assert list((tmp_path / "out" / name).glob("*.png")), "the overlay figure is written"
+
+
+def test_quick_free_rocking(tmp_path):
+    """A box released tilted on its end: the impact speed and Housner's ratio (one run, ~7 s)."""
+    proc = vibrofeed("validate", "free_rocking", "-o", tmp_path / "out", "--json")
+    rows = json.loads(proc.stdout)
+    assert {r["quantity"].split("[")[0] for r in rows} == {"impact_speed", "impact_ratio"}, proc.stderr
+    assert all(r["passed"] for r in rows), rows
+    assert proc.returncode == 0

@@ -19,7 +19,9 @@ QUANTITIES = {"flights": {"landing_time", "flight_duration"}, "transport": {"mea
               "pulloff": {"pulloff"}, "reference": {"parts_per_s"},
               "line_transport": {"section_speed"},
               "line_continuity": {"joint_flux", "little_flux", "feed_flux", "density_ratio"},
-              "vdw_pulloff": {"pulloff"}, "sticking": {"leaves"}, "squeeze_launch": {"deficit", "max_gap"}}
+              "vdw_pulloff": {"pulloff"}, "sticking": {"leaves"}, "squeeze_launch": {"deficit", "max_gap"},
+              "rocking_onset": {"rocks"}, "free_rocking": {"impact_speed", "impact_ratio"},
+              "tip_or_slide": {"regime"}}
 
 
 @pytest.mark.parametrize("name", C.available())
