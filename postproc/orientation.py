@@ -180,6 +180,10 @@ class Orientation(AnalysisBase):
         Batches of the rates' batch-means errors (as the feed rate's).
     correct_name:
         The option or parameter ``correct`` came from, for its errors.
+    feedrate, singulation:
+        The ``results`` of a :class:`.feedrate.FeedRate` and a :class:`.singulation.Singulation`
+        already run on this result over the same frames and window (a sweep's metrics), reused
+        instead of run again; their window is then the window.
 
     Results: ``correct`` (the rule, in words), ``within`` [deg], ``steady_from``, ``steady_to``
     [s]; at the outlet: ``n_delivered``, ``delivered_times`` and ``delivered_states`` (per part:
@@ -204,7 +208,8 @@ class Orientation(AnalysisBase):
 
     def __init__(self, result, correct: str | Correct = "up, lengthwise", within: float = 20.0,
                  start: float | None = None, end: float | None = None, bins: int = 20,
-                 batches: int = 10, axis: int = 0, correct_name: str = "correct"):
+                 batches: int = 10, axis: int = 0, correct_name: str = "correct", feedrate=None,
+                 singulation=None):
         super().__init__(result)
         require_outlet(result)
         if result.body_template is None:
@@ -221,20 +226,26 @@ class Orientation(AnalysisBase):
         self.within, self.start, self.end = float(within), start, end
         self.bins, self.batches, self.axis = bins, batches, axis
         self._axes_q = _quaternion(body_axes(result.body_template))
+        self._feedrate, self._singulation = feedrate, singulation
 
     def _compute(self, frames: np.ndarray) -> None:
         if len(frames) < 2:
             raise InputError("orientation: at least two frames are needed")
         r, result = self.results, self.result
         freq = float(result.parameters.get("freq", 0.0))
-        fr = FeedRate(result, start=self.start, end=self.end, batches=self.batches, model=False)
-        fr = fr.run(frames=frames).results
+        fr = self._feedrate
+        if fr is None:
+            fr = FeedRate(result, start=self.start, end=self.end, batches=self.batches, model=False)
+            fr = fr.run(frames=frames).results
         t_a, t_b = fr.steady_from, fr.steady_to
         r.steady_from, r.steady_to = t_a, t_b
         r.correct, r.within = str(self.correct), self.within
         r.parts_per_s, r.parts_per_s_err = fr.parts_per_s, fr.parts_per_s_err
-        sg = Singulation(result, start=t_a, end=t_b, cluster_frames=1, axis=self.axis).run(frames=frames)
-        self._outlet(sg.results, (t_a, t_b, freq))
+        sg = self._singulation
+        if sg is None:
+            sg = Singulation(result, start=t_a, end=t_b, cluster_frames=1, axis=self.axis)
+            sg = sg.run(frames=frames).results
+        self._outlet(sg, (t_a, t_b, freq))
         self._recirculation(fr, (t_a, t_b, freq))
         self._stations_and_census(frames, fr, (t_a, t_b, freq))
         r.reason = too_few_exits(r.n_delivered)
