@@ -99,6 +99,23 @@ def test_recirculation_load_of_a_track_without_returns_is_its_rejects(tmp_path):
     assert o.recirculation_source == "rejected" and o.recirculation_per_s == 0.0
 
 
+def test_recirculation_load_of_a_run_that_returns_is_its_returned_count():
+    # a line returning one part at every other frame (10 ms, 30 ms, ...): 50 parts/s over the window,
+    # whatever its rejects table holds
+    from types import SimpleNamespace
+
+    from vibrofeed.postproc.base import Results
+
+    time = np.arange(0, 1.0 + 1e-9, 0.01)
+    result = SimpleNamespace(time=time, mass_balance={"returned": (np.arange(len(time)) + 1) // 2},
+                             rejects={"time": np.array([0.3, 0.5])})
+    o = SimpleNamespace(result=result, results=Results(), batches=10)
+    Orientation._recirculation(o, Results(), (0.0, 1.0, 100.0))
+    assert o.results.recirculation_source == "returned"
+    assert o.results.recirculation_per_s == pytest.approx(50.0, rel=1e-12)
+    assert o.results.recirculation_per_s_err == pytest.approx(0.0, abs=1e-9)    # every batch alike
+
+
 # -- a station --------------------------------------------------------------------------
 GATE = {"gate_width": ("6e-4", "m", "", "0"), "gate_at": ("0.5", "-", "", "0.7"),
         "track_width": ("1.2e-3", "m", "", "1e-3")}
