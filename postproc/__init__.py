@@ -16,6 +16,9 @@ a selection of frames and answers in ``results``::
   feeder's outlet over the detected steady window, conveying speed profile;
 - :mod:`.singulation`: :class:`Singulation`, inter-arrival times, doubles,
   gaps, clusters on the track and chip orientation at the outlet;
+- :mod:`.orientation`: :class:`Orientation`, the parts' states (face up, lengthwise) at the
+  outlet, through each tooling station and along the path, and the rate of correctly
+  oriented single parts;
 - :mod:`.clusters`: :func:`cluster_labels`, the contact graph's components.
 """
 
@@ -25,8 +28,9 @@ from .base import AnalysisBase, Results
 from .clusters import cluster_labels, cluster_sizes
 from .feedrate import FeedRate
 from .flights import Flights
+from .orientation import Orientation
 from .singulation import Singulation
 from .transport import Transport
 
-__all__ = ["AnalysisBase", "Results", "Transport", "Flights", "FeedRate", "Singulation",
+__all__ = ["AnalysisBase", "Results", "Transport", "Flights", "FeedRate", "Singulation", "Orientation",
            "cluster_labels", "cluster_sizes"]

@@ -109,6 +109,31 @@ def face_orientation(quaternions, template) -> tuple[np.ndarray, np.ndarray]:
     return cos_tilt[:, 2], yaw
 
 
+def delivered_orientation(result, ev: dict, before: np.ndarray, axis: int = 0) -> np.ndarray:
+    """Each leaving part's orientation (E, 4) at the last frame at which its centre was still
+    over the track (not past the outlet edge), where a chip still lies as the track delivers
+    it: ``ev`` the outlet events (``id``, ``orientation``), ``before`` the frame before each
+    crossed the catch plane, searched back from there; the event's own orientation (at the
+    catch plane, after it tipped over the edge) only for a part never seen over the track
+    (frames 0..before)."""
+    edge = outlet_x(result)
+    orientation = np.array(ev["orientation"], dtype=float)
+    if not math.isfinite(edge):
+        return orientation
+    frames = np.asarray(before, dtype=np.int64).copy()
+    pending = np.ones(len(frames), dtype=bool)
+    while pending.any():
+        k = np.nonzero(pending)[0]
+        state = values_at(result, frames[k], ev["id"][k], ["position", "orientation"])
+        surface_x = result.read("surface_position", frames=frames[k])[:, axis]
+        over = state["found"] & (state["position"][:, axis] - surface_x <= edge)
+        orientation[k[over]] = state["orientation"][over]
+        pending[k[over]] = False
+        pending &= frames > 0
+        frames[pending] -= 1
+    return orientation
+
+
 class Singulation(AnalysisBase):
     """Inter-arrival times, doubles, gaps and clusters of a bulk feeder (module docstring).
 
@@ -136,8 +161,11 @@ class Singulation(AnalysisBase):
         default 5 mean part diameters.
 
     Results: the ``SUMMARY_KEYS`` and ``interarrival`` [s], ``gaps`` [m],
-    ``doubles`` and ``touching`` (per consecutive pair), ``arrival_times``,
-    ``cluster_size_counts`` (sizes of every cluster sampled), ``yaw_deg`` and
+    ``doubles`` and ``touching`` (per consecutive pair), ``arrival_times``, ``arrival_ids``,
+    ``cluster_size_counts`` (sizes of every cluster sampled), ``singulated`` (per arrival:
+    in no double, neither with the part before nor with the part after), ``delivered`` (per
+    arrival: a clump's orientation as the track delivered it, :func:`delivered_orientation`;
+    None for spheres), ``yaw_deg`` and
     ``cos_tilt`` of the chips at the outlet (None for spheres); ``orientation_yield``
     (chips: the fraction face up and aligned, per part; None for spheres).
 
@@ -177,7 +205,7 @@ class Singulation(AnalysisBase):
         inside = (ev["time"] >= t_a) & (ev["time"] < t_b)
         ev = {name: values[inside] for name, values in ev.items()}
         times = ev["time"]
-        r.arrival_times, r.n_arrivals = times, len(times)
+        r.arrival_times, r.arrival_ids, r.n_arrivals = times, ev["id"], len(times)
 
         # State of each part at the last frame before its crossing.
         before = np.maximum(np.searchsorted(result.time, times, side="left") - 1, 0)
@@ -199,6 +227,7 @@ class Singulation(AnalysisBase):
         r.edge_velocity = self._edge_velocity(frames, t_a, t_b, diameter)
         delivered = (self._on_track_orientation(ev, before) if result.body_template is not None
                      else None)
+        r.delivered = delivered
         front, back = self._reach(state["radius"], delivered)
         r.gaps = dt * r.edge_velocity - (back[:-1] + front[1:])
         r.mean_gap = float(np.nanmean(r.gaps)) if np.isfinite(r.gaps).any() else math.nan
@@ -215,6 +244,7 @@ class Singulation(AnalysisBase):
         alone = np.ones(len(times), dtype=bool)
         alone[:-1] &= ~doubles
         alone[1:] &= ~doubles
+        r.singulated = alone
         r.singulated_fraction = float(alone.mean()) if len(times) else math.nan
 
         r.reason = too_few_exits(len(times))  # the arrivals' statistics are noise (see the command)
@@ -326,26 +356,8 @@ class Singulation(AnalysisBase):
         r.orientation_yield = float(((r.cos_tilt >= c) & aligned).mean())
 
     def _on_track_orientation(self, ev: dict, before: np.ndarray) -> np.ndarray:
-        """Each leaving part's orientation at the last frame at which its centre was still
-        over the track (not past the outlet edge), where a chip still lies as the track
-        delivers it; the event's own orientation (at the catch plane, after it tipped over
-        the edge) only for a part never seen over the track (frames 0..before)."""
-        result, edge = self.result, outlet_x(self.result)
-        orientation = np.array(ev["orientation"], dtype=float)
-        if not math.isfinite(edge):
-            return orientation
-        frames = np.asarray(before, dtype=np.int64).copy()
-        pending = np.ones(len(frames), dtype=bool)
-        while pending.any():
-            k = np.nonzero(pending)[0]
-            state = values_at(result, frames[k], ev["id"][k], ["position", "orientation"])
-            surface_x = result.read("surface_position", frames=frames[k])[:, self.axis]
-            over = state["found"] & (state["position"][:, self.axis] - surface_x <= edge)
-            orientation[k[over]] = state["orientation"][over]
-            pending[k[over]] = False
-            pending &= frames > 0
-            frames[pending] -= 1
-        return orientation
+        """:func:`delivered_orientation` of the leaving parts."""
+        return delivered_orientation(self.result, ev, before, self.axis)
 
     # -- views ----------------------------------------------------------------------
     def summary(self) -> dict:

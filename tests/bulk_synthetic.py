@@ -35,7 +35,7 @@ G = 9.81
 def feeder(path, frame_times, exit_times, speed=0.02, amp=0.0, freq=100.0, radius=RADIUS,
            mass=1e-7, lanes=None, orientations=None, body_template=None, variables=None,
            outlet_x=OUTLET_X, seed=0, tipped=None, track=None, insert_x=0.0, seen_falling=True,
-           clumps=False):
+           clumps=False, turn=None):
     """Write the result file (module docstring); returns ``path``.
 
     ``speed``, ``mass``, ``radius``: scalars or one value per part; ``lanes``:
@@ -52,7 +52,9 @@ def feeder(path, frame_times, exit_times, speed=0.02, amp=0.0, freq=100.0, radiu
     it past the edge); ``clumps=True`` (with ``body_template``): each row is a body as the
     engine writes it (FORMAT.md, "Parts are bodies"): ``radius`` the sphere about the
     centre that encloses the clump, its centre where its lowest sphere rests on the track
-    (z = 0), force NaN (not recorded).
+    (z = 0), force NaN (not recorded). ``turn`` = (x, quaternions (parts, 4)): on the track
+    at or past track x [m], a part lies in its second orientation (a station that turns
+    parts), and so it leaves (unless ``tipped``).
     """
     rng = np.random.default_rng(seed)
     frame_times = np.asarray(frame_times, dtype=float)
@@ -96,6 +98,9 @@ def feeder(path, frame_times, exit_times, speed=0.02, amp=0.0, freq=100.0, radiu
                  "force": np.full((m, 3), np.nan) if clumps else np.zeros((m, 3))}
         if orientations is not None:
             q = np.asarray(orientations, dtype=float)[present]
+            if turn is not None:
+                past = (track_x[present] >= turn[0]) | falling[present]
+                q = np.where(past[:, None], np.asarray(turn[1], dtype=float)[present], q)
             if tipped is not None:
                 q = np.where(falling[present][:, None], np.asarray(tipped, dtype=float)[present], q)
             parts["orientation"] = q
@@ -109,7 +114,8 @@ def feeder(path, frame_times, exit_times, speed=0.02, amp=0.0, freq=100.0, radiu
                                            np.full(len(out), CATCH_Z)]),
               "velocity": np.column_stack([speed[out], np.zeros(len(out)), np.full(len(out), -0.05)]),
               "orientation": (np.tile([1.0, 0, 0, 0], (len(out), 1)) if orientations is None
-                              else np.asarray(orientations if tipped is None else tipped, dtype=float)[out])}
+                              else np.asarray(tipped if tipped is not None else orientations if turn is None
+                                              else turn[1], dtype=float)[out])}
     surface = [([amp * np.sin(w * t), 0, 0], [amp * w * np.cos(w * t), 0, 0]) for t in frame_times]
     base = {"freq": (repr(float(freq)), "Hz", "vibration frequency", "100"),
             "track_length": (repr(outlet_x), "m", "track length", "0.02"),

@@ -44,6 +44,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "prepare": ("vibrofeed.cli.prepare", "write a deck's meshes and templates for a run by hand"),
     "feedrate": ("vibrofeed.cli.feedrate", "feed rate and conveying speed of a bulk-feeder result"),
     "singulation": ("vibrofeed.cli.singulation", "doubles, gaps and clusters of a bulk-feeder result"),
+    "orientation": ("vibrofeed.cli.orientation", "parts delivered the right way up, per station and "
+                    "along the path"),
     "render": ("vibrofeed.cli.render", "draw a frame (PNG) or a movie (MP4) of a result"),
     "export": ("vibrofeed.cli.export", "write a result as a ParaView time series (.pvd)"),
 }

@@ -34,14 +34,35 @@ from .records import Drive, Part, number
 
 @dataclass(frozen=True)
 class Station:
-    """A tooling station where the analyses look for its rejects: on ``section`` (1-based),
-    from ``start`` to ``end`` along the path [m] (a wiper: its upstream face to its bar's
-    end; a side drop: its open stretch)."""
+    """A tooling station: on path ``section`` (1-based) of ``element`` (its number, 1-based),
+    from ``start`` to ``end`` along the path [m] (a wiper: its upstream face to its bar's end;
+    a side drop: its open stretch; a gate: where its walls start to narrow to where they
+    reach its width; a tool at a point, e.g. an air jet: ``start == end``). ``name`` says
+    which (``s2.side_drop``). The rejects are looked for over [start, end]; a part passes
+    the station between ``x_in`` and ``x_out``, ``margin`` (a part's size) before its start
+    and after its end, where it is wholly before and wholly past the tool."""
 
     section: int
     kind: str
     start: float
     end: float
+    element: int = 0
+    name: str = ""
+    margin: float = 0.0
+
+    @property
+    def x_in(self) -> float:
+        """Where a part arrives at the station along the path [m]."""
+        return self.start - self.margin
+
+    @property
+    def x_out(self) -> float:
+        """Where a part has passed the station along the path [m]."""
+        return self.end + self.margin
+
+
+# The tool attributes an element may carry, in the order its stations are listed.
+TOOLS = ("gate", "side_drop", "wiper", "jet")
 
 
 @dataclass(frozen=True)
@@ -234,26 +255,37 @@ class Feeder:
 
     @property
     def stations(self) -> list[Station]:
-        """The side drops and wipers along the path, in conveying order of sections; each
-        on the path section (1-based) it lies on."""
+        """The tooling stations along the path, in conveying order of elements (a bowl's side
+        drop and wiper; each further element's tools of :data:`TOOLS`, whichever it carries),
+        each on the path section (1-based) it lies on. A tool record placed by ``start`` and
+        ``end`` (fractions of its element's length) spans them; one placed by ``at`` spans
+        from there on by its ``length`` [m] if it has one (a wiper's bar), else is a point (an
+        air jet); a gate spans its 45-degree narrowing from its element's width to its own."""
         out = []
-        shift = self.path_shift
+        shift, margin = self.path_shift, self.part.size
         for e in self.elements:
             if isinstance(e, BowlElement):
                 b = e.bowl
-                if b.drop is not None:
-                    out.append(Station(1, "side_drop", *(float(b.arc_length(t)) for t in b.drop)))
-                if b.wiper is not None:
-                    out.append(Station(1, "wiper", *(float(b.arc_length(t)) for t in b.wiper)))
+                for kind, span in (("side_drop", b.drop), ("wiper", b.wiper)):
+                    if span is not None:
+                        out.append(Station(1, kind, *(float(b.arc_length(t)) for t in span),
+                                           element=1, name=f"s1.{kind}", margin=margin))
                 continue
             k = int(self.section_at(e.x0 + shift)) + 1
-            if getattr(e, "side_drop", None) is not None:
-                d = e.side_drop
-                out.append(Station(k, "side_drop", e.x0 + d.start * e.length + shift,
-                                   e.x0 + d.end * e.length + shift))
-            if getattr(e, "wiper", None) is not None:
-                a = e.x0 + e.wiper.at * e.length + shift
-                out.append(Station(k, "wiper", a, a + e.wiper.length))
+            for attr in TOOLS:
+                tool = getattr(e, attr, None)
+                if tool is None:
+                    continue
+                if hasattr(tool, "start") and hasattr(tool, "end"):
+                    a, z = e.x0 + tool.start * e.length, e.x0 + tool.end * e.length
+                else:
+                    a = e.x0 + tool.at * e.length
+                    z = a + float(getattr(tool, "length", 0.0) or 0.0)
+                    if attr == "gate":  # its walls narrow at 45 degrees to its width
+                        z = min(a + max(getattr(e, "width", 0.0) - tool.width, 0.0) / 2, e.x1)
+                kind = getattr(tool, "kind", attr)
+                out.append(Station(k, kind, a + shift, z + shift, element=e.number,
+                                   name=f"s{e.number}.{kind}", margin=margin))
         return out
 
     def further_meshes(self) -> list:

@@ -2,12 +2,13 @@
 
 The sweep's metrics (:func:`vibrofeed.sweep.metrics.metrics`) give the feed rate with its
 batch-means error (``parts_per_s_err``) and the singulation fractions over the arrivals
-counted (``n_arrivals``). Two products are what a designer asks for:
-``singulated_rate`` = parts_per_s x singulated_fraction (single parts per second) and
-``oriented_rate`` = parts_per_s x orientation_yield (parts per second delivered flat and
-aligned). A fraction f over n arrivals has the binomial error sqrt(f (1 - f) / n); a
-product's relative errors add in quadrature (independent estimates: the rate's from batch
-means of the counts, the fraction's from which arrivals were single).
+counted (``n_arrivals``). What a designer asks for: ``singulated_rate`` = parts_per_s x
+singulated_fraction (single parts per second), a product, and ``oriented_rate``, the parts
+per second delivered correctly oriented and single (``vibrofeed orientation``: counted part by
+part, not a product of fractions; its own batch-means error ``oriented_rate_err``). A fraction
+f over n arrivals has the binomial error sqrt(f (1 - f) / n); a product's relative errors add
+in quadrature (independent estimates: the rate's from batch means of the counts, the
+fraction's from which arrivals were single).
 
 A metric the run could not measure (too few exits, a bed not steady: its ``*_reason``) is
 None, never a number: such a run is a failed evaluation for the search.
@@ -20,9 +21,8 @@ import math
 from .spec import MINIMISED
 
 # metric -> (its error's key in the row, or the fraction whose error is binomial)
-_FRACTIONS = ("singulated_fraction", "orientation_yield")
-_PRODUCTS = {"singulated_rate": ("parts_per_s", "singulated_fraction"),
-             "oriented_rate": ("parts_per_s", "orientation_yield")}
+_FRACTIONS = ("singulated_fraction", "orientation_yield", "correct_fraction")
+_PRODUCTS = {"singulated_rate": ("parts_per_s", "singulated_fraction")}
 
 
 def value_and_error(row: dict, name: str) -> tuple[float | None, float | None]:

@@ -56,7 +56,7 @@ from ..sweep.execute import run_job
 from ..sweep.plan import Job, cost, find_deck, value_text
 from . import objective as O
 from .screen import screen
-from .spec import StudySpec, load
+from .spec import ORIENTED, StudySpec, load
 
 STUDY_JSON, JOURNAL, STEM = "study.json", "optuna.journal", "study"
 CONFIRM_BASE, ROBUST_BASE = 10_000, 20_000
@@ -509,7 +509,7 @@ def check_values(spec: StudySpec, deck) -> None:
         if not outlet and metric != "mean_velocity":
             raise UsageError(f"{spec.where(*key)}: {metric}: deck {deck.name} has no outlet (it is "
                              "not a bulk feeder), so its runs measure mean_velocity only")
-        if outlet and metric in ("orientation_yield", "oriented_rate") and spheres:
+        if outlet and metric in ORIENTED and spheres:
             raise UsageError(f"{spec.where(*key)}: {metric}: the study's parts are spheres, which "
                              "have no orientation; it is measured on chips and discs (shape = 1 or 2)")
 

@@ -66,9 +66,11 @@ BUDGET = {"runs": 20, "seeds": 6, "screen": 256, "confirm": 3, "replicates": 3}
 # (studies/line_singulated_rate.toml on a 2-core Xeon, 2026-12-03): 10 000 take 15 minutes
 # before the first DEM run (screen = 1000000000 ended in a memory traceback).
 MAX_SCREEN = 10_000
-# Metrics an objective may name: the sweep's metrics of a bulk result, and two products.
+# Metrics an objective may name: the sweep's metrics of a bulk result, and a product.
 METRICS = ("parts_per_s", "mass_per_s", "mean_velocity", "singulated_fraction", "orientation_yield",
-           "singulated_rate", "oriented_rate", "cv_interarrival", "doubles_rate")
+           "singulated_rate", "oriented_rate", "correct_fraction", "cv_interarrival", "doubles_rate")
+# Of them, the ones only parts with an orientation measure (not spheres).
+ORIENTED = ("orientation_yield", "oriented_rate", "correct_fraction")
 # Lower is better for these (the others are maximised).
 MINIMISED = ("cv_interarrival", "doubles_rate")
 # Names an inequality may use besides the parameters: arithmetic only.

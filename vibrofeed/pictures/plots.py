@@ -164,3 +164,36 @@ def singulation_figures(analysis, folder) -> list[Path]:
     name_run(fig, caption)
     out.append(save(fig, Path(folder) / "singulation_clusters.png"))
     return out
+
+
+# The states' colours in the orientation census (up: the usual correct state).
+STATE_COLOURS = {"up": "tab:green", "down": "tab:red", "side": "tab:orange", "end": "tab:purple"}
+
+
+def orientation_figure(analysis, path) -> Path:
+    """The state fractions of the parts on the track against the path coordinate, stacked,
+    the correct fraction over them and the tooling stations marked (their in and out): one
+    PNG at ``path``."""
+    plt = pyplot()
+    r = analysis.results
+    fig, ax = plt.subplots(figsize=(8, 4), layout="constrained")
+    x = np.asarray(r.census_x) * 1e3
+    width = float(np.diff(r.census_edges).mean()) * 1e3 if len(x) else 1.0
+    bottom = np.zeros(len(x))
+    for name, fractions in r.census_fractions.items():
+        f = np.nan_to_num(np.asarray(fractions, dtype=float))
+        ax.bar(x, f, width=width, bottom=bottom, color=STATE_COLOURS.get(name), alpha=0.75,
+               label=name, edgecolor="white", linewidth=0.3)
+        bottom += f
+    ax.plot(x, r.census_correct, "k.-", lw=1.0, label=f"correct ({r.correct})")
+    for st in r.stations:
+        ax.axvspan(st["x_in"] * 1e3, st["x_out"] * 1e3, color="0.5", alpha=0.15)
+        ax.annotate(st["name"], (st["x_in"] * 1e3, 1.01), fontsize=7, rotation=30,
+                    xycoords=("data", "axes fraction"))
+    ax.set_xlim(float(r.census_edges[0]) * 1e3, float(r.census_edges[-1]) * 1e3)
+    ax.set_ylim(0, 1)
+    ax.set_xlabel("path coordinate [mm] (the outlet edge at the right)")
+    ax.set_ylabel("fraction of the parts on the track [-]")
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    name_run(fig, f"{run_caption(analysis.result)}; {r.steady_from:.3g} .. {r.steady_to:.3g} s")
+    return save(fig, path)

@@ -21,7 +21,13 @@ after section K: the last section's is ``parts_per_s``), ``speed_K``,
 ``hold_up_K`` (every section) and ``reject_rate_K`` (sections past the first,
 where the tooling is); the rates among them are missing with the feed rate. A bowl
 has the same columns: section 1 is its helix, 2 its chute.
-Chips and discs get their ``orientation_yield`` (face up and aligned).
+Chips and discs get their ``orientation_yield`` (face up and aligned). Parts that are clumps
+(chips, discs, boxes) also get the figures of ``vibrofeed orientation`` at its defaults (correct
+= up and lengthwise within 20 degrees), over the same window: ``correct_fraction``,
+``lengthwise_fraction``, ``correct_rate`` and ``oriented_rate`` (correct single parts per
+second) with their errors ``*_err``, and ``recirculation_per_s`` (the parts sent back); None
+for spheres, and the fractions and rates None with too few arrivals (``singulation_reason``:
+the same exits).
 """
 
 from __future__ import annotations
@@ -34,6 +40,10 @@ FEEDRATE = ("parts_per_s", "parts_per_s_err", "mass_per_s", "mass_per_s_err", "m
 SINGULATION = ("cv_interarrival", "doubles_rate", "singulated_fraction", "mean_gap", "n_arrivals",
                "doubles_per_s", "mean_interarrival", "edge_velocity", "track_singulated_fraction",
                "face_up_fraction", "aligned_fraction", "orientation_yield")
+ORIENTATION = ("correct_fraction", "lengthwise_fraction", "correct_rate", "correct_rate_err",
+               "oriented_rate", "oriented_rate_err", "recirculation_per_s")
+# What too few arrivals void of them (the command voids the same: vibrofeed.cli.orientation RATE_KEYS).
+ORIENTATION_UNMEASURED = ORIENTATION[:-1]
 MODEL = ("model_velocity", "velocity_ratio")
 # What a reason for measuring nothing voids (the commands void the same: vibrofeed.cli.feedrate
 # RATE_KEYS and SECTION_RATE_KEYS, vibrofeed.cli.singulation ARRIVAL_KEYS).
@@ -78,24 +88,35 @@ def metrics(path) -> dict:
     """The figures of the result at ``path`` (module docstring)."""
     from ..postproc import Transport
     from ..postproc.feedrate import FeedRate, dilute_limit, velocity_ratio
+    from ..postproc.orientation import Orientation
     from ..postproc.singulation import Singulation
     from ..results.reader import Result
 
     out: dict = {}
     with Result(path) as r:
         if r.outlet_plane is not None:
-            fr = FeedRate(r).run().summary()
+            feedrate = FeedRate(r).run()
+            fr = feedrate.summary()
             out.update({k: _scalar(fr.get(k)) for k in FEEDRATE})
             out["feedrate_reason"] = fr.get("reason") or None
             if out["feedrate_reason"]:
                 out.update(dict.fromkeys(FEEDRATE_UNMEASURED))
             out.update(section_columns(fr.get("sections") or [], not out["feedrate_reason"]))
             # over feed rate's window, found once (Singulation would search it again)
-            sg = Singulation(r, start=fr["steady_from"], end=fr["steady_to"]).run().summary()
+            singulation = Singulation(r, start=fr["steady_from"], end=fr["steady_to"]).run()
+            sg = singulation.summary()
             out.update({k: _scalar(sg.get(k)) for k in SINGULATION})
             out["singulation_reason"] = sg.get("reason") or None
             if out["singulation_reason"]:
                 out.update(dict.fromkeys(SINGULATION_UNMEASURED))
+            if r.body_template is not None:  # the same window, feed rate and arrivals
+                o = Orientation(r, start=fr["steady_from"], end=fr["steady_to"], feedrate=feedrate.results,
+                                singulation=singulation.results).run().results
+                out.update({k: _scalar(o.get(k)) for k in ORIENTATION})
+                if out["singulation_reason"]:
+                    out.update(dict.fromkeys(ORIENTATION_UNMEASURED))
+            else:
+                out.update(dict.fromkeys(ORIENTATION))
             out.update({k: _scalar(fr.get(k)) for k in MODEL})
         else:
             out["n_parts"] = len(r.part_ids)

@@ -74,8 +74,15 @@ def test_joint_motion_in_closed_form():
 
 def test_tooling_stations_where_the_numbers_put_them():
     stations = Feeder.from_values(THREE).stations
-    assert [(s.section, s.kind) for s in stations] == [(2, "side_drop"), (2, "wiper")]
-    drop, wiper = stations
+    assert [(s.section, s.kind) for s in stations] == [(1, "gate"), (2, "side_drop"), (2, "wiper")]
+    assert [(s.element, s.name) for s in stations] == [(1, "s1.gate"), (2, "s2.side_drop"), (2, "s2.wiper")]
+    gate, drop, wiper = stations
+    # the gate at 0.5 of 4 mm, its walls narrowing at 45 degrees from 1.2 to 0.6 mm: 0.3 mm long
+    assert (gate.start, gate.end) == (pytest.approx(2e-3, abs=1e-15), pytest.approx(2.3e-3, abs=1e-15))
+    # a part passes a station from a part size (part_size) before it to one past it
+    size = THREE["part_size"]
+    assert (drop.x_in, drop.x_out) == (pytest.approx(5e-3 - size, abs=1e-15),
+                                       pytest.approx(7e-3 + size, abs=1e-15))
     # 4 mm + 0.2 .. 0.6 of 5 mm
     assert (drop.start, drop.end) == (pytest.approx(5e-3, abs=1e-15), pytest.approx(7e-3, abs=1e-15))
     assert wiper.start == pytest.approx(8e-3, abs=1e-15)
@@ -133,3 +140,22 @@ def test_sections_out_of_range_are_refused():
     for n in (0, 10, 1.5):
         with pytest.raises(ParameterError, match="must be a whole number from 1 to 9"):
             Feeder.from_values({**THREE, "sections": n})
+
+
+def test_any_tool_record_placed_by_at_is_a_station_of_its_element():
+    # a tool another element type may carry (an air jet at 0.25 of section 2): a point station,
+    # found from the element's attribute alone
+    import dataclasses
+
+    @dataclasses.dataclass(frozen=True)
+    class Jet:
+        kind = "jet"
+        at: float
+
+    f = Feeder.from_values(THREE)
+    s2 = dataclasses.replace(f.elements[1], side_drop=None, wiper=None)
+    object.__setattr__(s2, "jet", Jet(at=0.25))
+    f = dataclasses.replace(f, elements=(f.elements[0], s2, f.elements[2]))
+    gate, jet = f.stations
+    assert (jet.section, jet.element, jet.kind, jet.name) == (2, 2, "jet", "s2.jet")
+    assert jet.start == jet.end == pytest.approx(4e-3 + 1.25e-3, abs=1e-15)

@@ -93,6 +93,11 @@ def test_objective_values_and_errors():
     assert v == pytest.approx(18.0, rel=1e-12)
     assert e == pytest.approx(math.hypot(1.0 * 0.9, 0.03 * 20.0), rel=1e-12)  # relative errors in quadrature
     assert O.value_and_error(row, "oriented_rate") == (None, None)  # not measured: no number
+    # correctly oriented single parts: counted part by part, with their own batch-means error
+    oriented = {**row, "oriented_rate": 14.0, "oriented_rate_err": 0.7, "correct_fraction": 0.75}
+    assert O.value_and_error(oriented, "oriented_rate") == (14.0, 0.7)
+    v, e = O.value_and_error(oriented, "correct_fraction")
+    assert v == 0.75 and e == pytest.approx(math.sqrt(0.75 * 0.25 / 100), rel=1e-12)  # binomial
     assert O.value_and_error({"parts_per_s": float("nan")}, "parts_per_s") == (None, None)
     assert O.cautious(18.0, 0.5, "singulated_rate") == 17.5 and O.cautious(0.3, 0.1, "cv_interarrival") == 0.4
     assert O.better(0.2, 0.3, "doubles_rate") and O.better(3.0, 2.0, "parts_per_s")

@@ -130,6 +130,8 @@ def test_an_objective_the_deck_never_measures_is_refused_before_the_first_run(tm
     bulk = STUDY.replace("LIMIT", "8").replace("RUNS", "4")
     for goal, shape, refused in (("orientation_yield", "", True), ("oriented_rate", "shape = 0", True),
                                  ("oriented_rate", 'shape = "sphere"', True),
+                                 ("correct_fraction", "shape = 0", True),
+                                 ("correct_fraction", "shape = 1", False),
                                  ("orientation_yield", "shape = 1", False),
                                  ("orientation_yield", 'shape = "disc"', False),
                                  ("parts_per_s", "", False)):

@@ -143,6 +143,27 @@ def test_the_orientation_yield_of_chips_is_a_column(tmp_path):
 def test_spheres_have_no_orientation_yield(tmp_path):
     row = metrics(feeder(tmp_path / "s.h5", FRAMES, 0.02 + 0.15 * np.arange(40) / 40, freq=100.0))
     assert row["orientation_yield"] is None
+    assert row["oriented_rate"] is None and row["correct_fraction"] is None
+
+
+def test_the_rate_of_correctly_oriented_single_parts_is_a_column(tmp_path):
+    # box-like parts (5 x 2 spheres, long along x), one in three crosswise: the others are
+    # correct (up, lengthwise), all single (1.9 mm apart along the track, in lanes 1 mm apart)
+    box = np.array([[x, y, 0.0, 5e-5] for x in (-2e-4, -1e-4, 0, 1e-4, 2e-4) for y in (-5e-5, 5e-5)])
+    n = 40
+    quats = np.array([_q_axis([0, 0, 1], math.pi / 2 if k % 3 == 0 else 0.0) for k in range(n)])
+    exits = 0.02 + 0.15 * np.arange(n) / n
+    path = feeder(tmp_path / "boxes.h5", FRAMES, exits, speed=0.5, orientations=quats,
+                  body_template=box, lanes=np.arange(n) * 1e-3, freq=100.0)
+    row = metrics(path)
+    inside = (exits >= row["steady_from"]) & (exits < row["steady_to"])
+    right = inside & (np.arange(n) % 3 != 0)
+    span = row["steady_to"] - row["steady_from"]
+    assert row["singulated_fraction"] == 1.0
+    assert row["correct_fraction"] == pytest.approx(right.sum() / inside.sum(), abs=1e-12)
+    assert row["oriented_rate"] == pytest.approx(right.sum() / span, rel=1e-12)
+    assert row["correct_rate"] == pytest.approx(right.sum() / span, rel=1e-12)
+    assert row["oriented_rate_err"] is not None and row["recirculation_per_s"] == 0.0
 
 
 def test_the_new_columns_round_trip_through_the_summary(tmp_path):
@@ -269,7 +290,8 @@ def test_a_bulk_rows_columns_are_the_documented_ones_in_their_order(stream):
         "lost", "feedrate_reason", "cv_interarrival", "doubles_rate", "singulated_fraction", "mean_gap",
         "n_arrivals", "doubles_per_s", "mean_interarrival", "edge_velocity", "track_singulated_fraction",
         "face_up_fraction", "aligned_fraction", "orientation_yield", "singulation_reason",
-        "model_velocity", "velocity_ratio"]
+        "correct_fraction", "lengthwise_fraction", "correct_rate", "correct_rate_err", "oriented_rate",
+        "oriented_rate_err", "recirculation_per_s", "model_velocity", "velocity_ratio"]
 
 
 def test_the_velocity_error_and_the_edge_speed_of_parts_at_their_own_speeds(tmp_path):
