@@ -531,8 +531,12 @@ def _check_bulk_feeder(p: Mapping[str, float]) -> None:
     gate = p.get("gate_width", 0.0)
     length = p.get("track_length", math.inf)
     if gate > 0:
-        if gate < widest:
-            raise ParameterError(f"gate_width={gate:g} m is narrower than a part ({widest:g} m across)")
+        # a box passes a gate lengthwise (a gate narrower than its length is a width restriction
+        # that turns it or holds it back crosswise); other parts whichever way they lie
+        abreast = p.get("part_width", size) if shape == 3 else widest
+        if gate < abreast:
+            raise ParameterError(f"gate_width={gate:g} m is narrower than a part ({abreast:g} m across"
+                                 f"{' it lengthwise' if shape == 3 else ''})")
         if gate >= p["track_width"]:
             raise ParameterError(f"gate_width={gate:g} m must be narrower than track_width="
                                  f"{p['track_width']:g} m (gate_width=0: no gate)")

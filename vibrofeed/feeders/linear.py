@@ -227,9 +227,10 @@ class LinearSection:
                 raise ParameterError(f"{n(('side_drop', 'width'))}={d.width:g} m must be > 0 and "
                                      f"narrower than {n(('width',))}={self.width:g} m (the side drop "
                                      "narrows the track)")
-            if d.width < 0.5 * part.widest:
+            if d.width < 0.5 * part.abreast:  # (a box lengthwise: its width; crosswise ones fall)
                 raise ParameterError(f"{n(('side_drop', 'width'))}={d.width:g} m is less than half a "
-                                     f"part ({part.widest / 2:g} m): every part would fall off the drop")
+                                     f"part ({part.abreast / 2:g} m across it in a file): every part "
+                                     "would fall off the drop")
 
 
 def sine_commands(k: int) -> dict[str, list[str]]:

@@ -80,6 +80,12 @@ class Part:
         return self.size * (1 + self.size_spread) if self.shape == 0 else self.size
 
     @property
+    def abreast(self) -> float:
+        """Across a part lying flat along the path as it rides in a file [m]: a box's width W
+        (lengthwise), every other part's widest."""
+        return self.width if self.shape == 3 else self.widest
+
+    @property
     def tallest(self) -> float:
         """A part's height lying flat: the largest sphere, or the thickness (a box's with its
         bump up) [m]."""

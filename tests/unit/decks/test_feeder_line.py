@@ -222,7 +222,14 @@ def test_a_single_section_is_the_bulk_feeder_unchanged(tmp_path):
     ({"s2_wiper_height": 7e-4}, "not below the walls"),
     ({"s2_wiper_height": 6e-4}, "not below the walls"),  # as high as the walls
     ({"s2_wiper_height": 4e-4, "s2_wiper_at": 0.99}, "runs past the outlet"),
-    ({"s2_drop_to": 0.5, "s2_drop_width": 1e-4}, "less than half a part (0.00015 m)"),
+    ({"s2_drop_to": 0.5, "s2_drop_width": 1e-4}, "less than half a part (0.00015 m across it"),
+    # a box rides lengthwise: half its width W, not of its length, is what the drop must hold
+    ({"shape": "box", "part_size": 1e-3, "part_width": 5e-4, "part_thickness": 3.5e-4, "track_width": 2e-3,
+      "wall_height": 1.5e-3, "s2_width": 2e-3, "s2_wall_height": 1e-3, "s2_drop_to": 0.5,
+      "s2_drop_width": 2.4e-4, "gate_width": 0, "n_parts": 10},
+     "less than half a part (0.00025 m across it in a file)"),
+    ({"shape": "box", "part_size": 1e-3, "part_width": 5e-4, "part_thickness": 3.5e-4, "track_width": 2e-3,
+      "wall_height": 1.5e-3, "s2_width": 2e-3, "gate_width": 4.9e-4}, "(0.0005 m across it lengthwise)"),
     ({"s2_drop_to": 0.5, "s2_drop_width": 0}, "must be > 0"),  # a drop's extent with no floor left
     ({"s2_drop_to": 0.5, "s2_drop_width": 5e-4}, "narrower than s2_width"),
     ({"s2_drop_to": 0.5, "s2_drop_width": 4.2e-4}, "narrower than s2_width"),  # as wide
