@@ -276,8 +276,9 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
             f"parameter sections={values['sections']}: deck {deck.name} declares "
             f"{'one section' if declared == 1 else f'sections 1 to {declared}'}; a line of more "
             "sections is a feeder description (docs/feeders.md)")
-    # a mesh element's STL and path are words its checks read beside the numbers
-    words = {name: value for name, value in values.items() if re.match(r"^s\d+_(?:file|path)$", name)}
+    # a mesh element's STL and path, a jet's keep and mode are words its checks read beside the numbers
+    words = {name: value for name, value in values.items()
+             if re.match(r"^s\d+_(?:file|path|jet_keep|jet_mode)$", name)}
     try:
         _check_relations({**words, **numbers})
     except ParameterError as exc:

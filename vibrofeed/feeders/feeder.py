@@ -234,8 +234,8 @@ class Feeder:
 
     @property
     def stations(self) -> list[Station]:
-        """The side drops and wipers along the path, in conveying order of sections; each
-        on the path section (1-based) it lies on."""
+        """The side drops, wipers and jets (their blocks) along the path, in conveying order of
+        sections; each on the path section (1-based) it lies on."""
         out = []
         shift = self.path_shift
         for e in self.elements:
@@ -254,6 +254,9 @@ class Feeder:
             if getattr(e, "wiper", None) is not None:
                 a = e.x0 + e.wiper.at * e.length + shift
                 out.append(Station(k, "wiper", a, a + e.wiper.length))
+            if getattr(e, "jet", None) is not None:
+                a, b = e.jet_span(self.part.size)
+                out.append(Station(k, "jet", a + shift, b + shift))
         return out
 
     def further_meshes(self) -> list:
