@@ -15,7 +15,7 @@ from collections.abc import Callable, Mapping
 
 from .bowl import check_bowl, climb_advice
 from .decks import RESERVED, Deck
-from .errors import ParameterError
+from .errors import ParameterError, ParameterWarning
 from .feeders.feeder import Feeder
 from .feeders.linear import MAX_SECTIONS
 from .plausibility import DENSITY_MAX, PART_MAX, advice
@@ -23,8 +23,6 @@ from .plausibility import DENSITY_MAX, PART_MAX, advice
 NO_MICRO_PART = "a metre is no micro-part; lengths are in metres"
 
 
-class ParameterWarning(UserWarning):
-    """A value that runs but is almost certainly a slip (:mod:`vibrofeed.plausibility`)."""
 
 # A feeder's stroke is micrometres (piezo micro-feeders) to a few millimetres
 # (bowl feeders); a larger amplitude is almost always a unit slip (metres).

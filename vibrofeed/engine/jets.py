@@ -80,7 +80,7 @@ def merged(windows) -> list[tuple[float, float]]:
 def window_expression(windows) -> str:
     """LIGGGHTS' formula, 1 within the union of ``windows`` and 0 outside: a sum of
     ``(time>=a)*(time<b)`` over the merged windows (disjoint: the sum is 0 or 1); "0" for none."""
-    terms = [f"(time>={a!r})*(time<{b!r})" for a, b in merged(windows)]
+    terms = [f"(time>={a:.12g})*(time<{b:.12g})" for a, b in merged(windows)]  # (to 1e-11 s)
     return "+".join(terms) if terms else "0"
 
 

@@ -18,12 +18,13 @@ Its numbers in the deck's vocabulary: section 1 takes the bulk feeder's own name
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ParameterError
+from ..errors import ParameterError, ParameterWarning
 from ..line import WIPER_LENGTH, Section, section_mesh
 from ..orientation import STATES, parse_correct
 from .records import JET_MODES, Drive, Gate, Jet, Part, SideDrop, Wiper, number
@@ -349,10 +350,6 @@ class LinearSection:
         speed = 2 * math.pi * self.drive.freq * self.drive.amp_t  # no part conveys faster
         reach = self.sensing_x + speed * j.delay
         if reach > self.x1:
-            import warnings
-
-            from ..parameters import ParameterWarning
-
             warnings.warn(f"{n(('jet', 'delay'))}={j.delay:g} s: a part conveyed at the surface's peak "
                           f"speed along ({speed:.3g} m/s) is {reach - self.x1:.3g} m past section "
                           f"{self.number}'s end when the jet fires", ParameterWarning, stacklevel=2)
