@@ -24,7 +24,10 @@ events and the mass balance (:mod:`.outlet`), and the track mesh and clump
 template the runner's prepare hook made (``spec["prepared"]``) in the file. A
 feeder line's deck (``sections`` > 1) also defines each further section's motion
 (``s2_surface_*``: ``results.layout.surface_variables``), recorded at every frame beside
-section 1's, and the file says which section each track vertex belongs to.
+section 1's, and the file says which section each track vertex belongs to. A line with an
+orienting station (an air jet, :mod:`.jets`) is sensed at every frame on rank 0; new firings
+redefine the jet's switch before the next segment (collective) and are recorded
+(``vibrofeed/jet``).
 
 A bulk run given a target error (``spec["target_error"]``, ``vibrofeed run --target-error``)
 stops once the feed rate's relative error is at or below it (:class:`TargetError`): rank 0
