@@ -36,9 +36,12 @@ from .path import BLOCK_VALUES, along, feeder_of
 _BLOCK_VALUES = BLOCK_VALUES  # (a name of this module's: tests set it to read in small blocks)
 # Rejects: the tools, in the order they are tried (a part falls sideways only where the
 # side drop leaves no wall, so its stretch is tried first).
-TOOLING = ("side_drop", "wiper", "other")
+TOOLING = ("side_drop", "wiper", "jet", "other")
 # A part the wiper sweeps back falls within this many part sizes upstream of its face.
 WIPER_REACH = 3.0
+# A part a jet blows off crosses the catch plane within this many part sizes downstream of
+# the jet's block (it flies on along the path as it falls), or one upstream.
+JET_REACH = 5.0
 # A drift counts when the last third's mean differs from the first third's by more than
 # this many combined standard errors.
 DRIFT_SIGMAS = 3.0
@@ -134,13 +137,14 @@ def tooling(where, section, stations, size: float) -> np.ndarray:
     its crossing of the catch plane; a bowl's fall: the last on the track) fallen from
     ``section`` (1-based), among the feeder's tooling ``stations``
     (:attr:`vibrofeed.feeders.Feeder.stations`), parts ``size`` across: a side drop's
-    stretch on its section widened by a part size either way; else from
-    :data:`WIPER_REACH` part sizes upstream of a wiper's face to its bar's downstream end;
-    else other."""
+    stretch on its section widened by a part size either way; else a jet's block widened by a
+    part size upstream and :data:`JET_REACH` downstream; else from :data:`WIPER_REACH` part
+    sizes upstream of a wiper's face to its bar's downstream end; else other."""
     s = np.asarray(where, dtype=float)
     section = np.broadcast_to(np.asarray(section), s.shape)
     out = np.full(len(s), TOOLING.index("other"))
-    for kind, before, after in (("wiper", WIPER_REACH, 0.0), ("side_drop", 1.0, 1.0)):
+    reach = (("wiper", WIPER_REACH, 0.0), ("jet", 1.0, JET_REACH), ("side_drop", 1.0, 1.0))
+    for kind, before, after in reach:
         for st in (st for st in stations if st.kind == kind):  # (a side drop is decided last)
             hit = (section == st.section) & (s >= st.start - before * size) & (s <= st.end + after * size)
             out[hit] = TOOLING.index(kind)

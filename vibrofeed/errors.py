@@ -150,3 +150,8 @@ def _said(value, inner: bool) -> str:
     if isinstance(value, str) and inner:
         return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
     return str(value)
+
+
+class ParameterWarning(UserWarning):
+    """A value that runs but is almost certainly a slip (:mod:`vibrofeed.plausibility`; also
+    importable from vibrofeed.parameters, its home before the feeders warned too)."""

@@ -15,7 +15,7 @@ from collections.abc import Callable, Mapping
 
 from .bowl import check_bowl, climb_advice
 from .decks import RESERVED, Deck
-from .errors import ParameterError
+from .errors import ParameterError, ParameterWarning
 from .feeders.feeder import Feeder
 from .feeders.linear import MAX_SECTIONS
 from .feeders.records import Part
@@ -25,8 +25,6 @@ from .plausibility import DENSITY_MAX, PART_MAX, advice
 NO_MICRO_PART = "a metre is no micro-part; lengths are in metres"
 
 
-class ParameterWarning(UserWarning):
-    """A value that runs but is almost certainly a slip (:mod:`vibrofeed.plausibility`)."""
 
 # A feeder's stroke is micrometres (piezo micro-feeders) to a few millimetres
 # (bowl feeders); a larger amplitude is almost always a unit slip (metres).
@@ -283,8 +281,9 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
             f"parameter sections={values['sections']}: deck {deck.name} declares "
             f"{'one section' if declared == 1 else f'sections 1 to {declared}'}; a line of more "
             "sections is a feeder description (docs/feeders.md)")
-    # a mesh element's STL and path are words its checks read beside the numbers
-    words = {name: value for name, value in values.items() if re.match(r"^s\d+_(?:file|path)$", name)}
+    # a mesh element's STL and path, a jet's keep and mode are words its checks read beside the numbers
+    words = {name: value for name, value in values.items()
+             if re.match(r"^s\d+_(?:file|path|jet_keep|jet_mode)$", name)}
     try:
         _check_relations({**words, **numbers})
     except ParameterError as exc:

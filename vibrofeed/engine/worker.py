@@ -24,7 +24,10 @@ events and the mass balance (:mod:`.outlet`), and the track mesh and clump
 template the runner's prepare hook made (``spec["prepared"]``) in the file. A
 feeder line's deck (``sections`` > 1) also defines each further section's motion
 (``s2_surface_*``: ``results.layout.surface_variables``), recorded at every frame beside
-section 1's, and the file says which section each track vertex belongs to.
+section 1's, and the file says which section each track vertex belongs to. A line with an
+orienting station (an air jet, :mod:`.jets`) is sensed at every frame on rank 0; new firings
+redefine the jet's switch before the next segment (collective) and are recorded
+(``vibrofeed/jet``).
 
 A bulk run given a target error (``spec["target_error"]``, ``vibrofeed run --target-error``)
 stops once the feed rate's relative error is at or below it (:class:`TargetError`): rank 0
@@ -263,6 +266,13 @@ class BulkFrames:
 
             self.returns = Returns(float(variables.get("return_delay", 0.0)),
                                    int(float(variables.get("seed", 5489))), lmp.dt)
+        # a line's air jets (orienting stations): sensed and fired by the driver (.jets)
+        self.jets = None
+        if self.line and any(getattr(e, "jet", None) is not None for e in self.feeder.linear_sections):
+            from .jets import Jets
+
+            self.jets = Jets(self.feeder)
+        self.atom_ranges = None  # {body: (first, last atom id)} at the last frame (ideal jets)
         self.track, self.template = prepared_geometry(spec)
         # a line's track: which vertices move with section 2 (None: not a line, or not told)
         self.track_sections = track_sections(self.track, variables) if self.line else None
@@ -299,6 +309,10 @@ class BulkFrames:
         atoms = gather_atoms(lmp, comm, self.names)
         if atoms is None:
             return None
+        if self.jets is not None and self.jets.ideal and self.n_spheres > 1:
+            from .jets import atom_ranges
+
+            self.atom_ranges = atom_ranges(atoms)
         if self.n_spheres > 1:
             parts, incomplete = aggregate(atoms, self.template, self.n_spheres)
             if incomplete and not any("incomplete" in w for w in self.warnings):
@@ -458,7 +472,8 @@ def open_writer(spec: dict, derived: dict, ranks: int, natoms: int, bulk, sectio
         **({} if bulk is None else {"track": bulk.track, "outlet": bulk.outlet.attributes(),
                                     "body_template": bulk.template, "line": bulk.line,
                                     "track_sections": bulk.track_sections,
-                                    "returns": bulk.returns is not None}))
+                                    "returns": bulk.returns is not None,
+                                    "jet": bulk.jets is not None}))
     flush_on_engine_exit(writer)
     return writer
 
@@ -512,11 +527,18 @@ class Frames:
                                         surface_rotation=rotation)
             return t
         got = self.bulk.frame(lmp, self.comm, t)
-        returns = self.bulk.returns
+        returns, jets = self.bulk.returns, self.bulk.jets
         if returns is not None:  # collective: every rank gives the same commands
             self.commands = returns.schedule(lmp, self.comm, t, self.bulk.outlet.reject_times)
+        firings = None
+        if jets is not None:  # collective too: rank 0 senses, every rank redefines the jets
+            fire, firings = jets.step(self.comm, t, got[0] if got is not None else None,
+                                      self.bulk.atom_ranges)
+            self.commands = [*self.commands, *fire]
         if self.writer is not None:
             parts, events, rejects, counts = got
+            if firings is not None:
+                self.writer.write_events(firings, L.JET)
             if events is not None:
                 self.writer.write_events(events)
             if rejects is not None:
@@ -644,7 +666,8 @@ def run_segments(lmp, frames: Frames, segs: list[tuple], report: Reporter,
         if stop:
             return done, time.monotonic() - started, k + 1
         commands, steps, setup = segment
-        if frames.commands:  # a new fix (a line's returns) needs a run with setup
+        # a new fix (a line's returns) or a redefined variable (a jet's) needs a run with setup
+        if frames.commands:
             commands, setup = (*commands, *frames.commands), True
             frames.commands = []
         lmp.commands(commands)

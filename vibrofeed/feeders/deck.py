@@ -17,7 +17,8 @@ before lines of more sections existed.
   t = 0, and the wall contact over every mesh;
 * ``line_catch.in``: by hand, the rejects' catch face under the further sections;
 * ``line_motion.in``: each further section's movers and its recorded motion
-  (``s<k>_surface_*``, FORMAT.md).
+  (``s<k>_surface_*``, FORMAT.md), and a section's air jet (its block and force, switched
+  on by the driver only: vibrofeed.engine.jets).
 
 :func:`guard_lines` is the part of prepared.in that refuses, in a run by hand, any value
 other than those the geometry was checked and built for: the rules live in Python
@@ -105,7 +106,10 @@ def line_files(feeder: Feeder) -> dict[str, str]:
         f'     move {first["at"]} ${{catch_z}}" &\n'
         '  "fix rejects all massflow/mesh mesh reject_catch vec_side 0 0 -1 count once file '
         'rejects.txt writeTime"\n')
-    out["line_motion.in"] += "\n".join(line for p in pieces for line in p["motion"]) + "\n"
+    motion = [line for p in pieces for line in p["motion"]]
+    motion += [line for e in further if hasattr(e, "jet_commands")
+               for line in e.jet_commands(feeder.part, feeder.line_origin)]
+    out["line_motion.in"] += "\n".join(motion) + "\n"
     return out
 
 

@@ -26,8 +26,8 @@ from pathlib import Path
 
 from ..errors import ParameterError
 from . import bowl, chute, mesh_element
-from .linear import KEYS, MAX_SECTIONS, deck_names
-from .records import shape_code
+from .linear import KEYS, MAX_SECTIONS, deck_names, keep_word
+from .records import JET_MODES, shape_code
 
 
 def _kind_keys(kind: str, k: int) -> tuple[dict, dict]:
@@ -108,12 +108,28 @@ def _value(path: Path, dotted: str, value) -> str:
         if isinstance(value, float) and not math.isfinite(value):
             raise _fail(path, f"{dotted} = {value} is not finite")
         return repr(value) if isinstance(value, float) else str(value)
+    if dotted.endswith(".jet.keep") or dotted.endswith(".jet.mode"):  # words (linear.WORDS)
+        return _jet_word(path, dotted, value)
     if isinstance(value, str) and dotted == "parts.shape":  # the deck's code: LIGGGHTS compares numbers
         try:
             return str(shape_code(value))
         except ParameterError as exc:
             raise _fail(path, f"parts.{exc}".replace("parameter ", "")) from None
     raise _fail(path, f"{dotted} = {value!r} must be a number")
+
+
+def _jet_word(path: Path, dotted: str, value) -> str:
+    """A jet's keep (parse_correct's words) or mode as the deck's word (no blanks)."""
+    if not isinstance(value, str):
+        raise _fail(path, f"{dotted} = {value!r} must be text")
+    if dotted.endswith(".keep"):
+        try:
+            return keep_word(value)
+        except ParameterError as exc:
+            raise _fail(path, str(exc).replace("jet.keep", dotted, 1)) from None
+    if value.strip().lower() not in JET_MODES:
+        raise _fail(path, f"{dotted} = {value!r} must be {' or '.join(map(repr, JET_MODES))}")
+    return value.strip().lower()
 
 
 def aliases(kinds: list[str]) -> dict[str, str]:
@@ -214,6 +230,8 @@ def _element(path: Path, k: int, element: dict, last: bool) -> dict[str, str]:
             out[names[(key,)]] = _mesh_word(path, k, key, value)
             continue
         out[names[(key,)]] = _value(path, f"element.{k}.{key}", value)
+    if isinstance(element.get("jet"), dict) and "force" not in element["jet"]:
+        raise _fail(path, f"{where}'s jet has no force: give jet.force [N] (on a part wholly in it)")
     needed = {"chute": ("length", "width", "slope"), "bowl": bowl.NEEDED,
               "mesh": mesh_element.NEEDED}.get(kind, ("length", "width"))
     for key in needed:
@@ -261,6 +279,8 @@ def _not_here(k: int, key: tuple[str, ...]) -> str:
         return "the first section has no joint before it to step down at"
     if key[0] == "gate":
         return "a gate is built on the first section only in this version"
+    if key[0] == "jet":
+        return "a jet is built on the second section on in this version"
     if key[0] in ("side_drop", "wiper"):
         return f"a {key[0].replace('_', ' ')} is built on the second section on in this version"
     return "only the first section's drive takes a waveform other than a sine in this version"

@@ -259,8 +259,9 @@ class Feeder:
         drop and wiper; each further element's tools of :data:`TOOLS`, whichever it carries),
         each on the path section (1-based) it lies on. A tool record placed by ``start`` and
         ``end`` (fractions of its element's length) spans them; one placed by ``at`` spans
-        from there on by its ``length`` [m] if it has one (a wiper's bar), else is a point (an
-        air jet); a gate spans its 45-degree narrowing from its element's width to its own."""
+        from there on by its ``length`` [m] if it has one (a wiper's bar); an air jet spans its
+        block (from its sensing point by its offset, its length); a gate spans its 45-degree
+        narrowing from its element's width to its own."""
         out = []
         shift, margin = self.path_shift, self.part.size
         for e in self.elements:
@@ -276,7 +277,9 @@ class Feeder:
                 tool = getattr(e, attr, None)
                 if tool is None:
                     continue
-                if hasattr(tool, "start") and hasattr(tool, "end"):
+                if attr == "jet":  # its block: from the sensing point by its offset and length
+                    a, z = e.jet_span(self.part.size)
+                elif hasattr(tool, "start") and hasattr(tool, "end"):
                     a, z = e.x0 + tool.start * e.length, e.x0 + tool.end * e.length
                 else:
                     a = e.x0 + tool.at * e.length

@@ -18,14 +18,16 @@ Its numbers in the deck's vocabulary: section 1 takes the bulk feeder's own name
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ParameterError
+from ..errors import ParameterError, ParameterWarning
 from ..line import WIPER_LENGTH, Section, section_mesh
-from .records import Drive, Gate, Part, SideDrop, Wiper, number
+from ..orientation import STATES, parse_correct
+from .records import JET_MODES, Drive, Gate, Jet, Part, SideDrop, Wiper, number
 
 # description key (table, key) -> (section 1's deck name, later sections' suffix); None:
 # that section has no such number (a gate on section 1 only, a step, side drop and wiper
@@ -49,7 +51,19 @@ KEYS: dict[tuple[str, ...], tuple[str | None, str | None]] = {
     ("side_drop", "width"): (None, "drop_width"),
     ("wiper", "height"): (None, "wiper_height"),
     ("wiper", "at"): (None, "wiper_at"),
+    ("jet", "at"): (None, "jet_at"),
+    ("jet", "keep"): (None, "jet_keep"),
+    ("jet", "delay"): (None, "jet_delay"),
+    ("jet", "duration"): (None, "jet_duration"),
+    ("jet", "offset"): (None, "jet_offset"),
+    ("jet", "length"): (None, "jet_length"),
+    ("jet", "force"): (None, "jet_force"),
+    ("jet", "angle"): (None, "jet_angle"),
+    ("jet", "mode"): (None, "jet_mode"),
 }
+# Words, not numbers: the deck holds them as index words (no blank: "up,lengthwise").
+WORDS = (("jet", "keep"), ("jet", "mode"))
+JET_DEFAULTS = {"keep": "up,lengthwise", "mode": "region"}
 # The further sections' numbers carry the prefix s<k>_ with k from 2 to this.
 MAX_SECTIONS = 9
 
@@ -85,12 +99,14 @@ class LinearSection:
     gate: Gate | None = None
     side_drop: SideDrop | None = None
     wiper: Wiper | None = None
+    jet: Jet | None = None
 
     @classmethod
     def from_values(cls, values: Mapping, k: int, x0: float = 0.0, level: float = 0.0,
                     part: Part | None = None) -> LinearSection:
         """Section ``k`` from the deck's parameters (numbers or their strings); its tools are
-        absent where their numbers say so (gate_width 0, drop_to <= drop_from, wiper_height 0)."""
+        absent where their numbers say so (gate_width 0, drop_to <= drop_from, wiper_height 0,
+        jet_force 0)."""
         def get(key, default=0.0):  # (absent: zero, i.e. off or not moving, as the decks' tools)
             name = deck_name(k, key)
             return number(values, name, default) if name is not None else default
@@ -101,7 +117,7 @@ class LinearSection:
                       waveform=int(get(("drive", "waveform"), 0.0)) if first else 0,
                       duty=get(("drive", "duty"), 0.7) if first else 0.7)
         step = 0.0 if first else get(("step",))
-        gate = side_drop = wiper = None
+        gate = side_drop = wiper = jet = None
         if first and get(("gate", "width"), 0.0) > 0:
             gate = Gate(width=get(("gate", "width")), at=get(("gate", "at"), 0.7))
         if not first:
@@ -111,9 +127,11 @@ class LinearSection:
             if get(("wiper", "height"), 0.0) > 0:
                 wiper = Wiper(height=get(("wiper", "height")), at=get(("wiper", "at"), 0.5),
                               length=WIPER_LENGTH * (part.size if part else number(values, "part_size")))
+            jet = _jet(values, k, get)
         return cls(number=k, x0=x0, length=get(("length",)), width=get(("width",)),
                    wall_height=get(("wall_height",)), drive=drive, cross_tilt=get(("cross_tilt",), 0.0),
-                   step=step, level=level + step, gate=gate, side_drop=side_drop, wiper=wiper)
+                   step=step, level=level + step, gate=gate, side_drop=side_drop, wiper=wiper,
+                   jet=jet)
 
     # ---------------------------------------------------------------- geometry
     @property
@@ -158,6 +176,45 @@ class LinearSection:
     def bounds(self) -> list[tuple[float, float]]:
         return [(self.x0, self.x1)]
 
+    @property
+    def jet_length(self) -> float:
+        """The jet's block along the path [m] (0 without a jet)."""
+        j = self.jet
+        return 0.0 if j is None else j.length
+
+    @property
+    def sensing_x(self) -> float:
+        """Where the jet's camera senses the parts, along x [m]."""
+        return self.x0 + self.jet.at * self.length
+
+    def jet_span(self, size: float) -> tuple[float, float]:
+        """The jet's block along x [m] (its length 0: one part ``size``)."""
+        j = self.jet
+        length = j.length if j.length > 0 else size
+        centre = self.sensing_x + j.offset
+        return centre - length / 2, centre + length / 2
+
+    def floor_normal(self) -> tuple[float, float, float]:
+        """The floor's unit normal (up, tilted towards -y by the cross tilt)."""
+        a = math.radians(self.cross_tilt)
+        return 0.0, -math.sin(a), math.cos(a)
+
+    def jet_direction(self) -> tuple[float, float, float]:
+        """The jet's unit direction: ``angle`` up from the floor, across towards +y."""
+        a = math.radians(self.jet.angle + self.cross_tilt)
+        return 0.0, math.cos(a), math.sin(a)
+
+    def jet_block(self, part: Part) -> tuple[float, ...]:
+        """The jet's block (xlo, xhi, ylo, yhi, zlo, zhi) [m] in the section's frame: its span
+        along x, across the track and two parts beyond each wall, from below the lowest floor
+        (by the normal amplitude and a part) to a part above the walls' top (as they move): a
+        part blown off leaves it over the wall at +y, and flies on."""
+        xlo, xhi = self.jet_span(part.size)
+        margin = 2 * part.widest
+        return (xlo, xhi, -self.width / 2 - margin, self.width / 2 + margin,
+                self.lowest - self.drive.amp_n - part.widest,
+                -self.level + self.wall_height + self.drive.amp_n + part.widest)
+
     def mesh_section(self) -> Section:
         """The section as vibrofeed.line meshes it (a further section of a line)."""
         drop, wiper = self.side_drop, self.wiper
@@ -184,9 +241,37 @@ class LinearSection:
             f"variable {s}_low equal -({level}+v_{s}_width*tan(v_{s}_cross_tilt*PI/180))")
         return out
 
+    def jet_commands(self, part: Part, origin=(0.0, 0.0, 0.0)) -> list[str]:
+        """The jet's commands (none without one): its block (``s<k>_jet``, in the deck's frame:
+        the section's shifted by ``origin``), a ``fix addforce`` on the spheres in it, each a
+        share 1/body_spheres of ``s<k>_jet_force`` along the jet's direction, switched by
+        ``s<k>_jet_on`` (0: off). Only the driver switches it on (vibrofeed.engine.jets: an
+        equal-style window variable; ``ideal``: atom-style, the sensed body's atoms only); by
+        hand it never fires, and the deck says so."""
+        if self.jet is None:
+            return []
+        s = f"s{self.number}"
+        ox, oy, oz = origin
+        b = self.jet_block(part)
+        block = " ".join(repr(float(v)) for v in (b[0] + ox, b[1] + ox, b[2] + oy, b[3] + oy,
+                                                   b[4] + oz, b[5] + oz))
+        style = "atom" if self.jet.mode == "ideal" else "equal"
+        share = f"v_{s}_jet_force/v_body_spheres"
+        angle = f"(v_{s}_jet_angle+v_{s}_cross_tilt)*PI/180"
+        return [
+            f"# section {self.number}'s air jet ({self.jet.mode}): fired by vibrofeed run only",
+            f"region {s}_jet block {block} units box",
+            f"variable {s}_jet_on {style} 0",
+            f"variable {s}_jet_fy {style} v_{s}_jet_on*$({share}*cos({angle}))",
+            f"variable {s}_jet_fz {style} v_{s}_jet_on*$({share}*sin({angle}))",
+            f"fix {s}_jet all addforce 0 v_{s}_jet_fy v_{s}_jet_fz region {s}_jet",
+            f'if "${{driver}} == 0" then "print \'WARNING: the air jet of section {self.number} is '
+            "inactive in a run by hand: only vibrofeed run senses the parts it fires at'\""]
+
     def deck_names(self, drive: bool = True) -> list[str]:
         """The deck's names of this section's numbers (``drive``: with its drive's)."""
-        return [name for key, name in deck_names(self.number).items() if drive or key[0] != "drive"]
+        return [name for key, name in deck_names(self.number).items()
+                if (drive or key[0] != "drive") and key not in WORDS]
 
     def name(self, key: tuple[str, ...]) -> str:
         """The deck name of ``key`` on this section (for messages)."""
@@ -231,6 +316,70 @@ class LinearSection:
                 raise ParameterError(f"{n(('side_drop', 'width'))}={d.width:g} m is less than half a "
                                      f"part ({part.abreast / 2:g} m across it in a file): every part "
                                      "would fall off the drop")
+        if self.jet is not None:
+            self.check_jet(part)
+
+    def check_jet(self, part: Part) -> None:
+        """The jet (one-line ParameterError naming the parameter; a ParameterWarning for a
+        delay after which a part would be past the section's end)."""
+        j, n = self.jet, self.name
+        if j.force < 0:
+            raise ParameterError(f"{n(('jet', 'force'))}={j.force:g} N must be > 0 (0: no jet)")
+        if part.shape == 0:
+            raise ParameterError(f"{n(('jet', 'force'))}={j.force:g} N: a jet sorts parts by their "
+                                 "orientation, and spheres (shape 0) have none")
+        k = j.keep
+        if set(k.states) == set(STATES) and not k.lengthwise and not k.lead:
+            raise ParameterError(f"{n(('jet', 'keep'))}={keep_word(str(k))!r} keeps every state: "
+                                 "the jet would never fire; name the state(s) to keep, e.g. 'up'")
+        for key, value in (("delay", j.delay), ("offset", j.offset), ("length", j.length)):
+            if key != "offset" and value < 0:
+                raise ParameterError(f"{n(('jet', key))}={value:g} must be >= 0")
+        if not j.duration > 0:
+            raise ParameterError(f"{n(('jet', 'duration'))}={j.duration:g} s must be > 0")
+        if not 0 <= j.at <= 1:
+            raise ParameterError(f"{n(('jet', 'at'))}={j.at:g}: the sensing point lies outside section "
+                                 f"{self.number} (0 <= at <= 1)")
+        if not 0 <= j.angle <= 90:
+            raise ParameterError(f"{n(('jet', 'angle'))}={j.angle:g} deg must be in [0, 90] (up from "
+                                 "the floor, across towards +y)")
+        lo, hi = self.jet_span(part.size)
+        if lo < self.x0 - 1e-12 or hi > self.x1 + 1e-12:
+            raise ParameterError(f"{n(('jet', 'offset'))}={j.offset:g} m, {n(('jet', 'length'))}="
+                                 f"{hi - lo:g} m: the jet's block ({lo - self.x0:g} to {hi - self.x0:g} m "
+                                 f"along section {self.number}) lies past its ends (0 to {self.length:g} m)")
+        speed = 2 * math.pi * self.drive.freq * self.drive.amp_t  # no part conveys faster
+        reach = self.sensing_x + speed * j.delay
+        if reach > self.x1:
+            warnings.warn(f"{n(('jet', 'delay'))}={j.delay:g} s: a part conveyed at the surface's peak "
+                          f"speed along ({speed:.3g} m/s) is {reach - self.x1:.3g} m past section "
+                          f"{self.number}'s end when the jet fires", ParameterWarning, stacklevel=2)
+
+
+def _jet(values: Mapping, k: int, get) -> Jet | None:
+    """Section ``k``'s jet from the deck's parameters (none where ``s<k>_jet_force`` is 0 or
+    absent); its words read here (one-line ParameterError naming the parameter)."""
+    force = get(("jet", "force"), 0.0)
+    if force == 0:
+        return None
+    words = {}
+    for key in WORDS:
+        name = deck_name(k, key)
+        words[key[1]] = str(values.get(name, JET_DEFAULTS[key[1]])).strip()
+    keep = parse_correct(words["keep"], deck_name(k, ("jet", "keep")))
+    mode = words["mode"].lower()
+    if mode not in JET_MODES:
+        raise ParameterError(f"{deck_name(k, ('jet', 'mode'))}={words['mode']!r} must be "
+                             f"{' or '.join(JET_MODES)}")
+    return Jet(force=force, keep=keep, at=get(("jet", "at"), 0.5), delay=get(("jet", "delay"), 0.0),
+               duration=get(("jet", "duration"), 0.01), offset=get(("jet", "offset"), 0.0),
+               length=get(("jet", "length"), 0.0), angle=get(("jet", "angle"), 60.0), mode=mode)
+
+
+def keep_word(text: str) -> str:
+    """A jet's ``keep`` (parse_correct's words) as the deck's word, without blanks:
+    "up, lengthwise" -> "up,lengthwise"."""
+    return str(parse_correct(text, "jet.keep")).replace(", ", ",").replace(" ", "")
 
 
 def sine_commands(k: int) -> dict[str, list[str]]:

@@ -174,3 +174,29 @@ class Wiper:
     height: float
     at: float = 0.5
     length: float = 0.0
+
+
+JET_MODES = ("region", "ideal")
+
+
+@dataclass(frozen=True)
+class Jet:
+    """An orienting station: a camera senses each part as its centre crosses ``at`` (a fraction
+    of the element's length) and, for a part not in the state ``keep`` (a
+    vibrofeed.orientation.Correct), an air jet fires ``delay`` seconds later for ``duration``
+    seconds. The jet blows in a block ``length`` long along the path (0: one part size) centred
+    ``offset`` downstream of the sensing point, across the track and up past its walls, with
+    ``force`` [N] on a part wholly in it (shared by its spheres), ``angle`` degrees up from the
+    floor towards the side away from the reference wall (+y). ``mode``: "region" blows
+    everything in the block (as a real jet), "ideal" only the part that was sensed."""
+
+    kind = "jet"
+    force: float
+    keep: object  # vibrofeed.orientation.Correct
+    at: float = 0.5
+    delay: float = 0.0
+    duration: float = 0.01
+    offset: float = 0.0
+    length: float = 0.0
+    angle: float = 60.0
+    mode: str = "region"

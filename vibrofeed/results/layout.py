@@ -98,7 +98,23 @@ BOX_PBC = tuple(b == "periodic" for b in BOX_BOUNDARY)
 # A feeder line's reject table: as the outlet's, plus the section a part fell from
 # (its position tells which tooling: the side drop's stretch, or before the wiper).
 REJECT_ELEMENTS = {**OUTLET_ELEMENTS, "section": ("i4", 0, None)}
-EVENT_TABLES = {OUTLET: OUTLET_ELEMENTS, REJECTS: REJECT_ELEMENTS}
+# A line's air jets (orienting stations, vibrofeed.engine.jets): one row per firing, a part
+# sensed in a state the jet does not keep. Optional (a line with a jet has it; no new format
+# version): time sensed (its crossing of the sensing point), the body, the section, its state
+# (index into vibrofeed.orientation.STATES), the window the jet fired in, late (1: the window
+# would have started before the frame that sensed the part, and started at that frame).
+JET = "vibrofeed/jet"
+JET_ELEMENTS = {
+    "time": ("f8", 0, "s"),
+    "id": ("i8", 0, None),
+    "section": ("i4", 0, None),
+    "state": ("i4", 0, None),
+    "start": ("f8", 0, "s"),
+    "end": ("f8", 0, "s"),
+    "late": ("i1", 0, None),
+}
+OUTLET_TABLES = (OUTLET, REJECTS)  # the event tables with the outlet's attributes
+EVENT_TABLES = {OUTLET: OUTLET_ELEMENTS, REJECTS: REJECT_ELEMENTS, JET: JET_ELEMENTS}
 
 # The mass balance, one H5MD time series of int64 per count: inserted = on_track
 # + exited + lost, where exited counts the outlet events so far (parts that left

@@ -478,6 +478,14 @@ class Result:
         plus ``section`` (E,) (1-based); empty arrays when the file has no reject table."""
         return self._events(L.REJECTS if L.REJECTS in self.file else None, L.REJECT_ELEMENTS)
 
+    @cached_property
+    def jet_firings(self) -> dict[str, np.ndarray]:
+        """A line's air jet firings, one row per part sensed in a state the jet does not keep:
+        ``time`` (sensed), ``id``, ``section``, ``state`` (index into
+        vibrofeed.orientation.STATES), ``start``, ``end`` (its window) [s], ``late`` (E,);
+        empty arrays when the file has no jet table."""
+        return self._events(L.JET if L.JET in self.file else None, L.JET_ELEMENTS)
+
     def _events(self, path: str | None, elements: dict) -> dict[str, np.ndarray]:
         group = None if path is None else self.file[path]
         out = {}

@@ -175,6 +175,9 @@ class ResultWriter:
     rotating:
         the surface also turns about the z axis (a bowl): records ``L.ROTATION_ELEMENTS`` in
         ``L.SURFACE``; every frame then gives ``surface_rotation``.
+    jet:
+        a line with an air jet (an orienting station): creates its firing table (``L.JET``),
+        filled by :meth:`write_events` with ``path`` L.JET.
     target_error:
         the feed rate's relative error the run stops at (``--target-error``), recorded as
         ``parameters/run@target_error``; :meth:`finish` records why it stopped.
@@ -188,7 +191,7 @@ class ResultWriter:
                  max_delay: float = 0.25, track=None, body_template=None,
                  outlet: Mapping | None = None, line: bool = False, sections: int = 1,
                  track_sections=None, returns: bool = False, target_error: float | None = None,
-                 rotating: bool = False, description: Mapping | None = None):
+                 rotating: bool = False, description: Mapping | None = None, jet: bool = False):
         if returns and not line:
             raise ValueError("returns without a line: only a feeder line has rejects to return")
         self.path = str(path)
@@ -254,6 +257,8 @@ class ResultWriter:
         if line:  # a feeder line: its reject table (empty until a part falls off) and count
             self._create_outlet(outlet or {}, L.REJECTS)
             self._count_names = L.RETURN_COUNTS if returns else L.LINE_COUNTS
+        if jet:  # a line with an air jet: its firings (empty until it fires)
+            self._create_table(L.JET)
         f.flush()
         # Flush from a thread too, so a frame waits at most max_delay even when
         # the next one is long in coming (the engine releases the GIL).
@@ -385,10 +390,14 @@ class ResultWriter:
 
     def _create_outlet(self, attrs: Mapping, path: str = L.OUTLET) -> None:
         """An event table (the outlet's, or a line's rejects) with the outlet's attributes."""
-        g = self.file.create_group(path)
+        g = self._create_table(path)
         g.attrs["outlet_x"] = float(attrs.get("outlet_x", np.nan))
         g.attrs["catch_z"] = float(attrs.get("catch_z", np.nan))
         g.attrs["method"] = str(attrs.get("method", ""))
+
+    def _create_table(self, path: str):
+        """An empty event table of ``L.EVENT_TABLES[path]``; its group."""
+        g = self.file.create_group(path)
         table = self._tables[path] = {}
         for name, (dtype, comps, unit) in L.EVENT_TABLES[path].items():
             shape, maxshape = ((0, comps), (None, comps)) if comps else ((0,), (None,))
@@ -397,6 +406,7 @@ class ResultWriter:
             if unit:
                 set_unit(ds, unit)
             table[name] = ds
+        return g
 
     def _create_counts(self) -> None:
         """The mass-balance series; frames written before read the fill -1."""
@@ -504,7 +514,8 @@ class ResultWriter:
         ``events`` maps ``time`` (E,) [s], ``id`` (E,), ``position`` (E, 3) [m],
         ``velocity`` (E, 3) [m s-1] and ``orientation`` (E, 4) to arrays; they
         are written with the next frame (same delay, same flush). ``path``
-        L.REJECTS: a feeder line's rejects, with ``section`` (E,) too.
+        L.REJECTS: a feeder line's rejects, with ``section`` (E,) too; L.JET: a jet's
+        firings (``L.JET_ELEMENTS``).
         """
         table = {}
         n = len(np.atleast_1d(events["id"]))
@@ -556,7 +567,10 @@ class ResultWriter:
         if self._pending_events:
             for path in dict.fromkeys(p for p, _ in self._pending_events):
                 if path not in self._tables:
-                    self._create_outlet({"method": ""}, path)
+                    if path in L.OUTLET_TABLES:
+                        self._create_outlet({"method": ""}, path)
+                    else:
+                        self._create_table(path)
                 tables = [table for p, table in self._pending_events if p == path]
                 for name, ds in self._tables[path].items():
                     self._append(ds, ds.shape[0], np.concatenate([table[name] for table in tables]))

@@ -23,8 +23,8 @@ def warned(given: dict) -> list[str]:
 @pytest.mark.parametrize("helix, climbs", [(3.0, True), (6.0, True), (10.0, False), (15.0, False)])
 def test_the_warning_follows_the_models_speed_up_the_helix(helix, climbs):
     given = {"shape": "1", "helix_angle": repr(helix)}
-    values = {k: float(v) for k, v in resolve(DECK, given).items() if k != "deck_dir" and
-              k not in ("mesh_dir", "dump_file", "outlet_file")}
+    values = {k: float(v) for k, v in resolve(DECK, given).items()
+              if k in DECK.variables and DECK.variables[k].is_numeric}
     d = track_drive(values["amp_t"], values["amp_n"], values["phase"], values["freq"], helix,
                     bowl_from(values).r_mid)
     speed = transport({**values, "amp_t": d.amp_t, "amp_n": d.amp_n, "phase": d.phase,

@@ -181,7 +181,8 @@ def test_a_limit_exactly_at_the_smallest_timestep_is_accepted():
 
 def test_a_timestep_exactly_at_the_limit_is_accepted():
     given = {"hamaker": "1e-19", "roughness": "1e-9"}
-    p = {k: float(v) for k, v in resolve(BULK_DECK, given).items()}
+    p = {k: float(v) for k, v in resolve(BULK_DECK, given).items()
+         if k in BULK_DECK.variables and BULK_DECK.variables[k].is_numeric}
     limit = surface_forces_step_limit(p)
     r = 1.5e-4  # the default 300 um sphere
     mass = 4 / 3 * math.pi * r ** 3 * RHO

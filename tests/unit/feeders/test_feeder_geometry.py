@@ -142,20 +142,13 @@ def test_sections_out_of_range_are_refused():
             Feeder.from_values({**THREE, "sections": n})
 
 
-def test_any_tool_record_placed_by_at_is_a_station_of_its_element():
-    # a tool another element type may carry (an air jet at 0.25 of section 2): a point station,
-    # found from the element's attribute alone
-    import dataclasses
-
-    @dataclasses.dataclass(frozen=True)
-    class Jet:
-        kind = "jet"
-        at: float
-
-    f = Feeder.from_values(THREE)
-    s2 = dataclasses.replace(f.elements[1], side_drop=None, wiper=None)
-    object.__setattr__(s2, "jet", Jet(at=0.25))
-    f = dataclasses.replace(f, elements=(f.elements[0], s2, f.elements[2]))
+def test_an_air_jet_is_a_station_spanning_its_block():
+    # a jet sensing at 0.25 of section 2 (4 mm from the line's start, 5 mm long): its block,
+    # 0.5 mm long, centred 0.2 mm downstream of the sensing point, by hand
+    f = Feeder.from_values({**THREE, "shape": 1, "part_thickness": 1e-4, "s2_drop_to": 0,
+                            "s2_wiper_height": 0, "s2_jet_force": 1e-6, "s2_jet_at": 0.25,
+                            "s2_jet_offset": 2e-4, "s2_jet_length": 5e-4})
     gate, jet = f.stations
     assert (jet.section, jet.element, jet.kind, jet.name) == (2, 2, "jet", "s2.jet")
-    assert jet.start == jet.end == pytest.approx(4e-3 + 1.25e-3, abs=1e-15)
+    centre = 4e-3 + 0.25 * 5e-3 + 2e-4
+    assert (jet.start, jet.end) == pytest.approx((centre - 2.5e-4, centre + 2.5e-4), rel=0, abs=1e-15)

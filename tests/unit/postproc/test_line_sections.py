@@ -13,7 +13,7 @@ from bulk_synthetic import JOINT, OUTLET_X, RADIUS, S2_LENGTH, bed, feeder, line
 from helpers import parts, write_bulk_result
 from vibrofeed.postproc import FeedRate
 from vibrofeed.postproc.feedrate import BOWL_KEYS, LINE_KEYS, SUMMARY_KEYS, period_velocities
-from vibrofeed.postproc.line import batch_cuts, bed_pass, drift, drifts, tooling, unsteady
+from vibrofeed.postproc.line import TOOLING, batch_cuts, bed_pass, drift, drifts, tooling, unsteady
 from vibrofeed.results.reader import Result
 
 FREQ = 100.0
@@ -240,14 +240,14 @@ def test_rejects_are_sorted_by_the_tooling_where_they_fell(tmp_path):
         params = dict(r.parameters)
         fr = FeedRate(r, start=0.1, end=0.3).run().results
         section = r.rejects["section"]
-    names = np.array(["side_drop", "wiper", "other"])
+    names = np.array(TOOLING)
     got = names[tooling(np.array(at), section, Feeder.from_values(params).stations, D)]
     assert got.tolist() == want
     assert section.tolist() == [2, 2, 2, 2, 2, 2, 2, 1]           # 3 mm: off section 1
     # reached at tj + (x - J) / v2 on section 2, tj - (J - x) / v1 on section 1
     fell = np.where(np.array(at) < JOINT, tj - (JOINT - np.array(at)) / V1, tj + (np.array(at) - JOINT) / V2)
     by = fr.rejects_by_tooling
-    for name in names:
+    for name in ("side_drop", "wiper", "other"):  # (no jet on this line: no entry)
         mine = np.array(want) == name
         inside = mine & (fell >= 0.1) & (fell < 0.3)
         assert by[name]["in_window"] == inside.sum()
@@ -478,7 +478,7 @@ def test_line_tooling_at_the_exact_ends_of_each_stretch():
               "s2_wiper_height": 4e-4, "s2_wiper_at": 0.9, "part_size": D}
     s = section_from(values)
     (d0, d1), (w0, w1) = s.drop_x, s.wiper_x
-    names = np.array(["side_drop", "wiper", "other"])
+    names = np.array(TOOLING)
     at = np.array([d0 - D, d1 + D, w0 - 3.0 * D, w1, d0 - D])
     got = names[tooling(at, [2, 2, 2, 2, 1], Feeder.from_values(values).stations, D)]
     assert got.tolist() == ["side_drop", "side_drop", "wiper", "wiper", "other"]

@@ -1,0 +1,154 @@
+"""An orienting station's scheduling without the engine (vibrofeed.engine.jets), and what a
+jet refuses (vibrofeed.feeders.linear)."""
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+from vibrofeed.engine.jets import (
+    Jets,
+    Station,
+    atom_expression,
+    atom_ranges,
+    crossings,
+    merged,
+    window_expression,
+)
+from vibrofeed.errors import ParameterError
+from vibrofeed.feeders.feeder import Feeder
+from vibrofeed.orientation import parse_correct
+
+UP = (1.0, 0.0, 0.0, 0.0)  # the body frame as the simulation's: marked face (+z) up
+DOWN = (0.0, 1.0, 0.0, 0.0)  # turned 180 degrees about x: face down
+LINE = {"part_size": "3e-4", "part_thickness": "1.5e-4", "shape": "1", "track_length": "2e-3",
+        "track_width": "2e-3", "gate_width": "4.5e-4", "wall_height": "1e-3", "sections": "2",
+        "s2_length": "3e-3", "s2_width": "4.5e-4", "s2_wall_height": "6e-4", "s2_step": "5e-5",
+        "s2_freq": "100", "s2_amp_t": "6e-5", "s2_amp_n": "2e-5", "s2_jet_force": "1.5e-6",
+        "s2_jet_at": "0.3", "s2_jet_keep": "up,any-direction"}
+
+
+def frame(ids, x, q):
+    n = len(ids)
+    return {"id": np.asarray(ids), "position": np.column_stack([x, np.zeros(n), np.zeros(n)]),
+            "orientation": np.asarray(q, dtype=float).reshape(n, 4)}
+
+
+def test_a_crossing_is_timed_between_the_frames_and_only_parts_seen_at_both_count():
+    # part 1 crosses x = 1 a quarter of the way; part 2 was already past; part 3 is new; part 4
+    # goes back
+    hit, t, first = crossings(1.0, 0.0, [4, 1, 2], [1.5, 0.9, 1.1], 0.1,
+                              [1, 2, 3, 4], [1.3, 1.4, 2.0, 0.5])
+    assert hit.tolist() == [0] and t == pytest.approx([0.025]) and first.tolist() == [True]
+
+
+def test_windows_merge_where_they_overlap_and_the_formula_is_zero_or_one():
+    assert merged([(0.3, 0.4), (0.1, 0.2), (0.15, 0.25), (0.25, 0.26), (0.5, 0.5)]) == \
+        [(0.1, 0.26), (0.3, 0.4)]
+    assert window_expression([]) == "0"
+    assert window_expression([(0.2, 0.3), (0.1, 0.25)]) == "(time>=0.1)*(time<0.3)"
+    formula = window_expression([(0.1, 0.2), (0.3, 0.4)])
+    assert formula == "(time>=0.1)*(time<0.2)+(time>=0.3)*(time<0.4)"
+    for time in (0.05, 0.15, 0.25, 0.35, 0.45):  # evaluated as LIGGGHTS would (booleans 0/1)
+        assert eval(formula, {"time": time}) == (0.1 <= time < 0.2 or 0.3 <= time < 0.4)
+    assert atom_expression([(10, 18, [(0.1, 0.2)]), (19, 27, [])]) == \
+        "(id>=10)*(id<=18)*((time>=0.1)*(time<0.2))"
+
+
+def station(**kw):
+    return Station(**{"section": 2, "x_sense": 1.0, "keep": parse_correct("up, any-direction"),
+                      "delay": 0.02, "duration": 0.01, "mode": "region", **kw})
+
+
+def test_a_part_in_a_wrong_state_is_fired_at_after_the_delay_once_and_windows_are_pruned():
+    s = station()
+    prev = frame([1, 2], [0.9, 0.8], [DOWN, UP])
+    now = frame([1, 2], [1.1, 1.2], [DOWN, UP])  # both cross; only the face-down one is fired at
+    (f,) = s.sense(0.0, prev, 0.01, now)
+    assert f[:4] == (pytest.approx(0.005), 1, 2, 1) and f[4:6] == pytest.approx((0.025, 0.035))
+    assert f[6] is False
+    assert s.commands(0.01) == ["variable s2_jet_on equal (time>=0.025)*(time<0.035)"]
+    assert s.sense(0.01, frame([1], [0.95], [DOWN]), 0.02, frame([1], [1.05], [DOWN])) == []  # once
+    assert s.commands(0.04) == ["variable s2_jet_on equal 0"]  # over: pruned
+
+
+def test_a_window_due_before_the_frame_that_saw_the_crossing_starts_then_and_is_late():
+    s = station(delay=0.002)
+    (f,) = s.sense(0.0, frame([7], [0.5], [DOWN]), 0.01, frame([7], [1.5], [DOWN]))
+    assert f[4:] == (0.01, pytest.approx(0.02), True)
+
+
+def test_the_state_is_read_at_the_frame_nearer_the_crossing():
+    s = station()
+    # crosses at 90 % of the interval, turned face down by then: fired at
+    assert s.sense(0.0, frame([1], [0.1], [UP]), 0.01, frame([1], [1.01], [DOWN]))
+    # crosses at 10 %, face up then (flipped later): not
+    assert not station().sense(0.0, frame([1], [0.99], [UP]), 0.01, frame([1], [1.9], [DOWN]))
+
+
+def test_the_ideal_jet_holds_the_sensed_bodys_atoms_only():
+    atoms = {"molecule": np.array([5, 5, 5, 6, 6, 6, -1]), "id": np.array([3, 1, 2, 4, 6, 5, 9])}
+    ranges = atom_ranges(atoms)
+    assert ranges == {5: (1, 3), 6: (4, 6)}
+    s = station(mode="ideal")
+    s.sense(0.0, frame([5, 6], [0.9, 0.2], [DOWN, DOWN]), 0.01, frame([5, 6], [1.1, 0.3], [DOWN, DOWN]),
+            ranges)
+    assert s.commands(0.01) == ["variable s2_jet_on atom (id>=1)*(id<=3)*((time>=0.025)*(time<0.035))"]
+
+
+class OneRank:
+    size = 1
+
+
+def test_the_line_s_jets_give_commands_only_when_a_firing_is_new():
+    jets = Jets(Feeder.from_values(LINE))
+    (s,) = jets.stations
+    assert s.x_sense == pytest.approx(2e-3 + 0.3 * 3e-3) and s.section == 2
+    x = s.x_sense
+    assert jets.step(OneRank(), 0.0, frame([1], [x - 1e-4], [DOWN])) == ([], None)
+    commands, table = jets.step(OneRank(), 0.005, frame([1], [x + 1e-4], [DOWN]))
+    # crossed at 2.5 ms, due at once (delay 0): late, it fires from the frame that saw it
+    assert commands == ["variable s2_jet_on equal (time>=0.005)*(time<0.015)"]
+    assert table["id"].tolist() == [1] and table["state"].tolist() == [1] and table["late"].tolist() == [1]
+    assert jets.step(OneRank(), 0.01, frame([1], [x + 2e-4], [DOWN])) == ([], None)
+
+
+def jet(**kw):
+    return Feeder.from_values({**LINE, **{f"s2_jet_{k}": str(v) for k, v in kw.items()}})
+
+
+@pytest.mark.parametrize("change, names", [
+    ({"keep": "up|down|side|end,any-direction"}, "s2_jet_keep"),
+    ({"keep": "upside"}, "s2_jet_keep"),
+    ({"mode": "gentle"}, "s2_jet_mode"),
+    ({"delay": -0.01}, "s2_jet_delay"),
+    ({"duration": 0}, "s2_jet_duration"),
+    ({"force": -1e-6}, "s2_jet_force"),
+    ({"offset": 3e-3}, "s2_jet_offset"),
+    ({"at": 1.2}, "s2_jet_at"),
+    ({"angle": 120}, "s2_jet_angle"),
+])
+def test_bad_jets_are_refused_in_one_line_naming_the_key(change, names):
+    with pytest.raises(ParameterError) as info:
+        jet(**change).check()
+    assert names in str(info.value) and "\n" not in str(info.value)
+
+
+def test_a_jet_on_spheres_is_refused():
+    with pytest.raises(ParameterError, match="s2_jet_force.*spheres"):
+        Feeder.from_values({**LINE, "shape": "0"}).check()
+
+
+def test_a_delay_that_fires_past_the_section_warns():
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        jet(delay=0.5).check()
+    assert any("s2_jet_delay" in str(w.message) for w in said)
+    speed = 2 * math.pi * 100 * 6e-5
+    assert speed * 0.5 > 3e-3 * 0.7  # (the case is past the end)
+
+
+def test_the_jet_is_a_station_spanning_its_block():
+    (st,) = [s for s in jet(length=4e-4, offset=1e-4).stations if s.kind == "jet"]
+    assert (st.section, st.start, st.end) == (2, pytest.approx(2.8e-3), pytest.approx(3.2e-3))
