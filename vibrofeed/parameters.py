@@ -718,6 +718,8 @@ def contact_times(p: Mapping[str, float]) -> dict[str, float] | None:
     (E* with the track's modulus, R* = r); the shorter time counts."""
     if not {"density", "youngs", "poisson"} <= set(p):
         return None
+    if int(p.get("shape", 0)) == 4 and "part_file" not in p:  # (numbers alone: no STL to clump)
+        return None
     rho, youngs, nu = p["density"], p["youngs"], p["poisson"]
     v_peak = 2 * math.pi * p.get("freq", 0.0) * math.hypot(p.get("amp_t", 0.0), p.get("amp_n", 0.0))
     speed = max(v_peak, MIN_CONTACT_SPEED)
@@ -732,7 +734,7 @@ def contact_times(p: Mapping[str, float]) -> dict[str, float] | None:
     thickness = p.get("part_thickness", size)
     r_sph = size / 2 if shape == 0 else thickness / 2
     r_min = r_sph * (1 - p.get("size_spread", 0.0))
-    mass = part_volume(shape, size, thickness) * rho if shape != 3 else volume_of(p) * rho
+    mass = part_volume(shape, size, thickness) * rho if shape < 3 else volume_of(p) * rho
     spheres = 1
     if shape == 3:  # the box's clump: spheres of T/2, a bump's maybe smaller (vibrofeed.parts)
         rows = box_template(Box.of(Part.from_values(p)))

@@ -53,8 +53,8 @@ METHOD_NAMES = {code: name for name, code in METHODS.items()}
 # A micro-part is 10 um to 10 mm across (after the unit): outside, the unit is wrong.
 SIZES = (1e-5, 1e-2)
 # The deck's names of the part's words and numbers, with their defaults.
-DEFAULTS = {"part_unit": 1e-3, "clump_method": 0, "clump_spheres": 30, "clump_resolution": 20,
-            "clump_overlap": 0.6}
+DEFAULTS = {"part_unit": 1e-3, "clump_method": 0, "clump_spheres": 60, "clump_resolution": 20,
+            "clump_overlap": 0.8}
 NAMES = ["part_file", *DEFAULTS]
 # Ferellec-McDowell's random choice of vertices: fixed, so that a part is one clump.
 SEED = 1
@@ -71,9 +71,9 @@ class StlPart:
     file: str
     unit: float = 1e-3
     method: int = 0
-    spheres: int = 30
+    spheres: int = 60
     resolution: int = 20
-    overlap: float = 0.6
+    overlap: float = 0.8
 
     @classmethod
     def of(cls, values: Mapping) -> StlPart:
