@@ -424,6 +424,12 @@ def tallest_part(p: Mapping) -> float:
     return Part.from_values(p).tallest
 
 
+def stl_words(values: Mapping) -> dict:
+    """An stl part's (shape 4) STL and clump knobs from ``values``, for Part.from_values."""
+    names = ("part_file", "part_unit", "clump_method", "clump_spheres", "clump_resolution", "clump_overlap")
+    return {k: values[k] for k in names if k in values}
+
+
 def part_reach(p: Mapping) -> float:
     """A part's circumscribed radius (the deck's r_ext; Part.reach)."""
     return Part.from_values(p).reach
@@ -642,6 +648,7 @@ def write_bowl(values: Mapping[str, str], folder: Path) -> list[str]:
     """Write the bowl's mesh (``bowl.stl``) and return ``prepared.in`` lines: the derived
     geometry the deck reads and the regions along the track for its pre-fill."""
     p = {k: float(v) for k, v in values.items() if k in GEOMETRY + PART + tuple(BOX_PART)}
+    p.update(stl_words(values))
     b = bowl_from(p)
     write_stl(*bowl_mesh(b), folder / "bowl.stl", "bowl")
     # room for a part however it is turned (LIGGGHTS inserts its bounding sphere), under

@@ -13,7 +13,8 @@ connected surface, without seams between floor and walls). They are written as b
 (:func:`vibrofeed.mesh.write_stl`). Multisphere parts (chips, discs) are clumps of spheres of diameter
 ``part_thickness`` whose outline is the part's, given as ``(n, 4)`` rows x, y, z, r in
 the body frame (the part's centre at the origin, its flat faces normal to z); boxes
-(shape 3) are vibrofeed.parts' clumps, about the solid's centre of mass.
+(shape 3) are vibrofeed.parts' clumps, stl parts (shape 4) vibrofeed.stl_part's, both about
+the solid's centre of mass.
 
 :func:`prepare_bulk_feeder` is the prepare hook that decks/bulk_feeder.liggghts declares:
 the runner calls it before a run (and ``vibrofeed prepare`` for a run by hand).
@@ -34,6 +35,10 @@ from .feeders.feeder import Feeder
 from .feeders.records import number, shape_code
 from .line import combined
 from .mesh import MeshBuilder, write_stl
+from .stl_part import DEFAULTS as STL_DEFAULTS
+from .stl_part import stl_lines
+
+STL_NUMBERS = list(STL_DEFAULTS)  # an stl part's numbers prepared.in holds a run by hand to
 
 # Largest spacing of a clump's spheres, as a fraction of their diameter: the faces stay
 # within 4 % of the thickness of flat (the bumps between spheres are shallow).
@@ -227,9 +232,11 @@ def _part_files(values: Mapping[str, str], folder: Path, hook: str, shape: int, 
     lines += [f"variable n_sph_{name} equal {len(rows)}\n" for name, rows in templates.items()]
     box, box_rows = box_lines({**values, "shape": str(shape)}, folder)
     lines += box
+    stl, stl_rows = stl_lines({**values, "shape": str(shape)}, folder)
+    lines += stl
     seed = int(number(values, "seed")) if "seed" in values else 5489
     lines += [f"variable seed_{k} equal {p}\n" for k, p in enumerate(insertion_seeds(seed, 6), 1)]
-    return lines, {0: None, 1: templates["chip"], 2: templates["disc"], 3: box_rows}[shape]
+    return lines, {0: None, 1: templates["chip"], 2: templates["disc"], 3: box_rows, 4: stl_rows}[shape]
 
 
 def prepare_bulk_feeder(values: Mapping[str, str], folder: str | Path) -> Prepared:
@@ -277,6 +284,8 @@ def feeder_names(feeder: Feeder) -> list[str]:
     names = ["shape", "part_size", "part_thickness", "size_spread", "sections"]
     if feeder.part.shape == 3:  # (the box's template and mass are written for these)
         names += ["part_width", "bump_height", "bump_diameter", "bump_at", "clump_spacing", "density"]
+    if feeder.part.shape == 4:  # (the STL's template and mass; its file is a word, not held)
+        names += ["part_width", "density", *STL_NUMBERS]
     for e in feeder.elements:
         names += e.deck_names(drive=feeder.is_line)
     return names
@@ -290,7 +299,7 @@ def prepare_bowl_feeder(values: Mapping[str, str], folder: str | Path) -> Prepar
     derived geometry (``bowl_*``) and the region ``track_fill`` of the pre-fill along the
     track. The bowl's parameters are checked first (vibrofeed.bowl.check_bowl).
     """
-    from .bowl import BOX_PART, GEOMETRY, PART, bowl_from, bowl_mesh, check_bowl, write_bowl
+    from .bowl import BOX_PART, GEOMETRY, PART, bowl_from, bowl_mesh, check_bowl, stl_words, write_bowl
 
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
@@ -298,7 +307,7 @@ def prepare_bowl_feeder(values: Mapping[str, str], folder: str | Path) -> Prepar
     numbers["shape"] = shape_code(values.get("shape", "0"))
     numbers.update({name: number(values, name, default) for name, default in BOX_PART.items()
                     if default is not None or name in values})
-    check_bowl(numbers)
+    check_bowl({**numbers, **stl_words(values)})
     lines, template = _part_files(values, folder, "prepare_bowl_feeder", numbers["shape"],
                                   numbers["part_size"], numbers["part_thickness"])
     lines += write_bowl({k: str(v) for k, v in numbers.items()}, folder)
@@ -307,6 +316,8 @@ def prepare_bowl_feeder(values: Mapping[str, str], folder: str | Path) -> Prepar
     feeder = Feeder.from_values(values)
     feeder.check()
     box = list(BOX_PART) + ["density"] if numbers["shape"] == 3 else []
+    if numbers["shape"] == 4:
+        box = ["part_width", "density", *STL_NUMBERS]
     line_names = [n for e in feeder.elements[1:] for n in e.deck_names()]
     lines += guard_lines(values, ["sections"] + box + line_names)
     (folder / "prepared.in").write_text("".join(lines))

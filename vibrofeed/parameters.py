@@ -117,7 +117,7 @@ RULES: dict[str, Callable[[float], str | None]] = {
     "dt": _non_negative,
     "seed": _integer(lo=1),
     # the bulk feeder (decks/bulk_feeder.liggghts)
-    "shape": _integer(choices=(0, 1, 2, 3)),
+    "shape": _integer(choices=(0, 1, 2, 3, 4)),
     "pair": _integer(choices=(0, 1)),
     "pull_speed": _positive,
     "overlap0": _positive,
@@ -128,6 +128,12 @@ RULES: dict[str, Callable[[float], str | None]] = {
     "bump_diameter": _non_negative,
     "bump_at": _between(-1, 1, lo_open=False, hi_open=False),
     "clump_spacing": _between(0.5, 1, lo_open=False, hi_open=False),
+    # an stl part (shape 4, vibrofeed.stl_part): its STL's unit and CLUMP's method and knobs
+    "part_unit": _positive,
+    "clump_method": _integer(choices=(0, 1, 2)),
+    "clump_spheres": _integer(lo=1),
+    "clump_resolution": _integer(lo=4),
+    "clump_overlap": _between(0, 1, lo_open=False),
     "size_spread": _between(0, 1, lo_open=False),
     "n_parts": _integer(lo=0),
     "fill_from": _between(0, 1, lo_open=False, hi_open=False),
@@ -195,7 +201,8 @@ def rule_for(name: str) -> Callable[[float], str | None] | None:
 
 # Parameters that also take names; a name is replaced by the deck's number.
 NAMED_VALUES: dict[str, dict[str, str]] = {
-    "shape": {"sphere": "0", "chip": "1", "disc": "2", "box": "3"},
+    "shape": {"sphere": "0", "chip": "1", "disc": "2", "box": "3", "stl": "4"},
+    "clump_method": {"euclidean": "0", "favier": "1", "ferellec-mcdowell": "2"},
 }
 
 
@@ -281,9 +288,12 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
             f"parameter sections={values['sections']}: deck {deck.name} declares "
             f"{'one section' if declared == 1 else f'sections 1 to {declared}'}; a line of more "
             "sections is a feeder description (docs/feeders.md)")
-    # a mesh element's STL and path, a jet's keep and mode are words its checks read beside the numbers
+    # a mesh element's STL and path, a jet's keep and mode, an stl part's STL are words its
+    # checks read beside the numbers
     words = {name: value for name, value in values.items()
-             if re.match(r"^s\d+_(?:file|path|jet_keep|jet_mode)$", name)}
+             if re.match(r"^(?:s\d+_(?:file|path|jet_keep|jet_mode)|part_file)$", name)}
+    if numbers.get("shape") == 4:
+        _stl_sizes(values, numbers, given)
     try:
         _check_relations({**words, **numbers})
     except ParameterError as exc:
@@ -295,6 +305,21 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
     for line in advice(numbers, moved) + climb_advice(numbers):
         warnings.warn(line, ParameterWarning, stacklevel=2)
     return values
+
+
+def _stl_sizes(values: dict[str, str], numbers: dict[str, float], given: Mapping[str, str]) -> None:
+    """An stl part's part_size, part_width and part_thickness: its principal extents
+    (vibrofeed.stl_part.sizes), written into ``values`` and ``numbers``; one given otherwise
+    is refused."""
+    from .stl_part import StlPart, check_part, sizes
+
+    part = StlPart.of({**values, **numbers})
+    check_part(part)
+    for name, x in zip(("part_size", "part_width", "part_thickness"), sizes(part)):
+        if name in given and not math.isclose(numbers.get(name, x), x, rel_tol=1e-6):
+            raise ParameterError(f"parameter {name}={given[name]}: an stl part's sizes are its STL's "
+                                 f"({name}={x:.6g} m, its principal extents); leave it out")
+        values[name], numbers[name] = repr(x), x
 
 
 def checked_value(deck: Deck, name: str, value: str) -> float | None:
@@ -392,7 +417,7 @@ def circumscribed_radius(p: Mapping[str, float]) -> float:
     takes it (r_ext): a sphere's with its size spread, a chip's corner sphere, a disc's rim,
     a box's clump about its centre of mass."""
     size, shape = p["part_size"], int(p.get("shape", 0))
-    if shape == 3:
+    if shape in (3, 4):
         return Part.from_values(p).reach
     if shape == 0:
         return size / 2 * (1 + p.get("size_spread", 0.0))
@@ -467,6 +492,10 @@ def volume_of(p: Mapping[str, float]) -> float:
     """A part's volume [m^3] from a deck's parameters (a box's with its bump's cap)."""
     if int(p.get("shape", 0)) == 3:
         return mass_properties(Box.of(Part.from_values(p)), 1.0).mass
+    if int(p.get("shape", 0)) == 4:
+        from .stl_part import StlPart, solid
+
+        return solid(StlPart.of(p)).volume
     size = p["part_size"]
     return part_volume(int(p.get("shape", 0)), size, p.get("part_thickness", size))
 
@@ -510,9 +539,10 @@ def _check_bulk_feeder(p: Mapping[str, float]) -> None:
     widest = size * (1 + spread) if shape == 0 else size
     if shape == 3:
         check_box(Box.of(Part.from_values(p)))
-        if p.get("hamaker", 0.0) > 0 or p.get("air_viscosity", 0.0) > 0:
-            raise ParameterError("hamaker and air_viscosity act on spheres, chips and discs: a box "
-                                 "(shape 3) runs without them in this version")
+    if shape in (3, 4) and (p.get("hamaker", 0.0) > 0 or p.get("air_viscosity", 0.0) > 0):
+        raise ParameterError(f"hamaker and air_viscosity act on spheres, chips and discs: a "
+                             f"{'box (shape 3)' if shape == 3 else 'stl part (shape 4)'} runs without "
+                             "them in this version")
     if p.get("n_parts", 1) <= 0 and p.get("inlet_rate", 1) <= 0:
         raise ParameterError("n_parts=0 and inlet_rate=0: no part would ever be fed; "
                              "set n_parts (pre-fill) or inlet_rate")
@@ -605,6 +635,10 @@ def surface_forces_part(p: Mapping[str, float]) -> dict | None:
     thickness = p.get("part_thickness", size)
     if shape == 3:  # (refused with the surface forces: no face of its own here)
         return {"mass": volume_of(p) * rho, "radius": Box.of(Part.from_values(p)).sphere_diameter / 2}
+    if shape == 4:  # (as a box)
+        from .stl_part import StlPart, template
+
+        return {"mass": volume_of(p) * rho, "radius": float(template(StlPart.of(p))[:, 3].max())}
     mass = part_volume(shape, size, thickness) * rho
     if shape == 1:
         return {"mass": mass, "radius": thickness / 2, "area": size ** 2,
@@ -687,6 +721,8 @@ def contact_times(p: Mapping[str, float]) -> dict[str, float] | None:
     (E* with the track's modulus, R* = r); the shorter time counts."""
     if not {"density", "youngs", "poisson"} <= set(p):
         return None
+    if int(p.get("shape", 0)) == 4 and "part_file" not in p:  # (numbers alone: no STL to clump)
+        return None
     rho, youngs, nu = p["density"], p["youngs"], p["poisson"]
     v_peak = 2 * math.pi * p.get("freq", 0.0) * math.hypot(p.get("amp_t", 0.0), p.get("amp_n", 0.0))
     speed = max(v_peak, MIN_CONTACT_SPEED)
@@ -701,11 +737,16 @@ def contact_times(p: Mapping[str, float]) -> dict[str, float] | None:
     thickness = p.get("part_thickness", size)
     r_sph = size / 2 if shape == 0 else thickness / 2
     r_min = r_sph * (1 - p.get("size_spread", 0.0))
-    mass = part_volume(shape, size, thickness) * rho if shape != 3 else volume_of(p) * rho
+    mass = part_volume(shape, size, thickness) * rho if shape < 3 else volume_of(p) * rho
     spheres = 1
     if shape == 3:  # the box's clump: spheres of T/2, a bump's maybe smaller (vibrofeed.parts)
         rows = box_template(Box.of(Part.from_values(p)))
         r_sph, r_min, spheres = rows[0, 3], float(rows[:, 3].min()), len(rows)
+    elif shape == 4:  # CLUMP's spheres of the STL (vibrofeed.stl_part): the largest and smallest
+        from .stl_part import StlPart, template
+
+        rows = template(StlPart.of(p))
+        r_sph, r_min, spheres = float(rows[:, 3].max()), float(rows[:, 3].min()), len(rows)
     elif shape != 0:  # a clump: its spheres share the mass (vibrofeed.geometry builds them)
         from .geometry import chip_template, disc_template
 

@@ -147,7 +147,10 @@ def _without_effect(p: Mapping[str, float], given: Collection[str]) -> list[str]
     if "part_size" in p and int(p.get("shape", 0)) != 3:
         for name in ("part_width", "bump_height", "bump_diameter", "bump_at", "clump_spacing"):
             idle[name] = "shapes a box (shape 3) only"
-    elif "part_size" in p and p.get("bump_height", 0.0) == 0:
+    if "part_size" in p and int(p.get("shape", 0)) != 4:
+        for name in ("part_unit", "clump_method", "clump_spheres", "clump_resolution", "clump_overlap"):
+            idle[name] = "shapes an stl part (shape 4) only"
+    if "part_size" in p and int(p.get("shape", 0)) == 3 and p.get("bump_height", 0.0) == 0:
         for name in ("bump_diameter", "bump_at"):
             idle[name] = "shapes the bump: bump_height=0 has none"
     if "gate_at" in p and p.get("gate_width", 0.0) == 0:

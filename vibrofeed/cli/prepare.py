@@ -57,6 +57,11 @@ def run(args) -> int:
         for name in new:
             written(folder / name)
         print(f"vibrofeed: wrote {', '.join(new)} in {folder}")
+    if values.get("shape") == "4":  # an stl part: its sizes are the STL's (resolve), and its clump's fidelity
+        from ..stl_part import StlPart, fidelity_line
+
+        given = {**given, **{n: values[n] for n in ("part_size", "part_width", "part_thickness")}}
+        print(f"vibrofeed: stl part: {fidelity_line(StlPart.of(values))}")
     print(liggghts_line(deck, given, values, extra))
     if float(values.get("recirculate", 0) or 0):  # a line's returns are the driver's
         print("vibrofeed: note: recirculate=1 is done by `vibrofeed run` (it returns the rejects "

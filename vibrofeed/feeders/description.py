@@ -24,10 +24,11 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from .. import stl_part
 from ..errors import ParameterError
 from . import bowl, chute, mesh_element
 from .linear import KEYS, MAX_SECTIONS, deck_names, keep_word
-from .records import JET_MODES, shape_code
+from .records import JET_MODES, SHAPES, shape_code
 
 
 def _kind_keys(kind: str, k: int) -> tuple[dict, dict]:
@@ -52,6 +53,8 @@ TABLES: dict[str, dict[str, str]] = {
     "parts": {"shape": "shape", "size": "part_size", "thickness": "part_thickness", "width": "part_width",
               "bump_height": "bump_height", "bump_diameter": "bump_diameter", "bump_at": "bump_at",
               "clump_spacing": "clump_spacing",
+              "file": "part_file", "unit": "part_unit", "method": "clump_method", "spheres": "clump_spheres",
+              "resolution": "clump_resolution", "overlap": "clump_overlap",
               "size_spread": "size_spread", "density": "density", "youngs": "youngs",
               "poisson": "poisson", "restitution": "restitution", "restitution_pp": "restitution_pp",
               "mu": "mu", "mu_pp": "mu_pp", "rolling_friction": "rolling_friction",
@@ -170,7 +173,20 @@ def read(path: str | os.PathLike, text: str | None = None) -> Description:
                 continue
             if key not in keys:
                 raise _unknown(path, f"[{table}]", key, [*TEXT_KEYS.get(table, ()), *keys])
+            if table == "parts" and key in PART_WORDS:
+                values[keys[key]] = _part_word(path, key, value)
+                continue
             values[keys[key]] = _value(path, f"{table}.{key}", value)
+    if values.get("shape") == str(SHAPES["stl"]):
+        derived = [k for k in ("size", "width", "thickness", "clump_spacing") if k in data["parts"]]
+        if derived:
+            raise _fail(path, f"parts.{derived[0]}: an stl part's sizes are its STL's (its principal "
+                              "extents); leave it out")
+        if "file" not in data["parts"]:
+            raise _fail(path, "parts.shape = \"stl\" needs parts.file, the part's STL")
+    elif any(k in data.get("parts", {}) for k in PART_WORDS):
+        key = next(k for k in PART_WORDS if k in data["parts"])
+        raise _fail(path, f"parts.{key} shapes an stl part: give parts.shape = \"stl\"")
     elements = data.get("element")
     if not isinstance(elements, list) or not elements or not all(isinstance(e, dict) for e in elements):
         raise _fail(path, "a feeder needs its elements, in conveying order: one [[element]] table each")
@@ -264,6 +280,32 @@ def _mesh_word(path: Path, k: int, key: str, value) -> str:
         raise _fail(path, f"{where} must be a list of at least two points [x, y, z] (numbers, in the "
                           "STL's unit), on its floor's centre line in conveying order")
     return mesh_element.path_text(value)
+
+
+PART_WORDS = ("file", "unit", "method")  # an stl part's words: [parts] file, unit, method
+
+
+def _part_word(path: Path, key: str, value) -> str:
+    """An stl part's file (relative to the description's folder), unit ("mm" or "m") or CLUMP
+    method (its name) as the deck's word."""
+    if key == "file":
+        if not isinstance(value, str) or not value.strip():
+            raise _fail(path, "parts.file must be the part's STL, relative to the description's folder")
+        full = (path.parent / value).resolve()
+        if any(c.isspace() or c in "#$\"'" for c in str(full)):
+            raise _fail(path, f"parts.file: {full} has a space or a character LIGGGHTS' variables cannot "
+                              "hold; move the STL to a plain path")
+        if not full.is_file():
+            raise _fail(path, f"parts.file = {value!r}: no such file ({full})")
+        return str(full)
+    if key == "unit":
+        if value not in stl_part.UNITS:
+            raise _fail(path, f"parts.unit = {value!r}: the STL's unit is \"mm\" (as CAD exports) or \"m\"")
+        return repr(stl_part.UNITS[value])
+    if value not in stl_part.METHODS:
+        raise _fail(path, f"parts.method = {value!r}: CLUMP's methods are "
+                          f"{', '.join(repr(m) for m in stl_part.METHODS)}")
+    return str(stl_part.METHODS[value])
 
 
 def _given(element: dict):

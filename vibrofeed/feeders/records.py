@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 from ..errors import ParameterError
 
-SHAPES = {"sphere": 0, "chip": 1, "disc": 2, "box": 3}
+SHAPES = {"sphere": 0, "chip": 1, "disc": 2, "box": 3, "stl": 4}
 
 
 def number(values: Mapping, name: str, default: float | None = None) -> float:
@@ -30,7 +30,7 @@ def number(values: Mapping, name: str, default: float | None = None) -> float:
 
 
 def shape_code(value) -> int:
-    """A part's shape as the deck's code: 0 sphere, 1 chip, 2 disc, 3 box (names accepted)."""
+    """A part's shape as the deck's code: 0 sphere, 1 chip, 2 disc, 3 box, 4 stl (names accepted)."""
     text = str(value).strip().lower()
     if text in SHAPES:
         return SHAPES[text]
@@ -38,8 +38,9 @@ def shape_code(value) -> int:
         code = float(text)
     except ValueError:
         code = -1.0
-    if code not in (0.0, 1.0, 2.0, 3.0):
-        raise ParameterError(f"parameter shape={value} must be sphere, chip, disc or box (0, 1, 2 or 3)")
+    if code not in (0.0, 1.0, 2.0, 3.0, 4.0):
+        raise ParameterError(f"parameter shape={value} must be sphere, chip, disc, box or stl "
+                             "(0, 1, 2, 3 or 4)")
     return int(code)
 
 
@@ -49,7 +50,8 @@ class Part:
     sphere's diameter, a chip's edge, a disc's diameter, a box's length L), ``thickness``
     (a chip's, disc's or box's), ``size_spread`` (spheres: radii R(1-s), R, R(1+s)); a
     box's ``width`` W, its bump (``bump_height`` 0: none, ``bump_diameter``, ``bump_at``) and
-    its clump's ``clump_spacing`` (vibrofeed.parts)."""
+    its clump's ``clump_spacing`` (vibrofeed.parts); an stl part's STL and clump (``stl``, a
+    vibrofeed.stl_part.StlPart; its size, width and thickness are its principal extents)."""
 
     shape: int
     size: float
@@ -60,6 +62,7 @@ class Part:
     bump_diameter: float = 0.0
     bump_at: float = 0.5
     clump_spacing: float = 0.75
+    stl: object = None
 
     @classmethod
     def from_values(cls, values: Mapping) -> Part:
@@ -71,7 +74,8 @@ class Part:
                    bump_height=number(values, "bump_height", 0.0),
                    bump_diameter=number(values, "bump_diameter", 0.0),
                    bump_at=number(values, "bump_at", 0.5),
-                   clump_spacing=number(values, "clump_spacing", 0.75))
+                   clump_spacing=number(values, "clump_spacing", 0.75),
+                   stl=_stl(values) if shape_code(values.get("shape", 0)) == 4 else None)
 
     @property
     def widest(self) -> float:
@@ -103,11 +107,21 @@ class Part:
             from ..parts import Box, box_reach
 
             return box_reach(Box.of(self))
+        if self.shape == 4:
+            from ..stl_part import part_reach
+
+            return part_reach(self.stl)
         if self.shape == 0:
             return self.widest / 2
         if self.shape == 1:
             return (self.size - self.thickness) / math.sqrt(2) + self.thickness / 2
         return self.size / 2
+
+
+def _stl(values: Mapping):
+    from ..stl_part import StlPart
+
+    return StlPart.of(values)
 
 
 @dataclass(frozen=True)

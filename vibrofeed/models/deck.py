@@ -89,7 +89,8 @@ def transport(p: Mapping, g: float = G) -> SteadyState:
 def mass(p: Mapping) -> float:
     """Mass [kg] of the deck's part: the single-part deck's sphere of
     ``radius``, or the bulk deck's ``shape`` 0 sphere (diameter ``part_size``,
-    nominal size), 1 chip (part_size^2 x part_thickness), 2 disc or 3 box (with its bump)."""
+    nominal size), 1 chip (part_size^2 x part_thickness), 2 disc, 3 box (with its bump)
+    or 4 stl (its solid)."""
     rho = _f(p, "density")
     if "radius" in p:
         return 4.0 / 3.0 * math.pi * _f(p, "radius") ** 3 * rho
@@ -105,7 +106,11 @@ def mass(p: Mapping) -> float:
         h, r = _f(p, "bump_height", 0.0), _f(p, "bump_diameter", 0.0) / 2
         cap = math.pi * h * h * (3 * r - h) / 3 if h > 0 else 0.0
         return (size * _f(p, "part_width") * thickness + cap) * rho
-    raise ValueError(f"shape must be 0, 1, 2 or 3, got {shape}")
+    if shape == 4:  # the STL's solid (vibrofeed.stl_part)
+        from ..stl_part import StlPart, solid
+
+        return solid(StlPart.of(p)).volume * rho
+    raise ValueError(f"shape must be 0, 1, 2, 3 or 4, got {shape}")
 
 
 def adhesion(p: Mapping) -> Adhesion:

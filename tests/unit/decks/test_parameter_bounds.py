@@ -55,7 +55,7 @@ BOUNDS = {
 # The bulk feeder's own parameters (decks/bulk_feeder.liggghts); their relations
 # (_check_bulk_feeder) bind at most edges, so these bounds are checked on the rule itself.
 BULK = {
-    "shape": (0, True, 3, True, (0, 1, 2, 3)),
+    "shape": (0, True, 4, True, (0, 1, 2, 3, 4)),
     "part_size": (0, False, 1, True, None),
     "part_thickness": (0, False, 1, True, None),
     "part_width": (0, False, 1, True, None),
@@ -63,6 +63,11 @@ BULK = {
     "bump_diameter": (0, True, INF, False, None),
     "bump_at": (-1, True, 1, True, None),
     "clump_spacing": (0.5, True, 1, True, None),
+    "part_unit": (0, False, INF, False, None),  # (prepare takes 0.001 or 1: vibrofeed.stl_part)
+    "clump_method": (0, True, 2, True, (0, 1, 2)),
+    "clump_spheres": (1, True, INF, False, "integers"),
+    "clump_resolution": (4, True, INF, False, "integers"),
+    "clump_overlap": (0, True, 1, False, None),
     "size_spread": (0, True, 1, False, None),
     "n_parts": (0, True, INF, False, "integers"),
     "fill_from": (0, True, 1, True, None),
