@@ -34,7 +34,7 @@ from .feeders.deck import guard_lines, write_line_files
 from .feeders.feeder import Feeder
 from .feeders.records import number, shape_code
 from .line import combined
-from .mesh import MeshBuilder, write_stl
+from .mesh import MeshBuilder, write_stl, write_template
 from .stl_part import DEFAULTS as STL_DEFAULTS
 from .stl_part import stl_lines
 
@@ -160,14 +160,6 @@ def disc_template(diameter: float, thickness: float) -> np.ndarray:
             a = 2 * math.pi * j / m
             rows.append([rk * math.cos(a), rk * math.sin(a), 0.0, thickness / 2])
     return np.array(rows)
-
-
-def write_template(rows: np.ndarray, path: str | Path, name: str) -> Path:
-    """A clump template as LIGGGHTS' particletemplate/multisphere reads it (x y z r per
-    line; used with ``scale 1``)."""
-    path = Path(path)
-    np.savetxt(path, rows, fmt="%.17g", header=f"{name}: x y z r [m], {len(rows)} spheres")
-    return path
 
 
 # ------------------------------------------------------------------ seeds

@@ -81,3 +81,11 @@ def write_stl(vertices: np.ndarray, triangles: np.ndarray, path: str | Path,
         f.write(np.uint32(len(record)).astype("<u4").tobytes())
         f.write(record.tobytes())
     return path
+
+
+def write_template(rows: np.ndarray, path: str | Path, name: str) -> Path:
+    """A clump template as LIGGGHTS' particletemplate/multisphere reads it (x y z r per
+    line; used with ``scale 1``)."""
+    path = Path(path)
+    np.savetxt(path, rows, fmt="%.17g", header=f"{name}: x y z r [m], {len(rows)} spheres")
+    return path

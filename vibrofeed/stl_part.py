@@ -45,6 +45,8 @@ from pathlib import Path
 import numpy as np
 
 from .errors import ParameterError
+from .mesh import write_template
+from .values import number
 
 SHAPE = 4
 UNITS = {"mm": 1e-3, "m": 1.0}
@@ -77,8 +79,6 @@ class StlPart:
 
     @classmethod
     def of(cls, values: Mapping) -> StlPart:
-        from .feeders.records import number
-
         file = str(values.get("part_file", "") or "").strip()
         if not file or file == "none":
             raise ParameterError("an stl part (shape 4) needs its STL: part_file (a description's "
@@ -349,10 +349,7 @@ def stl_lines(values: Mapping[str, str], folder: Path) -> tuple[list[str], np.nd
     """An stl part's template file ``stl.multisphere`` and prepared.in's lines of its sphere
     count, largest and smallest sphere radius, reach, mass and inertia tensor (body frame);
     for other shapes the same variables at 0 and no file."""
-    from .feeders.records import number, shape_code
-    from .geometry import write_template
-
-    if shape_code(values.get("shape", "0")) != SHAPE:
+    if number(values, "shape", 0) != SHAPE:  # (resolved values: the shape's code)
         return [f"variable {n} equal 0\n" for n in VARIABLES], None
     part = StlPart.of(values)
     rows = template(part)

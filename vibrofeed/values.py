@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 
 import numpy as np
+
+from .errors import ParameterError
 
 
 def to_json(value):
@@ -35,3 +38,16 @@ def fmt(value, scale: float = 1.0, spec: str = ".4g") -> str:
     if value is None or (isinstance(value, float) and not math.isfinite(value)):
         return "n/a"
     return format(value * scale, spec)
+
+
+def number(values: Mapping, name: str, default: float | None = None) -> float:
+    """``values[name]`` as a float (``default`` when absent); a one-line ParameterError
+    naming the parameter when it is missing or not a number."""
+    if name not in values:
+        if default is None:
+            raise ParameterError(f"the feeder needs the parameter {name!r}")
+        return float(default)
+    try:
+        return float(values[name])
+    except (TypeError, ValueError):
+        raise ParameterError(f"parameter {name}={values[name]!r} is not a number") from None

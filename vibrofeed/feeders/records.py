@@ -12,21 +12,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 from ..errors import ParameterError
+from ..values import number  # noqa: F401 (the feeders' parameters are read with it)
 
 SHAPES = {"sphere": 0, "chip": 1, "disc": 2, "box": 3, "stl": 4}
-
-
-def number(values: Mapping, name: str, default: float | None = None) -> float:
-    """``values[name]`` as a float (``default`` when absent); a one-line ParameterError
-    naming the parameter when it is missing or not a number."""
-    if name not in values:
-        if default is None:
-            raise ParameterError(f"the feeder needs the parameter {name!r}")
-        return float(default)
-    try:
-        return float(values[name])
-    except (TypeError, ValueError):
-        raise ParameterError(f"parameter {name}={values[name]!r} is not a number") from None
 
 
 def shape_code(value) -> int:

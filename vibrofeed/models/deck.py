@@ -10,6 +10,7 @@ other through the engine (tests/engine/test_waveform_decks.py).
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Mapping
 
@@ -106,11 +107,21 @@ def mass(p: Mapping) -> float:
         h, r = _f(p, "bump_height", 0.0), _f(p, "bump_diameter", 0.0) / 2
         cap = math.pi * h * h * (3 * r - h) / 3 if h > 0 else 0.0
         return (size * _f(p, "part_width") * thickness + cap) * rho
-    if shape == 4:  # the STL's solid (vibrofeed.stl_part)
-        from ..stl_part import StlPart, solid
-
-        return solid(StlPart.of(p)).volume * rho
+    if shape == 4:  # the STL's solid (vibrofeed.stl_part reads and checks it before a run)
+        if not p.get("part_file"):
+            raise ValueError("an stl part (shape 4) is weighed from its STL: part_file is missing")
+        return _stl_volume(str(p["part_file"]), _f(p, "part_unit", 1e-3)) * rho
     raise ValueError(f"shape must be 0, 1, 2, 3 or 4, got {shape}")
+
+
+@functools.lru_cache(maxsize=16)
+def _stl_volume(file: str, unit: float) -> float:
+    """The volume [m^3] of a closed STL at ``unit`` metres per unit (read here, not through
+    vibrofeed.stl_part, so that the models stay free of the package beyond them)."""
+    import trimesh
+
+    mesh = trimesh.load(file, force="mesh")
+    return abs(float(mesh.volume)) * unit**3
 
 
 def adhesion(p: Mapping) -> Adhesion:

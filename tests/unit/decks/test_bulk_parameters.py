@@ -29,8 +29,9 @@ def derived(**given):
     env = dict(values)
     clumps = {1: chip_template, 2: disc_template}
     env["body_spheres"] = len(clumps[shape](size, thick)) if shape else 1
-    # prepared.in's box variables (vibrofeed.geometry.box_lines): 0 for other shapes
-    env.update({n: 0.0 for n in ("n_sph_box", "r_sph_box", "r_min_box", "r_ext_box", "m_box")})
+    # prepared.in's box and stl-part variables (vibrofeed.geometry): 0 for other shapes
+    env.update({f"{n}_{kind}": 0.0 for kind in ("box", "stl")
+                for n in ("n_sph", "r_sph", "r_min", "r_ext", "m")})
     if env["youngs_track"] <= 0:
         env["youngs_track"] = env["youngs"] * 70 / 130
     cache = {}
@@ -125,7 +126,8 @@ def test_outlet_catch_plane_and_box_floor(given):
     ({"wall_height": "1e-4"}, "wall_height=0.0001 m is no higher than a part's centre"),
     ({"n_parts": "5000"}, "n_parts=5000 settle"),
     ({"shape": "cube"}, "shape=cube must be one of sphere (0), chip (1), disc (2)"),
-    ({"shape": "4"}, "shape=4 must be one of 0, 1, 2, 3"),
+    ({"shape": "5"}, "shape=5 must be one of 0, 1, 2, 3, 4"),
+    ({"shape": "4"}, "an stl part (shape 4) needs its STL: part_file"),
     ({"size_spread": "1"}, "size_spread=1"),
     ({"youngs_track": "1e6"}, "youngs_track=1e6"),
     ({"restitution_pp": "0.01"}, "restitution_pp=0.01"),

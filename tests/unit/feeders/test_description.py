@@ -119,7 +119,7 @@ def test_a_joint_that_does_not_step_down_is_refused_naming_the_element(tmp_path)
     (("[parts]", "[part]"), "unknown key 'part' in the description (did you mean 'parts'?)"),
     (("size = 3e-4", "size = \"big\""), "f.toml: parts.size = 'big' must be a number"),
     (("size = 3e-4", "size = 3e-4\nshape = \"cube\""),
-     "f.toml: parts.shape=cube must be sphere, chip, disc or box"),
+     "f.toml: parts.shape=cube must be sphere, chip, disc, box or stl (0, 1, 2, 3 or 4)"),
     (("step = 5e-5", "step = 5e-5\nside_drop = { from = 0.2, to = 0.5, wdith = 4e-4 }"),
      "unknown key 'wdith' in element 2's side_drop (did you mean 'width'?)"),
     (('kind = "linear"\nlength = 0.004', 'kind = "linear"\nstep = 1e-5\nlength = 0.004'),

@@ -166,8 +166,19 @@ def test_the_mass_of_a_bulk_part_by_shape():
     cap = math.pi * 5e-5 ** 2 * (3e-4 - 5e-5) / 3
     assert deck.mass({**box, "bump_height": 5e-5, "bump_diameter": 2e-4}) == pytest.approx(
         (1e-3 * 5e-4 * 2e-4 + cap) * 2000, rel=1e-12)
-    with pytest.raises(ValueError, match="shape must be 0, 1, 2 or 3"):
+    with pytest.raises(ValueError, match="shape must be 0, 1, 2, 3 or 4"):
+        deck.mass({**base, "shape": 5})
+    with pytest.raises(ValueError, match="part_file is missing"):
         deck.mass({**base, "shape": 4})
+
+
+def test_the_mass_of_an_stl_part_is_its_solids(tmp_path):
+    # a 0.6 x 0.4 x 0.3 mm block written in mm: 0.072 mm^3 of solid
+    import trimesh
+
+    trimesh.creation.box(extents=(0.6, 0.4, 0.3)).export(tmp_path / "block.stl")
+    p = {"density": 2000, "shape": 4, "part_file": str(tmp_path / "block.stl"), "part_unit": 1e-3}
+    assert deck.mass(p) == pytest.approx(0.6e-3 * 0.4e-3 * 0.3e-3 * 2000, rel=1e-6)  # float32 STL
 
 
 # -- adhesion and the air film ---------------------------------------------------------------
