@@ -261,7 +261,7 @@ def _not_here(k: int, key: tuple[str, ...]) -> str:
         return "the first section has no joint before it to step down at"
     if key[0] == "gate":
         return "a gate is built on the first section only in this version"
-    if key[0] in ("side_drop", "wiper"):
+    if key[0] in ("side_drop", "wiper", "slot"):
         return f"a {key[0].replace('_', ' ')} is built on the second section on in this version"
     return "only the first section's drive takes a waveform other than a sine in this version"
 

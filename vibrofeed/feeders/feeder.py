@@ -36,7 +36,7 @@ from .records import Drive, Part, number
 class Station:
     """A tooling station where the analyses look for its rejects: on ``section`` (1-based),
     from ``start`` to ``end`` along the path [m] (a wiper: its upstream face to its bar's
-    end; a side drop: its open stretch)."""
+    end; a side drop: its open stretch; a slot: its hole's)."""
 
     section: int
     kind: str
@@ -234,7 +234,7 @@ class Feeder:
 
     @property
     def stations(self) -> list[Station]:
-        """The side drops and wipers along the path, in conveying order of sections; each
+        """The side drops, wipers and slots along the path, in conveying order of sections; each
         on the path section (1-based) it lies on."""
         out = []
         shift = self.path_shift
@@ -254,6 +254,9 @@ class Feeder:
             if getattr(e, "wiper", None) is not None:
                 a = e.x0 + e.wiper.at * e.length + shift
                 out.append(Station(k, "wiper", a, a + e.wiper.length))
+            if getattr(e, "slot", None) is not None:
+                out.append(Station(k, "slot", e.x0 + e.slot.start * e.length + shift,
+                                   e.x0 + e.slot.end * e.length + shift))
         return out
 
     def further_meshes(self) -> list:
