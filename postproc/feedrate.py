@@ -57,8 +57,8 @@ interval over the section); the hold-up (mean parts over them at the window's
 frames, parts with an outlet or reject event left out) and the line density
 (hold-up per metre). In steady feeding a joint's flux is the next section's
 out-flux plus its rejects. The rejects are also sorted by the tooling where
-they fell (side drop, wiper, jet, other: :func:`.line.tooling`; jet only for a line
-that has one).
+they fell (side drop, wiper, jet, slot, other: :func:`.line.tooling`; jet and slot only
+for a line that has one).
 
 Steadiness of the bed
 ---------------------
@@ -535,9 +535,9 @@ class FeedRate(AnalysisBase):
     ``reject_rate``, ``reject_rate_error`` [1/s], ``rejects_in_window``,
     ``speed``, ``speed_error`` [m/s], ``hold_up``, ``hold_up_error`` [parts],
     ``line_density`` [1/m]; and ``rejects_by_tooling``: for ``side_drop``,
-    ``wiper``, ``jet`` (only a line with a jet), ``other``, ``per_s``, ``per_s_error``
-    (in the window), ``in_window``, ``total`` (in the run analysed), or None for a tool the
-    line does not have.
+    ``wiper``, ``jet`` (only a line with a jet), ``slot`` (only a line with a slot trap),
+    ``other``, ``per_s``, ``per_s_error`` (in the window), ``in_window``, ``total`` (in the
+    run analysed), or None for a tool the line does not have.
 
     >>> fr = FeedRate(result).run()
     >>> fr.results.parts_per_s, fr.results.parts_per_s_err, fr.results.steady_from
@@ -811,11 +811,12 @@ class FeedRate(AnalysisBase):
         run = (rejects["time"] > t_lo) & (rejects["time"] <= t_hi)
         stations = feeder_of(result.parameters).stations
         which = tooling(rejects["where"], rejects["section"], stations, size)
-        has = {kind: any(st.kind == kind for st in stations) for kind in ("side_drop", "wiper", "jet")}
+        has = {kind: any(st.kind == kind for st in stations)
+               for kind in ("side_drop", "wiper", "jet", "slot")}
         out = {}
         for k, name in enumerate(TOOLING):
-            if name == "jet" and not has["jet"]:
-                continue
+            if name in ("jet", "slot") and not has[name]:
+                continue  # (a line without one: the figures lines have always had)
             if not has.get(name, True):
                 out[name] = None
                 continue

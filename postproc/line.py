@@ -13,8 +13,8 @@ yet, and either drive's amplitude is far below a section's length.
   also shakes it across, docs/bowl.md);
 * :func:`bed_pass`: one pass over the frames giving each joint's crossings and the parts
   over each section at each frame (the hold-up);
-* :func:`tooling`: the rejects sorted by the tool that threw them off (a bowl's falls
-  too);
+* :func:`tooling`: the rejects sorted by the tool that threw them off (a side drop, a
+  wiper, a slot trap; a bowl's falls too);
 * :func:`batch_cuts`, :func:`batch_means`: a quantity in batches of whole periods over
   the window; :func:`drift`, :func:`trend`, :func:`unsteady`: whether it drifts, and
   the words that say so.
@@ -35,8 +35,9 @@ from .path import BLOCK_VALUES, along, feeder_of
 
 _BLOCK_VALUES = BLOCK_VALUES  # (a name of this module's: tests set it to read in small blocks)
 # Rejects: the tools, in the order they are tried (a part falls sideways only where the
-# side drop leaves no wall, so its stretch is tried first).
-TOOLING = ("side_drop", "wiper", "jet", "other")
+# side drop leaves no wall, so its stretch is tried first; through the floor only where the
+# slot opens it: a section's slot and side drop do not overlap, nor a slot and the wiper's bar).
+TOOLING = ("side_drop", "wiper", "jet", "other", "slot")
 # A part the wiper sweeps back falls within this many part sizes upstream of its face.
 WIPER_REACH = 3.0
 # A part a jet blows off crosses the catch plane within this many part sizes downstream of
@@ -137,13 +138,15 @@ def tooling(where, section, stations, size: float) -> np.ndarray:
     its crossing of the catch plane; a bowl's fall: the last on the track) fallen from
     ``section`` (1-based), among the feeder's tooling ``stations``
     (:attr:`vibrofeed.feeders.Feeder.stations`), parts ``size`` across: a side drop's
-    stretch on its section widened by a part size either way; else a jet's block widened by a
-    part size upstream and :data:`JET_REACH` downstream; else from :data:`WIPER_REACH` part
-    sizes upstream of a wiper's face to its bar's downstream end; else other."""
+    stretch on its section widened by a part size either way, or a slot's the same way; else a
+    jet's block widened by a part size upstream and :data:`JET_REACH` downstream; else from
+    :data:`WIPER_REACH` part sizes upstream of a wiper's face to its bar's downstream end;
+    else other."""
     s = np.asarray(where, dtype=float)
     section = np.broadcast_to(np.asarray(section), s.shape)
     out = np.full(len(s), TOOLING.index("other"))
-    reach = (("wiper", WIPER_REACH, 0.0), ("jet", 1.0, JET_REACH), ("side_drop", 1.0, 1.0))
+    reach = (("wiper", WIPER_REACH, 0.0), ("jet", 1.0, JET_REACH), ("side_drop", 1.0, 1.0),
+             ("slot", 1.0, 1.0))
     for kind, before, after in reach:
         for st in (st for st in stations if st.kind == kind):  # (a side drop is decided last)
             hit = (section == st.section) & (s >= st.start - before * size) & (s <= st.end + after * size)

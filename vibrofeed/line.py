@@ -14,7 +14,11 @@ wall at y = -w/2 (parts are kept against that wall, the reference wall):
 the wall at +w/2 is missing over the side drop, where the floor narrows to
 ``drop_width`` from the reference wall and parts not against it fall off the open
 side. The wiper is a bar across the track whose underside follows the floor at
-``wiper_height``: a part taller than that (stacked, on edge) is swept back.
+``wiper_height``: a part taller than that (stacked, on edge) is swept back. A slot is a
+hole in the floor, ``slot_width`` across, its centre ``slot_offset`` from the reference wall,
+from ``slot_from`` to ``slot_to``: the floor is split into strips along its edges and the
+strips over it are left out, so a part narrower than the slot where it rides falls through
+while one lying across it bridges it (docs/feeders.md).
 
 Meshes are indexed triangle sets as in :mod:`vibrofeed.geometry`, with shared vertices
 along common edges (floor and walls form one surface, without seams).
@@ -33,6 +37,18 @@ from .mesh import MeshBuilder
 # The wiper's bar along x, in part sizes: long enough that a part cannot wedge under it
 # tilted, short enough to stay a bar.
 WIPER_LENGTH = 1.0
+# The slot's default place: along the reference wall (its centre half its width from it, no
+# floor between wall and slot). A part riding the wall falls through it only if its footprint
+# lies wholly over it: past a ledge, a part on its side tips over about the ledge's edge and
+# lands lying flat across the slot, bridging it (a 0.4 x 0.25 x 0.1 mm box did past a ledge
+# 3/8 of its thickness wide). A part lying flat against the wall then bridges it when its
+# centre lies beyond the slot, over the floor: the slot narrower than half its width across.
+
+
+def slot_offset(width: float) -> float:
+    """The default distance from the reference wall to the centre of a slot ``width`` across:
+    the slot along the wall."""
+    return width / 2
 
 
 @dataclass(frozen=True)
@@ -53,6 +69,10 @@ class Section:
     wiper_height: float = 0.0
     wiper_at: float = 0.5
     wiper_length: float = 0.0
+    slot_from: float = 0.0
+    slot_to: float = 0.0
+    slot_width: float = 0.0
+    slot_offset: float = 0.0  # its centre from the reference wall at y = -w/2
 
     @property
     def x1(self) -> float:
@@ -65,6 +85,10 @@ class Section:
     @property
     def has_wiper(self) -> bool:
         return self.wiper_height > 0
+
+    @property
+    def has_slot(self) -> bool:
+        return self.slot_to > self.slot_from and self.slot_width > 0
 
     def floor_z(self, y):
         """Height of the floor at rest at ``y`` [m]."""
@@ -85,6 +109,16 @@ class Section:
         a = self.x0 + self.wiper_at * self.length
         return a, a + self.wiper_length
 
+    @property
+    def slot_x(self) -> tuple[float, float]:
+        return self.x0 + self.slot_from * self.length, self.x0 + self.slot_to * self.length
+
+    @property
+    def slot_y(self) -> tuple[float, float]:
+        """The slot's edges across [m] (the frame's y)."""
+        a = -self.width / 2 + self.slot_offset - self.slot_width / 2
+        return a, a + self.slot_width
+
 
 def _stations(s: Section, spacing: float | None) -> np.ndarray:
     """x stations: uniform at most ``spacing`` apart (default the width, at most 1 mm) and
@@ -96,34 +130,45 @@ def _stations(s: Section, spacing: float | None) -> np.ndarray:
         xs.append(np.array(s.drop_x))
     if s.has_wiper:
         xs.append(np.array(s.wiper_x))
+    if s.has_slot:
+        xs.append(np.array(s.slot_x))
     return np.unique(np.round(np.concatenate(xs), 12))
 
 
 def section_mesh(s: Section, spacing: float | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """A further section at rest: floor, the reference wall (y = -w/2), the other wall except over
-    the side drop, and the wiper. No wall at the joint (parts arrive over it from section 1)
-    nor at the outlet edge."""
+    """A further section at rest: floor (without the slot), the reference wall (y = -w/2), the
+    other wall except over the side drop, and the wiper. No wall at the joint (parts arrive over
+    it from section 1) nor at the outlet edge. The floor is strips between every edge across
+    (the drop's, the slot's) over the whole section, so the strips beside the slot and its ends
+    share their vertices with the rest: one surface, without seams."""
     if s.has_drop and not s.x0 <= s.drop_x[0] < s.drop_x[1] <= s.x1:
         raise ParameterError("the side drop does not fit on its section: 0 <= drop_from < "
                              "drop_to <= 1")
     if s.has_wiper and not s.x0 <= s.wiper_x[0] < s.wiper_x[1] <= s.x1:
         raise ParameterError("the wiper does not fit on its section: lower its wiper_at")
+    if s.has_slot:
+        if not s.x0 <= s.slot_x[0] < s.slot_x[1] <= s.x1:
+            raise ParameterError("the slot does not fit on its section: 0 <= slot_from < slot_to <= 1")
+        if not -s.width / 2 <= s.slot_y[0] < s.slot_y[1] <= s.width / 2:
+            raise ParameterError("the slot does not fit across its section: slot_offset +- "
+                                 "slot_width/2 must lie between the walls")
     xs = _stations(s, spacing)
     lo, hi = -s.width / 2, s.width / 2
     inner = lo + s.drop_width  # the drop's open edge
     top = -s.step + s.wall_height
     a, b = s.drop_x if s.has_drop else (math.inf, math.inf)
+    sa, sb = s.slot_x if s.has_slot else (math.inf, math.inf)
+    ya, yb = s.slot_y if s.has_slot else (math.inf, math.inf)
+    # every edge across, on every stretch (the vertices along them are shared)
+    ys = sorted({lo, hi} | ({inner} if s.has_drop else set()) | ({ya, yb} if s.has_slot else set()))
     b_ = MeshBuilder()
     z = s.floor_z
     for x0, x1 in zip(xs[:-1], xs[1:]):
         dropping = s.has_drop and a <= x0 and x1 <= b
-        if dropping:
-            ys = [lo, inner]
-        elif s.has_drop:
-            ys = [lo, inner, hi]  # shares the drop's edge vertices
-        else:
-            ys = [lo, hi]
+        slotted = s.has_slot and sa <= x0 and x1 <= sb
         for y0, y1 in zip(ys[:-1], ys[1:]):  # floor, normal +z
+            if (dropping and y0 >= inner) or (slotted and ya <= y0 and y1 <= yb):
+                continue
             b_.quad((x0, y0, z(y0)), (x1, y0, z(y0)), (x1, y1, z(y1)), (x0, y1, z(y1)))
         b_.quad((x1, lo, z(lo)), (x0, lo, z(lo)), (x0, lo, top), (x1, lo, top))  # reference wall
         if not dropping:

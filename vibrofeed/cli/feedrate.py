@@ -36,7 +36,8 @@ def add_arguments(p) -> None:
 RATE_KEYS = ("parts_per_s", "parts_per_s_err", "mass_per_s", "mass_per_s_err")
 # A line's per-section figures that are rates over the window, unmeasured with the rest.
 SECTION_RATE_KEYS = ("joint_flux", "joint_flux_error", "reject_rate", "reject_rate_error")
-TOOLING_NAMES = {"side_drop": "side drop", "wiper": "wiper", "jet": "jet", "other": "other"}
+TOOLING_NAMES = {"side_drop": "side drop", "wiper": "wiper", "jet": "jet", "other": "other",
+                 "slot": "slot"}
 
 
 def unmeasured_sections(summary: dict) -> None:

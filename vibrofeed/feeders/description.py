@@ -323,7 +323,7 @@ def _not_here(k: int, key: tuple[str, ...]) -> str:
         return "a gate is built on the first section only in this version"
     if key[0] == "jet":
         return "a jet is built on the second section on in this version"
-    if key[0] in ("side_drop", "wiper"):
+    if key[0] in ("side_drop", "wiper", "slot"):
         return f"a {key[0].replace('_', ' ')} is built on the second section on in this version"
     return "only the first section's drive takes a waveform other than a sine in this version"
 

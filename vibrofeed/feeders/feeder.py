@@ -36,7 +36,7 @@ from .records import Drive, Part, number
 class Station:
     """A tooling station: on path ``section`` (1-based) of ``element`` (its number, 1-based),
     from ``start`` to ``end`` along the path [m] (a wiper: its upstream face to its bar's end;
-    a side drop: its open stretch; a gate: where its walls start to narrow to where they
+    a side drop: its open stretch; a slot: its hole's; a gate: where its walls start to narrow to where they
     reach its width; a tool at a point, e.g. an air jet: ``start == end``). ``name`` says
     which (``s2.side_drop``). The rejects are looked for over [start, end]; a part passes
     the station between ``x_in`` and ``x_out``, ``margin`` (a part's size) before its start
@@ -62,7 +62,7 @@ class Station:
 
 
 # The tool attributes an element may carry, in the order its stations are listed.
-TOOLS = ("gate", "side_drop", "wiper", "jet")
+TOOLS = ("gate", "side_drop", "slot", "wiper", "jet")
 
 
 @dataclass(frozen=True)

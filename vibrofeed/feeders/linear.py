@@ -8,7 +8,8 @@ edge (y = +w/2); every later one lies ``step`` below the one before it at its hi
 at y = -w/2: ``z(y) = -level - (w/2 - y) tan(cross_tilt)``.
 
 The first section has a back wall, and may have a singulation gate; a later one has
-no wall at its joint and may carry a side drop and a wiper (vibrofeed.line builds them).
+no wall at its joint and may carry a side drop, a slot trap and a wiper (vibrofeed.line builds
+them).
 
 Its numbers in the deck's vocabulary: section 1 takes the bulk feeder's own names
 (``track_length``, ``freq``, ``gate_width`` ...), section k >= 2 the same quantities as
@@ -25,12 +26,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ParameterError, ParameterWarning
-from ..line import WIPER_LENGTH, Section, section_mesh
+from ..line import WIPER_LENGTH, Section, section_mesh, slot_offset
 from ..orientation import STATES, parse_correct
-from .records import JET_MODES, Drive, Gate, Jet, Part, SideDrop, Wiper, number
+from .records import JET_MODES, Drive, Gate, Jet, Part, SideDrop, Slot, Wiper, number
 
 # description key (table, key) -> (section 1's deck name, later sections' suffix); None:
-# that section has no such number (a gate on section 1 only, a step, side drop and wiper
+# that section has no such number (a gate on section 1 only, a step, side drop, slot and wiper
 # on later ones: the meshes of this version build them there).
 KEYS: dict[tuple[str, ...], tuple[str | None, str | None]] = {
     ("length",): ("track_length", "length"),
@@ -49,6 +50,10 @@ KEYS: dict[tuple[str, ...], tuple[str | None, str | None]] = {
     ("side_drop", "from"): (None, "drop_from"),
     ("side_drop", "to"): (None, "drop_to"),
     ("side_drop", "width"): (None, "drop_width"),
+    ("slot", "from"): (None, "slot_from"),
+    ("slot", "to"): (None, "slot_to"),
+    ("slot", "width"): (None, "slot_width"),
+    ("slot", "offset"): (None, "slot_offset"),
     ("wiper", "height"): (None, "wiper_height"),
     ("wiper", "at"): (None, "wiper_at"),
     ("jet", "at"): (None, "jet_at"),
@@ -99,6 +104,7 @@ class LinearSection:
     gate: Gate | None = None
     side_drop: SideDrop | None = None
     wiper: Wiper | None = None
+    slot: Slot | None = None
     jet: Jet | None = None
 
     @classmethod
@@ -106,7 +112,8 @@ class LinearSection:
                     part: Part | None = None) -> LinearSection:
         """Section ``k`` from the deck's parameters (numbers or their strings); its tools are
         absent where their numbers say so (gate_width 0, drop_to <= drop_from, wiper_height 0,
-        jet_force 0)."""
+        jet_force 0, slot_to <= slot_from); a slot's offset 0 is its default place, along the
+        wall (vibrofeed.line.slot_offset)."""
         def get(key, default=0.0):  # (absent: zero, i.e. off or not moving, as the decks' tools)
             name = deck_name(k, key)
             return number(values, name, default) if name is not None else default
@@ -117,13 +124,19 @@ class LinearSection:
                       waveform=int(get(("drive", "waveform"), 0.0)) if first else 0,
                       duty=get(("drive", "duty"), 0.7) if first else 0.7)
         step = 0.0 if first else get(("step",))
-        gate = side_drop = wiper = jet = None
+        gate = side_drop = wiper = jet = slot = None
         if first and get(("gate", "width"), 0.0) > 0:
             gate = Gate(width=get(("gate", "width")), at=get(("gate", "at"), 0.7))
         if not first:
             start, end = get(("side_drop", "from"), 0.0), get(("side_drop", "to"), 0.0)
             if end > start:
                 side_drop = SideDrop(start=start, end=end, width=get(("side_drop", "width"), 0.0))
+            start, end = get(("slot", "from"), 0.0), get(("slot", "to"), 0.0)
+            if end > start:
+                width, offset = get(("slot", "width"), 0.0), get(("slot", "offset"), 0.0)
+                if offset == 0:
+                    offset = slot_offset(width)
+                slot = Slot(start=start, end=end, width=width, offset=offset)
             if get(("wiper", "height"), 0.0) > 0:
                 wiper = Wiper(height=get(("wiper", "height")), at=get(("wiper", "at"), 0.5),
                               length=WIPER_LENGTH * (part.size if part else number(values, "part_size")))
@@ -131,7 +144,7 @@ class LinearSection:
         return cls(number=k, x0=x0, length=get(("length",)), width=get(("width",)),
                    wall_height=get(("wall_height",)), drive=drive, cross_tilt=get(("cross_tilt",), 0.0),
                    step=step, level=level + step, gate=gate, side_drop=side_drop, wiper=wiper,
-                   jet=jet)
+                   jet=jet, slot=slot)
 
     # ---------------------------------------------------------------- geometry
     @property
@@ -217,13 +230,15 @@ class LinearSection:
 
     def mesh_section(self) -> Section:
         """The section as vibrofeed.line meshes it (a further section of a line)."""
-        drop, wiper = self.side_drop, self.wiper
+        drop, wiper, slot = self.side_drop, self.wiper, self.slot
+        slotted = {} if slot is None else {"slot_from": slot.start, "slot_to": slot.end,
+                                           "slot_width": slot.width, "slot_offset": slot.offset}
         return Section(
             x0=self.x0, length=self.length, width=self.width, wall_height=self.wall_height,
             step=self.level, cross_tilt=self.cross_tilt, drop_from=drop.start if drop else 0.0,
             drop_to=drop.end if drop else 0.0, drop_width=drop.width if drop else 0.0,
             wiper_height=wiper.height if wiper else 0.0, wiper_at=wiper.at if wiper else 0.5,
-            wiper_length=wiper.length if wiper else 0.0)
+            wiper_length=wiper.length if wiper else 0.0, **slotted)
 
     def mesh(self):
         """The mesh at rest of a further section (vertices (V, 3) [m], triangles (T, 3))."""
@@ -316,8 +331,67 @@ class LinearSection:
                 raise ParameterError(f"{n(('side_drop', 'width'))}={d.width:g} m is less than half a "
                                      f"part ({part.abreast / 2:g} m across it in a file): every part "
                                      "would fall off the drop")
+        if self.slot is not None:
+            self._check_slot(part)
         if self.jet is not None:
             self.check_jet(part)
+
+    def _check_slot(self, part: Part) -> None:
+        """The slot lies on the section and its floor, apart from the side drop and the wiper
+        (their rejects could not be told from its own); a width that rejects every part or
+        none is a warning (:class:`SlotWarning`), as is what it does to spheres."""
+        n, s = self.name, self.slot
+        frm, to, wide, off = (n(("slot", key)) for key in ("from", "to", "width", "offset"))
+        if not 0 <= s.start < s.end <= 1:
+            raise ParameterError(f"{frm}={s.start:g}, {to}={s.end:g}: the slot lies outside section "
+                                 f"{self.number} (0 <= from < to <= 1)")
+        if not 0 < s.width < self.width:
+            raise ParameterError(f"{wide}={s.width:g} m must be > 0 and narrower than the floor "
+                                 f"({n(('width',))}={self.width:g} m)")
+        if s.offset - s.width / 2 < -1e-12 or s.offset + s.width / 2 > self.width + 1e-12:
+            raise ParameterError(f"{off}={s.offset:g} m: the slot ({s.width:g} m across) runs under a "
+                                 f"wall; its centre must lie {s.width / 2:g} to "
+                                 f"{self.width - s.width / 2:g} m from the reference wall")
+        a, b = self.x0 + s.start * self.length, self.x0 + s.end * self.length
+        spans = []
+        if self.side_drop is not None:
+            spans.append(("side drop", ("side_drop", "from"), self.side_drop.start * self.length,
+                          self.side_drop.end * self.length))
+        if self.wiper is not None:
+            w0 = self.wiper.at * self.length
+            spans.append(("wiper", ("wiper", "at"), w0, w0 + self.wiper.length))
+        for tool, key, t0, t1 in spans:
+            if a < self.x0 + t1 and self.x0 + t0 < b:
+                raise ParameterError(f"{frm}={s.start:g}, {to}={s.end:g}: the slot overlaps the {tool} "
+                                     f"({n(key)}); their rejects could not be told apart: move one")
+        if (b - a) < part.widest:
+            warn(f"{frm}, {to}: the slot is {b - a:g} m long, shorter than a part ({part.widest:g} m): "
+                 "a part lying along the track may step over it")
+        if part.shape == 0:
+            warn(f"{wide}={s.width:g} m: spheres bridge the slot or fall through it by their diameter "
+                 f"alone: smaller than {s.width:g} m they fall when over it (against the wall: always, "
+                 "at the default offset), larger ones roll over")
+            return
+        thin, longest = thinnest(part), part.widest
+        if s.width <= thin:
+            warn(f"{wide}={s.width:g} m is no wider than a part's thinnest dimension ({thin:g} m): "
+                 "no part falls through, the slot rejects nothing")
+            return
+        if s.width >= longest:
+            warn(f"{wide}={s.width:g} m is no narrower than a part's longest dimension ({longest:g} m): "
+                 "every part falls through, the slot rejects everything")
+            return
+        ledge = s.offset - s.width / 2
+        if ledge > 1e-12:
+            warn(f"{off}={s.offset:g} m leaves a ledge {ledge:g} m wide between the wall and the slot: a "
+                 "part on its side against the wall tips over it and lands flat across the slot "
+                 "(it bridges it); the slot along the wall (offset 0) drops it")
+        across = part.width if part.shape == 3 else part.widest
+        if ledge <= 1e-12 and s.width >= across / 2:
+            warn(f"{wide}={s.width:g} m is no narrower than half a part's width ({across / 2:g} m): a "
+                 "part lying flat against the wall has its centre over the slot and tips in; "
+                 "lying flat, only a part crosswise bridges it (keep it below half the width)")
+
 
     def check_jet(self, part: Part) -> None:
         """The jet (one-line ParameterError naming the parameter; a ParameterWarning for a
@@ -354,6 +428,19 @@ class LinearSection:
             warnings.warn(f"{n(('jet', 'delay'))}={j.delay:g} s: a part conveyed at the surface's peak "
                           f"speed along ({speed:.3g} m/s) is {reach - self.x1:.3g} m past section "
                           f"{self.number}'s end when the jet fires", ParameterWarning, stacklevel=2)
+
+
+class SlotWarning(UserWarning):
+    """A slot that runs but cannot sort the parts (it rejects all of them, or none)."""
+
+
+def warn(text: str) -> None:
+    warnings.warn(text, SlotWarning, stacklevel=3)
+
+
+def thinnest(part: Part) -> float:
+    """A part's thinnest dimension [m]: a sphere's smallest diameter, else its thickness."""
+    return part.size * (1 - part.size_spread) if part.shape == 0 else part.thickness
 
 
 def _jet(values: Mapping, k: int, get) -> Jet | None:

@@ -168,6 +168,20 @@ class SideDrop:
 
 
 @dataclass(frozen=True)
+class Slot:
+    """A slot trap: from ``start`` to ``end`` (fractions of the element's length) a hole
+    ``width`` across in the floor, its centre ``offset`` from the reference wall (0: the
+    default, vibrofeed.line.slot_offset). A part lying flat across it bridges it; one narrower
+    than the slot where it rides (on its side, on its end) falls through."""
+
+    kind = "slot"
+    start: float
+    end: float
+    width: float
+    offset: float = 0.0
+
+
+@dataclass(frozen=True)
 class Wiper:
     """A wiper: a bar across the element at ``at`` (a fraction of its length), ``length`` long,
     whose underside follows the floor ``height`` above it; a taller part is swept off."""
