@@ -133,12 +133,7 @@ def adhesion(p: Mapping) -> Adhesion:
     hamaker, roughness = _f(p, "hamaker"), _f(p, "roughness")
     if "radius" in p:
         return Adhesion(hamaker, roughness, radius=_f(p, "radius"), face_radius=_f(p, "face_radius", 0.0))
-    shape = int(_f(p, "shape", 0))
-    if shape == 4:  # the STL's solid (vibrofeed.stl_part reads and checks it before a run)
-        if not p.get("part_file"):
-            raise ValueError("an stl part (shape 4) is weighed from its STL: part_file is missing")
-        return _stl_volume(str(p["part_file"]), _f(p, "part_unit", 1e-3)) * rho
-    size = _f(p, "part_size")
+    shape, size = int(_f(p, "shape", 0)), _f(p, "part_size")
     if shape not in (0, 1, 2):
         raise ValueError(f"shape must be 0, 1 or 2 (a box's adhesion is not modelled yet), got {shape}")
     face = ({"radius": size / 2}, {"face_side": size}, {"face_radius": size / 2})[shape]
