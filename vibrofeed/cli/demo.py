@@ -129,9 +129,11 @@ def run(args) -> int:
 
 
 def report(path, folder: Path | None = None) -> tuple[str, str | None]:
-    """The feed-rate and singulation reports of a bulk result, and why they measure
-    nothing (too few exits; None when they measure); with ``folder``, also its
-    picture (folder/<name>.png) and plots (folder/plots/)."""
+    """The feed-rate and singulation reports of a bulk result, and its orientation report
+    when its parts have an orientation state (clumps: boxes, chips, discs), and why they
+    measure nothing (too few exits; None when they measure); with ``folder``, also its
+    picture (folder/<name>.png: coloured by orientation state when the parts have one, else
+    by speed) and plots (folder/plots/)."""
     from ..postproc.feedrate import FeedRate
     from ..postproc.singulation import Singulation
     from ..results.reader import Result
@@ -150,6 +152,16 @@ def report(path, folder: Path | None = None) -> tuple[str, str | None]:
         singulation = sg.summary()
         reason = reason or unmeasured(singulation, S.ARRIVAL_KEYS)
         lines += ["", "Feed rate", F.table(summary), "", "Singulation", S.table(singulation)]
+        oriented = result.body_template is not None  # spheres have no orientation state
+        if oriented:
+            from ..postproc.orientation import Orientation
+            from . import orientation as O
+
+            # the same window, feed rate and arrivals (as a sweep's metrics); "up, lengthwise"
+            o = Orientation(result, start=summary["steady_from"], end=summary["steady_to"],
+                            feedrate=fr.results, singulation=sg.results).run().summary()
+            reason = reason or unmeasured(o, O.RATE_KEYS)
+            lines += ["", "Orientation", O.table(o)]
         if folder is not None:
             from ..pictures.plots import feedrate_figures, singulation_figures
             from ..pictures.render import render
@@ -159,7 +171,8 @@ def report(path, folder: Path | None = None) -> tuple[str, str | None]:
             figures += figures_written(feedrate_figures(fr, plots) + singulation_figures(sg, plots))
             picture = folder / f"{Path(path).stem}.png"
             frame = picture_frame(result.time, summary["steady_to"])
-            figures.append(written(render(result, picture, frame=frame).path))
+            figures.append(written(render(result, picture, frame=frame,
+                                          color="state" if oriented else "speed").path))
     lines += [f"figure: {f}" for f in figures]
     return "\n".join(lines), reason
 

@@ -7,7 +7,9 @@ from .numbers import real, whole
 DESCRIPTION = ("Draw a result off-screen (no display needed): the track at the frame's surface "
                "position and the parts with their real shapes (spheres; chips as boxes, discs as "
                "cylinders, oriented), coloured by speed (the scale spans the parts on the track; "
-               "faster parts off it are counted on the bar) or by cluster of touching parts, "
+               "faster parts off it are counted on the bar), by cluster of touching parts or, for "
+               "boxes, chips and discs, by orientation state (face up, face down, on a side, on an "
+               "end; the correctly oriented ones, --correct, in a colour of their own), "
                "true to scale along the track with a scale bar, the run named in the footer. "
                "FILE.png draws one frame (default: the last), FILE.mp4 every frame (frames a whole "
                "number of vibration periods apart are stroboscopic: each frame says so).")
@@ -30,9 +32,14 @@ def add_arguments(p) -> None:
                    help="picture (.png) or movie (.mp4) to write (default: RUN.png here)")
     p.add_argument("--frame", type=int, metavar="K",
                    help="frame to draw in a PNG, from 0; negative counts from the end (default -1)")
-    p.add_argument("--color", choices=("speed", "cluster"), default="speed",
-                   help="colour the parts by speed [mm/s] or by the size of their cluster of "
-                        "touching parts (default speed)")
+    p.add_argument("--color", choices=("speed", "cluster", "state"), default="speed",
+                   help="colour the parts by speed [mm/s], by the size of their cluster of "
+                        "touching parts or by their orientation state (up, down, side, end; the "
+                        "correct ones green) (default speed)")
+    p.add_argument("--correct", metavar="STATE",
+                   help="--color state: what counts as correctly oriented, as `vibrofeed orientation "
+                        "--correct` reads it: states joined by | (up, down, side, end), then "
+                        "lengthwise or any-direction, and lead +x or lead -x (default 'up, lengthwise')")
     p.add_argument("--size", type=size, default=(1280, 720), metavar="WxH",
                    help="picture size in pixels (default 1280x720)")
     p.add_argument("--every", type=whole(1), metavar="N",
@@ -52,6 +59,14 @@ def run(args) -> int:
     from .options import no_effect, open_result
     from .outputs import file_destination, not_an_input, replaced
 
+    correct = None
+    if args.correct is not None:
+        if args.color != "state":
+            no_effect("--correct", f"it picks the parts --color state marks correct (not {args.color})")
+        else:
+            from ..orientation import parse_correct
+
+            correct = parse_correct(args.correct, "--correct")  # before any reading
     output = file_destination("-o", args.output or f"{Path(args.result).stem}.png", (".png", ".mp4"))
     not_an_input("-o" if args.output else None, output, output, [args.result])
     movie = output.suffix.lower() == ".mp4"
@@ -77,7 +92,8 @@ def run(args) -> int:
             with replaced(output) as tmp:
                 try:
                     done = render(result, tmp, frame=frame, color=args.color, size=args.size,
-                                  every=every, fps=fps, progress=bar.update if bar else None)
+                                  every=every, fps=fps, progress=bar.update if bar else None,
+                                  correct=correct)
                 except OutputError as exc:  # (named as the user named it)
                     raise OutputError(str(exc).replace(str(tmp), str(output))) from None
         finally:

@@ -2,8 +2,10 @@
 
 The track is drawn at the frame's surface position (a feeder line's sections each at
 its own recorded position), the parts with their real
-shapes (:mod:`.scene`), coloured by speed or by the size of the cluster of
-touching parts they belong to (single parts grey), seen from the front and
+shapes (:mod:`.scene`), coloured by speed, by the size of the cluster of
+touching parts they belong to (single parts grey) or by their orientation state
+(:data:`STATE_COLORS`: correctly oriented parts in one colour, the others in their
+state's), seen from the front and
 above in parallel projection: lengths along the track are true to scale on the
 screen, and a scale bar in mm says how long. The speed scale spans the parts on
 the track: the few parts falling past the outlet edge, ten times faster, would
@@ -36,13 +38,22 @@ from ..errors import OutputError, UsageError, said
 from .caption import run_caption
 from .scene import FrameData, floor_patch, part_shape, read_frame, section_motion, shape_mesh, track_mesh
 
-COLORINGS = ("speed", "cluster")
+COLORINGS = ("speed", "cluster", "state")
 DEFAULT_SIZE = (1280, 720)   # multiples of 16: what H.264 encoders want
 TRACK_COLOR = "#9aa3ad"
 # The track is seen through: its walls stand in front of the parts riding against them.
 TRACK_OPACITY = 0.45
 SINGLE_COLOR = "#d0d0d0"     # parts not touching any other (cluster of one)
 BACKGROUND = "white"
+# --color state (vibrofeed.orientation): Okabe-Ito colours, told apart with any colour vision.
+# The correctly oriented parts (whatever their state) take bluish green; the others their
+# state's colour: "up" there means marked face up but not correct (crosswise, wrong end).
+CORRECT_COLOR = "#009e73"    # bluish green
+STATE_COLORS = {"up": "#0072b2",     # blue
+                "down": "#d55e00",   # vermillion
+                "side": "#f0e442",   # yellow
+                "end": "#cc79a7"}    # reddish purple
+NO_STATE = "spheres have no orientation state: use --color speed or cluster"
 # Parts closer than this fraction of the mean part diameter count as touching for
 # --color cluster: the default of the singulation analysis (postproc/singulation.py),
 # so that the picture shows the clusters it counts.
@@ -179,12 +190,62 @@ def _view_bounds(result, frames: np.ndarray) -> np.ndarray:
     return np.column_stack([lo, hi]).ravel()
 
 
+class PartStates:
+    """Each part's orientation state at a frame, read as the orientation analysis reads it
+    (:mod:`vibrofeed.postproc.orientation`: the body frame from the result's template, the
+    path's direction where the part is: +x along a line, up a bowl's helix)."""
+
+    def __init__(self, result, correct=None):
+        from ..orientation import Correct, parse_correct
+        from ..postproc.orientation import _quaternion, body_axes
+        from ..postproc.path import feeder_of
+
+        if result.body_template is None:
+            raise UsageError(NO_STATE)
+        if correct is None:
+            correct = Correct()
+        self.correct = correct if isinstance(correct, Correct) else parse_correct(correct, "--correct")
+        self.result, self.feeder = result, feeder_of(result.parameters)
+        self._axes_q = _quaternion(body_axes(result.body_template))
+
+    def of(self, frame: FrameData):
+        """(:class:`vibrofeed.orientation.States`, (N,) correct) of the parts of ``frame``."""
+        from ..postproc.orientation import _states, path_directions
+        from ..postproc.path import along
+
+        s = along(self.result, np.array([frame.index]), 0, frame.position[None])[0][0]
+        tangent, up = path_directions(self.feeder, s)
+        states = _states(frame.orientation, self._axes_q, tangent, up)
+        return states, self.correct.of(states)
+
+    def categories(self, frame: FrameData) -> np.ndarray:
+        """(N,) each part's colour in :func:`state_palette`: 0 correct, else 1 + its state."""
+        states, correct = self.of(frame)
+        return np.where(correct, 0, 1 + states.state).astype(float)
+
+
+def _swatch(pv, color: str):
+    """A unit square coloured ``color`` by its cell's RGB: a legend entry's symbol."""
+    square = pv.PolyData(np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], dtype=float),
+                         faces=[4, 0, 1, 2, 3])
+    rgb = [int(color[k:k + 2], 16) for k in (1, 3, 5)]
+    square.cell_data["rgb"] = np.array([rgb], dtype=np.uint8)
+    return square
+
+
+def state_palette() -> list[tuple[str, str]]:
+    """(label, colour) of --color state's categories, in their order (PartStates.categories)."""
+    return [("correct", CORRECT_COLOR), *STATE_COLORS.items()]
+
+
 class _Painter:
     """One off-screen plotter drawing frame after frame of one result."""
 
-    def __init__(self, result, color: str, size, frames: np.ndarray, part_color=None):
+    def __init__(self, result, color: str, size, frames: np.ndarray, part_color=None, correct=None):
         if color not in COLORINGS:
             raise UsageError(f"--color must be one of {', '.join(COLORINGS)}, got {said(color)}")
+        # (before the plotter: spheres are refused without opening a window)
+        self.states = PartStates(result, correct) if color == "state" and part_color is None else None
         self.pv = pv = _offscreen_pyvista()
         self.result, self.color, self.part_color = result, color, part_color
         self.shape = part_shape(result.parameters, result.body_template)
@@ -206,6 +267,8 @@ class _Painter:
         # picture 3-5 times slower for edges hardly smoother at this size.
         self.plotter.ren_win.SetMultiSamples(1)
         self._camera_set = False
+        self.legend = None  # --color state's, made at the first frame
+        self.state_counts = np.zeros(len(state_palette()), dtype=np.int64)
 
     def _floor(self, frame: FrameData):
         placed = track_mesh(self.result, frame)
@@ -237,6 +300,15 @@ class _Painter:
                           "above_color": "#ff00ff",
                           "scalar_bar_args": {**bar, "title": title, "fmt": "%.3g",
                                               "above_label": "faster"}}
+        if self.color == "state":
+            categories = self.states.categories(frame)
+            self.state_counts = np.bincount(categories.astype(int), minlength=len(state_palette()))
+            mesh.point_data["state"] = categories[owner]
+            palette = state_palette()
+            # One colour per category, centred on the integers; the legend names them.
+            return mesh, {"scalars": "state", "cmap": [c for _, c in palette],
+                          "clim": (-0.5, len(palette) - 0.5), "n_colors": len(palette),
+                          "show_scalar_bar": False}
         sizes = _cluster_sizes(self.result, frame)
         mesh.point_data["cluster size"] = sizes[owner]
         top = int(max(self.cluster_top or sizes.max(initial=1), 3))
@@ -250,6 +322,33 @@ class _Painter:
             style["annotations"] = {float(s): str(s) for s in range(2, top + 1)}
             style["scalar_bar_args"]["n_labels"] = 0
         return mesh, style
+
+    def legend_labels(self) -> list[str]:
+        """--color state's legend: each category and how many parts of the frame are in it."""
+        return [f"{label}  {n}" for (label, _), n in zip(state_palette(), self.state_counts)]
+
+    def _state_legend(self) -> None:
+        """--color state's legend in the colour bar's place, what counts as correct above it;
+        made once, its counts changed with the frame."""
+        labels = self.legend_labels()
+        if self.legend is None:
+            p = self.plotter
+            legend = self.legend = p.add_legend(labels, loc=None, name="legend")
+            for k, (_, color) in enumerate(state_palette()):
+                # the square takes the category's colour from its own cells; the entry's colour
+                # left unset (negative), its text is the text property's black
+                legend.SetEntry(k, _swatch(self.pv, color), labels[k], [-1.0, -1.0, -1.0])
+            legend.GetEntryTextProperty().SetColor(0.0, 0.0, 0.0)
+            legend.SetPosition(SCENE_WIDTH + 0.01, 0.3)
+            legend.SetPosition2(0.98 - SCENE_WIDTH, 0.36)
+            # a line a condition ("|" is not drawn by VTK's text: "or")
+            rule = str(self.states.correct).replace(", ", ",\n").replace("|", " or ")
+            p.add_text(f"correct:\n{rule}", position=(SCENE_WIDTH + 0.01, 0.68), viewport=True,
+                       font_size=max(6, round(9 * min(1.0, self.size[0] / DEFAULT_SIZE[0]))),
+                       color="black", name="correct", render=False)
+            return
+        for k, label in enumerate(labels):
+            self.legend.SetEntryString(k, label)
 
     def _set_camera(self) -> None:
         """Parallel projection square to x, the view bounds fitted into the scene's part of
@@ -297,6 +396,9 @@ class _Painter:
             p.add_mesh(mesh, name="parts", smooth_shading=False, render=False, **style)
         else:
             p.remove_actor("parts", render=False)
+            self.state_counts[:] = 0
+        if self.states is not None:
+            self._state_legend()
         title = f"{self.deck}   t = {frame.time:.4f} s   frame {frame.index}/{frame.n_frames - 1}"
         if self.freq > 0:
             title += f"   phase {frame.time * self.freq % 1:.2f} T"
@@ -333,11 +435,13 @@ class _Painter:
 
 
 def render_frame(result, frame: int = -1, color: str = "speed", size=DEFAULT_SIZE,
-                 part_color=None) -> np.ndarray:
+                 part_color=None, correct=None) -> np.ndarray:
     """(height, width, 3) uint8 picture of one frame; ``part_color`` (a colour name or
-    ``#rrggbb``) paints every part in that colour instead of ``color``'s scale."""
+    ``#rrggbb``) paints every part in that colour instead of ``color``'s scale. ``correct``:
+    what --color state counts as correctly oriented (words or a Correct; default
+    "up, lengthwise")."""
     data = read_frame(result, frame)
-    painter = _Painter(result, color, size, np.array([data.index]), part_color)
+    painter = _Painter(result, color, size, np.array([data.index]), part_color, correct)
     try:
         painter.draw(data)
         return painter.image()
@@ -440,9 +544,10 @@ def _size(size) -> tuple[int, int]:
 
 
 def render(result, output, frame: int = -1, color: str = "speed", size=DEFAULT_SIZE,
-           every: int = 1, fps: float = 25.0, part_color=None, progress=None) -> Rendered:
+           every: int = 1, fps: float = 25.0, part_color=None, progress=None, correct=None) -> Rendered:
     """Write ``output``: a PNG of frame ``frame`` (.png) or an MP4 of every ``every``-th
-    frame at ``fps`` frames per second (.mp4). ``progress(n)`` is called per movie frame."""
+    frame at ``fps`` frames per second (.mp4). ``progress(n)`` is called per movie frame;
+    ``correct``: what --color state counts as correctly oriented (:func:`render_frame`)."""
     output = Path(output)
     suffix = output.suffix.lower()
     if suffix not in (".png", ".mp4"):
@@ -454,13 +559,13 @@ def render(result, output, frame: int = -1, color: str = "speed", size=DEFAULT_S
         raise OutputError(f"cannot write {output}: folder {output.parent} does not exist")
     start = _time.perf_counter()
     if suffix == ".png":
-        _write_png(render_frame(result, frame, color, (w, h), part_color), output)
+        _write_png(render_frame(result, frame, color, (w, h), part_color, correct), output)
         return Rendered(output, 1, (w, h), _time.perf_counter() - start)
     w, h = w + (-w % 16), h + (-h % 16)  # H.264 in yuv420p wants even sizes; 16 avoids rescaling
     frames = np.arange(0, result.n_frames, every)
     if len(frames) == 0:
         raise UsageError(f"{result.path} has no frames to draw")
-    painter = _Painter(result, color, (w, h), frames, part_color)
+    painter = _Painter(result, color, (w, h), frames, part_color, correct)
     try:
         _write_mp4(painter, frames, output, fps, (w, h), progress)
     finally:
