@@ -6,11 +6,13 @@ quaternion and the result's body template alone: the template's principal axes a
 frame (:func:`body_axes`: x along its longest spread, z through its thinnest, +z the body's
 own +z side where the template is laid out along the body axes), whatever the deck called its
 shape. What counts as correct is a :class:`vibrofeed.orientation.Correct`, given in words
-(``"up, lengthwise"``). The path's direction where a part is (``tangent``) and the floor's
-normal (``up``) come from the feeder (:func:`path_directions`): +x and +z along a line; up the
-helix of a bowl (its slope, the bowl's tiny turn under the drive neglected), along its chute,
-along a track from CAD's path; ``up`` is vertical with the tangent's slope taken out (a floor's
-cross tilt, a few degrees, is far inside the 45 degrees between states).
+(``"up, lengthwise"``); by default the run's own, its parameter ``correct`` (a result recorded
+before it: ``"up, lengthwise"``: :func:`vibrofeed.orientation.run_correct`). The path's
+direction where a part is (``tangent``) and the floor's normal (``up``) come from the feeder
+(:func:`path_directions`): +x and +z along a line; up the helix of a bowl (its slope, the
+bowl's tiny turn under the drive neglected), along its chute, along a track from CAD's path;
+``up`` is vertical with the tangent's slope taken out (a floor's cross tilt, a few degrees, is
+far inside the 45 degrees between states).
 
 What is measured (over the steady window of :mod:`.feedrate`, detected the same way unless
 ``start``/``end`` are given)
@@ -49,7 +51,7 @@ import math
 import numpy as np
 
 from ..errors import InputError
-from ..orientation import STATES, Correct, classify, parse_correct
+from ..orientation import STATES, Correct, classify, parse_correct, run_correct
 from ..results import layout as L
 from .base import AnalysisBase
 from .feedrate import FeedRate, batch_rate, require_outlet, too_few_exits
@@ -57,7 +59,8 @@ from .line import _left_at
 from .path import BLOCK_VALUES, along, feeder_of, path_end
 from .singulation import Singulation
 
-SUMMARY_KEYS = ("correct", "within", "n_delivered", "state_fractions", "lengthwise_fraction",
+SUMMARY_KEYS = ("correct", "correct_source", "run_correct", "within", "n_delivered", "state_fractions",
+                "lengthwise_fraction",
                 "correct_fraction", "correct_rate", "correct_rate_err", "oriented_rate",
                 "oriented_rate_err", "singulated_fraction", "parts_per_s", "parts_per_s_err",
                 "recirculation_per_s", "recirculation_per_s_err", "recirculation_source",
@@ -169,7 +172,8 @@ class Orientation(AnalysisBase):
         What counts as correctly oriented, in words (``"up, lengthwise"``, ``"up|down"``,
         ``"up, lengthwise, lead +x"``: :func:`vibrofeed.orientation.parse_correct`; a state
         that does not exist is a ParameterError naming ``correct_name``) or a
-        :class:`~vibrofeed.orientation.Correct`.
+        :class:`~vibrofeed.orientation.Correct`. Default (None): the run's own, its parameter
+        ``correct`` (``"up, lengthwise"`` for a result that records none).
     within:
         Lengthwise: the long axis within this many degrees of the path (0 < within <= 90).
     start, end:
@@ -185,7 +189,9 @@ class Orientation(AnalysisBase):
         already run on this result over the same frames and window (a sweep's metrics), reused
         instead of run again; their window is then the window.
 
-    Results: ``correct`` (the rule, in words), ``within`` [deg], ``steady_from``, ``steady_to``
+    Results: ``correct`` (the rule, in words), ``correct_source`` (``"run"``: the run's own;
+    ``"given"``: ``correct`` was given), ``run_correct`` (the run's own rule, in words),
+    ``within`` [deg], ``steady_from``, ``steady_to``
     [s]; at the outlet: ``n_delivered``, ``delivered_times`` and ``delivered_states`` (per part:
     state name), ``state_fractions`` ({state: fraction}), ``lengthwise_fraction``,
     ``correct_fraction``, ``correct_rate``, ``correct_rate_err``, ``oriented_rate``,
@@ -202,11 +208,11 @@ class Orientation(AnalysisBase):
     (part-frames per bin), ``census_fractions`` ({state: (bins,) fractions}, NaN in an
     empty bin), ``census_correct`` (bins,); ``reason`` (too few exits, else None).
 
-    >>> o = Orientation(result, correct="up, lengthwise").run()
+    >>> o = Orientation(result).run()     # the run's correct; correct="up|down" for another
     >>> o.results.oriented_rate, o.results.state_fractions, o.results.stations
     """
 
-    def __init__(self, result, correct: str | Correct = "up, lengthwise", within: float = 20.0,
+    def __init__(self, result, correct: str | Correct | None = None, within: float = 20.0,
                  start: float | None = None, end: float | None = None, bins: int = 20,
                  batches: int = 10, axis: int = 0, correct_name: str = "correct", feedrate=None,
                  singulation=None):
@@ -221,8 +227,14 @@ class Orientation(AnalysisBase):
             raise InputError(f"bins must be at least 1, not {bins}")
         if batches < 2:
             raise InputError(f"batches must be at least 2, not {batches}")
-        self.correct = (dataclasses.replace(correct, within=float(within)) if isinstance(correct, Correct)
-                        else parse_correct(correct, correct_name, float(within)))
+        self.run_correct = run_correct(result.parameters, float(within))
+        if correct is None:
+            self.correct, self.correct_source = self.run_correct, "run"
+        else:
+            self.correct = (dataclasses.replace(correct, within=float(within))
+                            if isinstance(correct, Correct) else parse_correct(correct, correct_name,
+                                                                               float(within)))
+            self.correct_source = "given"
         self.within, self.start, self.end = float(within), start, end
         self.bins, self.batches, self.axis = bins, batches, axis
         self._axes_q = _quaternion(body_axes(result.body_template))
@@ -240,6 +252,7 @@ class Orientation(AnalysisBase):
         t_a, t_b = fr.steady_from, fr.steady_to
         r.steady_from, r.steady_to = t_a, t_b
         r.correct, r.within = str(self.correct), self.within
+        r.correct_source, r.run_correct = self.correct_source, str(self.run_correct)
         r.parts_per_s, r.parts_per_s_err = fr.parts_per_s, fr.parts_per_s_err
         sg = self._singulation
         if sg is None:

@@ -24,7 +24,11 @@ and ``tangent`` (the path's direction of travel, along the floor):
 
 What a designer calls correct is a :class:`Correct`: a state (or several) and optionally
 ``lengthwise`` and a leading end, named in one string (``"up, lengthwise"``,
-``"up, lengthwise, lead +x"``, ``"up|down"``): :func:`parse_correct`.
+``"up, lengthwise, lead +x"``, ``"up|down"``): :func:`parse_correct`. A feeder says it once,
+for its part: the parameter ``correct`` (a deck tunable, ``[parts] correct`` of a description,
+default :data:`CORRECT`), which a result records; the analyses, the sweeps' metrics, the
+optimiser's objective and every air jet without a ``keep`` of its own take it from there
+(:func:`run_correct`).
 """
 
 from __future__ import annotations
@@ -50,6 +54,9 @@ STATES = tuple(GROUPS)
 LENGTHWISE = 20.0
 # A long axis within this angle of ``up`` has no direction on the floor [deg].
 UPRIGHT = 5.0
+# The parameter ``correct``'s default, as the decks hold it (a word: no blank); a result
+# recorded before ``correct`` existed was analysed with it.
+CORRECT = "up,lengthwise"
 
 
 def _unit(v, name: str) -> np.ndarray:
@@ -149,6 +156,8 @@ class Correct:
         words = ["|".join(self.states)]
         if self.lengthwise:
             words.append("lengthwise")
+        elif "end" not in self.states:  # (said: parse_correct reads it back lengthwise otherwise)
+            words.append("any-direction")
         if self.lead:
             words.append(f"lead {'+x' if self.lead > 0 else '-x'}")
         return ", ".join(words)
@@ -182,3 +191,15 @@ def parse_correct(text: str, name: str = "correct", within: float = LENGTHWISE) 
     if lengthwise is None:  # lengthwise unless said otherwise, or standing on its end
         lengthwise = "end" not in states
     return Correct(states=states, lengthwise=lengthwise, lead=lead, within=within)
+
+
+def correct_word(text: str, name: str = "correct") -> str:
+    """``text`` (:func:`parse_correct`'s words, checked: a ParameterError naming ``name``) as a
+    deck holds it, without blanks: "up, lengthwise" -> "up,lengthwise"."""
+    return str(parse_correct(text, name)).replace(", ", ",").replace(" ", "")
+
+
+def run_correct(parameters, within: float = LENGTHWISE) -> Correct:
+    """What a run counts as correct: its parameter ``correct`` (``parameters``: a result's or a
+    deck's, words or numbers), :data:`CORRECT` where it records none (a result older than it)."""
+    return parse_correct(str(parameters.get("correct", CORRECT)), "correct", within)

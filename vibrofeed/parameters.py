@@ -17,8 +17,9 @@ from .bowl import check_bowl, climb_advice
 from .decks import RESERVED, Deck
 from .errors import ParameterError, ParameterWarning
 from .feeders.feeder import Feeder
-from .feeders.linear import MAX_SECTIONS
+from .feeders.linear import MAX_SECTIONS, keep_word
 from .feeders.records import Part
+from .orientation import correct_word
 from .parts import Box, box_template, check_box, mass_properties
 from .plausibility import DENSITY_MAX, PART_MAX, advice
 
@@ -199,6 +200,16 @@ def rule_for(name: str) -> Callable[[float], str | None] | None:
     m = _FURTHER.match(name)
     return RULES.get(f"s2_{m[2]}" if m else name)
 
+# Parameters that name orientation states (vibrofeed.orientation.parse_correct's words): what
+# counts as correct, and each air jet's keep (which may also be "correct": the part's).
+STATE_WORDS = re.compile(r"^(?:correct|s\d+_jet_keep)$")
+
+
+def state_word(name: str, value: str) -> str:
+    """Parameter ``name`` of :data:`STATE_WORDS` as the deck holds it (no blank), checked: a
+    one-line ParameterError naming it."""
+    return correct_word(value, name) if name == "correct" else keep_word(value, name)
+
 # Parameters that also take names; a name is replaced by the deck's number.
 NAMED_VALUES: dict[str, dict[str, str]] = {
     "shape": {"sphere": "0", "chip": "1", "disc": "2", "box": "3", "stl": "4"},
@@ -278,6 +289,8 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
     numbers = {}
     for name, value in values.items():
         x = checked_value(deck, name, value)
+        if name in tunables and STATE_WORDS.match(name):  # as the deck holds it: no blank
+            values[name] = state_word(name, value)
         if x is None:
             continue
         numbers[name] = x
@@ -288,10 +301,13 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
             f"parameter sections={values['sections']}: deck {deck.name} declares "
             f"{'one section' if declared == 1 else f'sections 1 to {declared}'}; a line of more "
             "sections is a feeder description (docs/feeders.md)")
-    # a mesh element's STL and path, a jet's keep and mode, an stl part's STL are words its
-    # checks read beside the numbers
+    # a mesh element's STL and path, a jet's keep and mode, an stl part's STL, what is correct
+    # are words its checks read beside the numbers
     words = {name: value for name, value in values.items()
-             if re.match(r"^(?:s\d+_(?:file|path|jet_keep|jet_mode)|part_file)$", name)}
+             if re.match(r"^(?:s\d+_(?:file|path|jet_keep|jet_mode)|part_file|correct)$", name)}
+    if "correct" in given and numbers.get("shape", 0) == 0:
+        raise ParameterError(f"parameter correct={given['correct']}: spheres (shape 0) have no "
+                             "orientation; correct is for chips, discs, boxes and stl parts")
     if numbers.get("shape") == 4:
         _stl_sizes(values, numbers, given)
     try:
@@ -328,6 +344,9 @@ def checked_value(deck: Deck, name: str, value: str) -> float | None:
     None for a parameter that is no number. ParameterError naming it otherwise. The limits
     between parameters are :func:`resolve`'s."""
     var = deck.tunables[name]
+    if STATE_WORDS.match(name):  # words: what counts as correct, a jet's keep
+        state_word(name, value)
+        return None
     if not (var.is_numeric or rule_for(name)):
         return None
     value = NAMED_VALUES.get(name, {}).get(value.strip().lower(), value)

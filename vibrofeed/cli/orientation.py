@@ -10,7 +10,8 @@ from .options import print_figures, refuse, slips, unmeasured
 
 DESCRIPTION = ("Orientation of the parts a bulk feeder of clumps (chips, discs, boxes) delivers, over "
                "the steady window: the fraction face up, face down, on a side and on an end at the "
-               "outlet, the fraction correctly oriented (--correct), the rate of correctly oriented "
+               "outlet, the fraction correctly oriented (the run's parameter correct, or --correct), "
+               "the rate of correctly oriented "
                "single parts with its error, the parts per second sent back (recirculation), and for "
                "each tooling station (gate, side drop, wiper, air jet) the states of the parts in and "
                "out, its orienting efficiency and the share it takes off.")
@@ -23,10 +24,11 @@ RATE_KEYS = ("correct_fraction", "correct_rate", "correct_rate_err", "oriented_r
 
 def add_arguments(p) -> None:
     p.add_argument("result", metavar="RUN.h5", help="result of a bulk-feeder deck whose parts are clumps")
-    p.add_argument("--correct", default="up, lengthwise", metavar="STATE",
+    p.add_argument("--correct", metavar="STATE",
                    help="what counts as correctly oriented: states joined by | (up, down, side, end), "
-                        "then lengthwise or any-direction, and lead +x or lead -x (default "
-                        "'up, lengthwise')")
+                        "then lengthwise or any-direction, and lead +x or lead -x (default: the run's "
+                        "parameter correct, 'up, lengthwise' for a result that records none); given, "
+                        "it overrides the run's, and the figures say so")
     p.add_argument("--within", type=real(above=0), default=20.0, metavar="DEG",
                    help="lengthwise: the long axis within DEG degrees of the path (default 20)")
     p.add_argument("--start", type=real(), metavar="S", help="start of the window [s] (default: "
@@ -49,6 +51,13 @@ def _states(fractions: dict) -> str:
     return ", ".join(f"{name} {fmt(v, 100, '.1f')} %" for name, v in fractions.items())
 
 
+def _source(s: dict) -> str:
+    """Where the rule came from: the run's parameter correct, or --correct over it."""
+    if s.get("correct_source") == "given":
+        return f"--correct, overriding the run's {s.get('run_correct')}"
+    return "the run's parameter correct"
+
+
 def table(s: dict) -> str:
     """The figures as the command prints them."""
     source = {"returned": "returned to the inlet (the run recirculates)",
@@ -57,7 +66,7 @@ def table(s: dict) -> str:
     lines = [
         f"window         {fmt(s['steady_from'])} .. {fmt(s['steady_to'])} s, {s['n_delivered']} parts "
         "delivered" + (f"; {s['reason']}" if s.get("reason") else ""),
-        f"correct        {s['correct']} (lengthwise within {s['within']:g} deg)",
+        f"correct        {s['correct']} ({_source(s)}; lengthwise within {s['within']:g} deg)",
         f"oriented rate  {fmt(s['oriented_rate'], spec='.4g')} ± {fmt(s['oriented_rate_err'], spec='.2g')} "
         f"parts/s correct and single (of {fmt(s['parts_per_s'], spec='.4g')} parts/s; correct "
         f"{fmt(s['correct_rate'], spec='.4g')} ± {fmt(s['correct_rate_err'], spec='.2g')} parts/s)",
@@ -88,7 +97,9 @@ def run(args) -> int:
     from ..results.reader import Result
     from .outputs import file_destination, written
 
-    correct = parse_correct(args.correct, "--correct", args.within)  # before any reading
+    correct = None  # the run's own, read from the result
+    if args.correct is not None:
+        correct = parse_correct(args.correct, "--correct", args.within)  # before any reading
     slips(("--start", args.start, "s"), ("--end", args.end, "s"))
     advice = radians_advice("--within", args.within)
     if advice:

@@ -26,6 +26,7 @@ from pathlib import Path
 
 from .. import stl_part
 from ..errors import ParameterError
+from ..orientation import correct_word
 from . import bowl, chute, mesh_element
 from .linear import KEYS, MAX_SECTIONS, deck_names, keep_word
 from .records import JET_MODES, SHAPES, shape_code
@@ -59,7 +60,8 @@ TABLES: dict[str, dict[str, str]] = {
               "poisson": "poisson", "restitution": "restitution", "restitution_pp": "restitution_pp",
               "mu": "mu", "mu_pp": "mu_pp", "rolling_friction": "rolling_friction",
               "surface_energy": "surface_energy", "surface_energy_pp": "surface_energy_pp",
-              "hamaker": "hamaker", "roughness": "roughness", "air_viscosity": "air_viscosity"},
+              "hamaker": "hamaker", "roughness": "roughness", "air_viscosity": "air_viscosity",
+              "correct": "correct"},
     "surface": {"youngs": "youngs_track", "poisson": "poisson_track"},
     "supply": {k: k for k in ("n_parts", "fill_from", "fill_to", "inlet_rate", "inlet_batch",
                               "recirculate", "return_delay", "n_track")},
@@ -104,7 +106,14 @@ def _unknown(path: Path, where: str, key: str, known) -> ParameterError:
 
 
 def _value(path: Path, dotted: str, value) -> str:
-    """A description's number (or a shape's name) as the deck's string."""
+    """A description's number (a shape's name, what is correct: words) as the deck's string."""
+    if dotted == "parts.correct":  # words: what counts as correctly oriented
+        if not isinstance(value, str):
+            raise _fail(path, f"{dotted} = {value!r} must be text, e.g. \"up, lengthwise\"")
+        try:
+            return correct_word(value, dotted)
+        except ParameterError as exc:
+            raise _fail(path, str(exc)) from None
     if isinstance(value, bool):
         return "1" if value else "0"
     if isinstance(value, int | float):
@@ -187,6 +196,9 @@ def read(path: str | os.PathLike, text: str | None = None) -> Description:
     elif any(k in data.get("parts", {}) for k in PART_WORDS):
         key = next(k for k in PART_WORDS if k in data["parts"])
         raise _fail(path, f"parts.{key} shapes an stl part: give parts.shape = \"stl\"")
+    if "correct" in data.get("parts", {}) and values.get("shape", "0") == str(SHAPES["sphere"]):
+        raise _fail(path, "parts.correct: spheres have no orientation; correct is for chips, discs, "
+                          "boxes and stl parts (parts.shape)")
     elements = data.get("element")
     if not isinstance(elements, list) or not elements or not all(isinstance(e, dict) for e in elements):
         raise _fail(path, "a feeder needs its elements, in conveying order: one [[element]] table each")

@@ -27,7 +27,7 @@ import numpy as np
 
 from ..errors import ParameterError, ParameterWarning
 from ..line import WIPER_LENGTH, Section, section_mesh, slot_offset
-from ..orientation import STATES, parse_correct
+from ..orientation import STATES, correct_word, parse_correct, run_correct
 from .records import JET_MODES, Drive, Gate, Jet, Part, SideDrop, Slot, Wiper, number
 
 # description key (table, key) -> (section 1's deck name, later sections' suffix); None:
@@ -68,7 +68,10 @@ KEYS: dict[tuple[str, ...], tuple[str | None, str | None]] = {
 }
 # Words, not numbers: the deck holds them as index words (no blank: "up,lengthwise").
 WORDS = (("jet", "keep"), ("jet", "mode"))
-JET_DEFAULTS = {"keep": "up,lengthwise", "mode": "region"}
+# A jet's keep that names no state of its own: it keeps the part's correct state (the
+# parameter ``correct``, vibrofeed.orientation.run_correct), as a jet without a keep does.
+KEEP_CORRECT = "correct"
+JET_DEFAULTS = {"keep": KEEP_CORRECT, "mode": "region"}
 # The further sections' numbers carry the prefix s<k>_ with k from 2 to this.
 MAX_SECTIONS = 9
 
@@ -140,7 +143,7 @@ class LinearSection:
             if get(("wiper", "height"), 0.0) > 0:
                 wiper = Wiper(height=get(("wiper", "height")), at=get(("wiper", "at"), 0.5),
                               length=WIPER_LENGTH * (part.size if part else number(values, "part_size")))
-            jet = _jet(values, k, get)
+            jet = _jet(values, k, get, part)
         return cls(number=k, x0=x0, length=get(("length",)), width=get(("width",)),
                    wall_height=get(("wall_height",)), drive=drive, cross_tilt=get(("cross_tilt",), 0.0),
                    step=step, level=level + step, gate=gate, side_drop=side_drop, wiper=wiper,
@@ -404,6 +407,10 @@ class LinearSection:
                                  "orientation, and spheres (shape 0) have none")
         k = j.keep
         if set(k.states) == set(STATES) and not k.lengthwise and not k.lead:
+            if j.keeps_correct:
+                raise ParameterError(f"correct={keep_word(str(k))!r} counts every state correct, and "
+                                     f"the jet of section {self.number} keeps it: the jet would never "
+                                     f"fire; give it a keep of its own ({n(('jet', 'keep'))}), e.g. 'up'")
             raise ParameterError(f"{n(('jet', 'keep'))}={keep_word(str(k))!r} keeps every state: "
                                  "the jet would never fire; name the state(s) to keep, e.g. 'up'")
         for key, value in (("delay", j.delay), ("offset", j.offset), ("length", j.length)):
@@ -443,9 +450,11 @@ def thinnest(part: Part) -> float:
     return part.size * (1 - part.size_spread) if part.shape == 0 else part.thickness
 
 
-def _jet(values: Mapping, k: int, get) -> Jet | None:
+def _jet(values: Mapping, k: int, get, part: Part | None = None) -> Jet | None:
     """Section ``k``'s jet from the deck's parameters (none where ``s<k>_jet_force`` is 0 or
-    absent); its words read here (one-line ParameterError naming the parameter)."""
+    absent); its words read here (one-line ParameterError naming the parameter). A keep of
+    :data:`KEEP_CORRECT` (the deck's default) is the part's correct state (``part.correct``,
+    else the parameter ``correct`` read here); an explicit keep wins over it."""
     force = get(("jet", "force"), 0.0)
     if force == 0:
         return None
@@ -453,20 +462,27 @@ def _jet(values: Mapping, k: int, get) -> Jet | None:
     for key in WORDS:
         name = deck_name(k, key)
         words[key[1]] = str(values.get(name, JET_DEFAULTS[key[1]])).strip()
-    keep = parse_correct(words["keep"], deck_name(k, ("jet", "keep")))
+    inherits = words["keep"].lower() == KEEP_CORRECT
+    if inherits:
+        keep = part.correct if part is not None else run_correct(values)
+    else:
+        keep = parse_correct(words["keep"], deck_name(k, ("jet", "keep")))
     mode = words["mode"].lower()
     if mode not in JET_MODES:
         raise ParameterError(f"{deck_name(k, ('jet', 'mode'))}={words['mode']!r} must be "
                              f"{' or '.join(JET_MODES)}")
     return Jet(force=force, keep=keep, at=get(("jet", "at"), 0.5), delay=get(("jet", "delay"), 0.0),
                duration=get(("jet", "duration"), 0.01), offset=get(("jet", "offset"), 0.0),
-               length=get(("jet", "length"), 0.0), angle=get(("jet", "angle"), 60.0), mode=mode)
+               length=get(("jet", "length"), 0.0), angle=get(("jet", "angle"), 60.0), mode=mode,
+               keeps_correct=inherits)
 
 
-def keep_word(text: str) -> str:
-    """A jet's ``keep`` (parse_correct's words) as the deck's word, without blanks:
-    "up, lengthwise" -> "up,lengthwise"."""
-    return str(parse_correct(text, "jet.keep")).replace(", ", ",").replace(" ", "")
+def keep_word(text: str, name: str = "jet.keep") -> str:
+    """A jet's ``keep`` (parse_correct's words, or :data:`KEEP_CORRECT`) as the deck's word,
+    without blanks: "up, lengthwise" -> "up,lengthwise" (a ParameterError naming ``name``)."""
+    if str(text).strip().lower() == KEEP_CORRECT:
+        return KEEP_CORRECT
+    return correct_word(text, name)
 
 
 def sine_commands(k: int) -> dict[str, list[str]]:

@@ -12,6 +12,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 from ..errors import ParameterError
+from ..orientation import Correct, run_correct
 from ..values import number  # noqa: F401 (the feeders' parameters are read with it)
 
 SHAPES = {"sphere": 0, "chip": 1, "disc": 2, "box": 3, "stl": 4}
@@ -39,7 +40,9 @@ class Part:
     (a chip's, disc's or box's), ``size_spread`` (spheres: radii R(1-s), R, R(1+s)); a
     box's ``width`` W, its bump (``bump_height`` 0: none, ``bump_diameter``, ``bump_at``) and
     its clump's ``clump_spacing`` (vibrofeed.parts); an stl part's STL and clump (``stl``, a
-    vibrofeed.stl_part.StlPart; its size, width and thickness are its principal extents)."""
+    vibrofeed.stl_part.StlPart; its size, width and thickness are its principal extents);
+    ``correct``, what counts as correctly oriented (a vibrofeed.orientation.Correct, from the
+    parameter ``correct``: the analyses' and the air jets' default)."""
 
     shape: int
     size: float
@@ -51,6 +54,7 @@ class Part:
     bump_at: float = 0.5
     clump_spacing: float = 0.75
     stl: object = None
+    correct: Correct = Correct()
 
     @classmethod
     def from_values(cls, values: Mapping) -> Part:
@@ -63,7 +67,8 @@ class Part:
                    bump_diameter=number(values, "bump_diameter", 0.0),
                    bump_at=number(values, "bump_at", 0.5),
                    clump_spacing=number(values, "clump_spacing", 0.75),
-                   stl=_stl(values) if shape_code(values.get("shape", 0)) == 4 else None)
+                   stl=_stl(values) if shape_code(values.get("shape", 0)) == 4 else None,
+                   correct=run_correct(values))
 
     @property
     def widest(self) -> float:
@@ -199,7 +204,8 @@ JET_MODES = ("region", "ideal")
 class Jet:
     """An orienting station: a camera senses each part as its centre crosses ``at`` (a fraction
     of the element's length) and, for a part not in the state ``keep`` (a
-    vibrofeed.orientation.Correct), an air jet fires ``delay`` seconds later for ``duration``
+    vibrofeed.orientation.Correct; ``keeps_correct``: the part's own correct state, the jet
+    naming none of its own), an air jet fires ``delay`` seconds later for ``duration``
     seconds. The jet blows in a block ``length`` long along the path (0: one part size) centred
     ``offset`` downstream of the sensing point, across the track and up past its walls, with
     ``force`` [N] on a part wholly in it (shared by its spheres), ``angle`` degrees up from the
@@ -216,3 +222,4 @@ class Jet:
     length: float = 0.0
     angle: float = 60.0
     mode: str = "region"
+    keeps_correct: bool = False

@@ -5,7 +5,9 @@ batch-means error (``parts_per_s_err``) and the singulation fractions over the a
 counted (``n_arrivals``). What a designer asks for: ``singulated_rate`` = parts_per_s x
 singulated_fraction (single parts per second), a product, and ``oriented_rate``, the parts
 per second delivered correctly oriented and single (``vibrofeed orientation``: counted part by
-part, not a product of fractions; its own batch-means error ``oriented_rate_err``). A fraction
+part, not a product of fractions; its own batch-means error ``oriented_rate_err``); correctly
+oriented is each run's own parameter ``correct`` (the feeder description's ``[parts] correct``,
+or the study's ``[fixed] correct``), as ``correct_fraction``'s. A fraction
 f over n arrivals has the binomial error sqrt(f (1 - f) / n); a product's relative errors add
 in quadrature (independent estimates: the rate's from batch means of the counts, the
 fraction's from which arrivals were single).

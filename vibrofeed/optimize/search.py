@@ -503,6 +503,11 @@ def check_values(spec: StudySpec, deck) -> None:
                                             if "shape" in deck.tunables else 0))})
     spheres = {str(int(checked_value(deck, "shape", s))) for s in shapes} == {"0"} \
         if "shape" in deck.tunables else True
+    for table, names in (("fixed", spec.fixed), ("variables", [v.name for v in spec.variables])):
+        if "correct" in names and spheres:
+            raise ParameterError(f"{spec.where(table, 'correct')}: the study's parts are spheres, "
+                                 "which have no orientation; correct is for chips, discs, boxes and "
+                                 "stl parts")
     named = [(("objective", "maximize"), m) for m in spec.maximize]
     named += [(("objective", "at_least"), m) for m in spec.at_least]
     for key, metric in named:

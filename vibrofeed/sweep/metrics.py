@@ -23,7 +23,8 @@ where the tooling is); the rates among them are missing with the feed rate. A bo
 has the same columns: section 1 is its helix, 2 its chute.
 Chips and discs get their ``orientation_yield`` (face up and aligned). Parts that are clumps
 (chips, discs, boxes) also get the figures of ``vibrofeed orientation`` at its defaults (correct
-= up and lengthwise within 20 degrees), over the same window: ``correct_fraction``,
+= the run's own parameter ``correct``, "up, lengthwise" unless the feeder or the study says
+otherwise; lengthwise within 20 degrees), over the same window: ``correct_fraction``,
 ``lengthwise_fraction``, ``correct_rate`` and ``oriented_rate`` (correct single parts per
 second) with their errors ``*_err``, and ``recirculation_per_s`` (the parts sent back); None
 for spheres, and the fractions and rates None with too few arrivals (``singulation_reason``:

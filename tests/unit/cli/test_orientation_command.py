@@ -15,11 +15,11 @@ BOX = np.array([[x, y, 0.0, 5e-5] for x in (-2e-4, -1e-4, 0.0, 1e-4, 2e-4) for y
 UP, CROSS = [1.0, 0, 0, 0], [np.cos(np.pi / 4), 0, 0, np.sin(np.pi / 4)]   # lengthwise, crosswise
 GATE = {"gate_width": ("6e-4", "m", "", "0"), "gate_at": ("0.5", "-", "", "0.7"),
         "track_width": ("1.2e-3", "m", "", "1e-3")}
-KEYS = {"correct", "within", "n_delivered", "state_fractions", "lengthwise_fraction", "correct_fraction",
-        "correct_rate", "correct_rate_err", "oriented_rate", "oriented_rate_err", "singulated_fraction",
-        "parts_per_s", "parts_per_s_err", "recirculation_per_s", "recirculation_per_s_err",
-        "recirculation_source", "stations", "census_x", "census_fractions", "census_correct",
-        "census_count", "steady_from", "steady_to", "reason"}
+KEYS = {"correct", "correct_source", "run_correct", "within", "n_delivered", "state_fractions",
+        "lengthwise_fraction", "correct_fraction", "correct_rate", "correct_rate_err", "oriented_rate",
+        "oriented_rate_err", "singulated_fraction", "parts_per_s", "parts_per_s_err",
+        "recirculation_per_s", "recirculation_per_s_err", "recirculation_source", "stations", "census_x",
+        "census_fractions", "census_correct", "census_count", "steady_from", "steady_to", "reason"}
 
 
 @pytest.fixture(scope="module")
@@ -72,3 +72,20 @@ def test_a_state_that_does_not_exist_and_spheres_are_refused_in_one_line(run_fil
     proc = vibrofeed("orientation", spheres)
     assert proc.returncode == 2 and len(proc.stderr.splitlines()) == 1
     assert "spheres have no orientation" in proc.stderr
+
+
+def test_the_runs_own_correct_is_the_default_and_correct_overrides_it_saying_so(tmp_path):
+    # the run says "down, any-direction": its parts, all face up, are none of them correct
+    path = feeder(tmp_path / "down.h5", np.arange(0, 1.2 + 1e-9, 0.01), 0.403 + 0.01 * np.arange(30),
+                  speed=0.05, orientations=np.tile(UP, (30, 1)), body_template=BOX,
+                  lanes=np.arange(30) % 6 * 1e-3,
+                  variables={"correct": ("down,any-direction", "-", "", "up,lengthwise")})
+    own = vibrofeed("orientation", path, check=True).stdout
+    assert "correct        down, any-direction (the run's parameter correct;" in own
+    assert "correct 0.0 %" in own
+    told = vibrofeed("orientation", path, "--correct", "up", "--json", check=True).stdout
+    figures = json.loads(told)
+    assert (figures["correct"], figures["correct_source"]) == ("up, lengthwise", "given")
+    assert figures["run_correct"] == "down, any-direction" and figures["correct_fraction"] == 1.0
+    table = vibrofeed("orientation", path, "--correct", "up", check=True).stdout
+    assert "(--correct, overriding the run's down, any-direction;" in table

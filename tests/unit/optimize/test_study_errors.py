@@ -154,3 +154,15 @@ def test_fixed_values_and_choices_run_refuses_are_named_at_their_line(tmp_path):
                                                   "[variables]\nwaveform = { choices = [0, 7] }")
     assert checked(tmp_path, choices) == (f"{s}:5: variable waveform: a choice: parameter waveform=7 must "
                                           "be one of 0, 1, 2, 3, 4")
+
+
+def test_a_studys_correct_is_checked_at_its_line(tmp_path):
+    s = tmp_path / "s.toml"
+    bulk = STUDY.replace("LIMIT", "8").replace("RUNS", "4").replace('"parts_per_s"', '"oriented_rate"')
+    chips = bulk.replace("freq = 100", 'freq = 100\nshape = 1\ncorrect = "CORRECT"')
+    assert checked(tmp_path, chips.replace("CORRECT", "up|down, lengthwise")) is None
+    assert checked(tmp_path, chips.replace("CORRECT", "upside")) == (
+        f"{s}:5: correct: no state named 'upside'; the states are up, down, side, end")
+    spheres = bulk.replace("freq = 100", 'freq = 100\ncorrect = "up"')
+    answer = checked(tmp_path, spheres)
+    assert answer.startswith(f"{s}:4: ") and "spheres" in answer and "correct is for chips" in answer

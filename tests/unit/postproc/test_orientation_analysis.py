@@ -92,6 +92,39 @@ def test_what_counts_as_correct_is_the_designers_choice(tmp_path):
     assert loose.lengthwise_fraction == pytest.approx(1.0, abs=1e-12)
 
 
+def test_the_runs_own_correct_is_the_default_of_the_analysis_and_of_the_sweeps_metrics(tmp_path):
+    from vibrofeed.sweep.metrics import metrics
+
+    path, _ = outlet_run(tmp_path)   # recorded before correct existed: up and lengthwise
+    said = {"correct": ("up|down,any-direction", "-", "", "up,lengthwise")}
+    q = [yaw(a) for a in (0, 5, -10, 180, 15, 190, 3)] + [SIDE, yaw(-4), then(DOWN, yaw(70))]
+    told = feeder(tmp_path / "told.h5", FRAMES, np.r_[0.1 + 0.08 * np.arange(8), 0.74, 0.7401],
+                  speed=0.05, orientations=np.array(q), tipped=np.tile(END, (10, 1)), body_template=BOX,
+                  lanes=np.r_[np.arange(9) * 1e-3, 8e-3 + 1.5e-3], variables=said)
+    with Result(path) as old, Result(told) as r:
+        before = Orientation(old, start=0.0, end=1.0).run().results
+        own = Orientation(r, start=0.0, end=1.0).run().results
+        over = Orientation(r, correct="up, lengthwise", start=0.0, end=1.0).run().results
+    assert (before.correct, before.correct_source) == ("up, lengthwise", "run")
+    assert before.correct_fraction == pytest.approx(0.8, abs=1e-12)
+    assert (own.correct, own.correct_source, own.run_correct) == ("up|down, any-direction", "run",
+                                                                  "up|down, any-direction")
+    assert own.correct_fraction == pytest.approx(0.9, abs=1e-12)      # all but the one on a side
+    assert (over.correct, over.correct_source, over.run_correct) == ("up, lengthwise", "given",
+                                                                     "up|down, any-direction")
+    assert over.correct_fraction == pytest.approx(0.8, abs=1e-12)
+    # a sweep's row, and so the optimiser's objective (its metrics), measures the run's own: 60
+    # parts, one in four face down, the run counting face down correct
+    n = 60
+    q = np.array([DOWN if k % 4 == 0 else yaw(0) for k in range(n)])
+    many = feeder(tmp_path / "many.h5", np.arange(0, 1.2 + 1e-9, 0.01), 0.403 + 0.01 * np.arange(n),
+                  speed=0.05, orientations=q, body_template=BOX, lanes=np.arange(n) % 6 * 1e-3,
+                  variables={"correct": ("down", "-", "", "up,lengthwise")})
+    row = metrics(many)
+    assert row["singulation_reason"] is None
+    assert row["correct_fraction"] == pytest.approx(0.25, abs=1e-12)
+
+
 def test_recirculation_load_of_a_track_without_returns_is_its_rejects(tmp_path):
     path, _ = outlet_run(tmp_path)
     with Result(path) as r:
