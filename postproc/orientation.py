@@ -159,6 +159,13 @@ def _states(quaternions, axes_q, tangent, up):
     return classify(_compose(quaternions, axes_q), tangent, up)
 
 
+def part_states(quaternions, template, tangent=(1.0, 0.0, 0.0), up=(0.0, 0.0, 1.0)):
+    """The :class:`~vibrofeed.orientation.States` of parts whose recorded ``quaternions`` (N, 4)
+    turn the body ``template`` (its axes as :func:`body_axes` finds them), along ``tangent`` and
+    ``up`` ((3,) or (N, 3)): what the analysis classifies, for pictures and other readers."""
+    return _states(quaternions, _quaternion(body_axes(template)), tangent, up)
+
+
 class Orientation(AnalysisBase):
     """The orientation of the parts a feeder delivers, per station and along its path
     (module docstring).

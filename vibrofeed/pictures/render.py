@@ -197,25 +197,24 @@ class PartStates:
 
     def __init__(self, result, correct=None):
         from ..orientation import Correct, parse_correct
-        from ..postproc.orientation import _quaternion, body_axes
         from ..postproc.path import feeder_of
 
         if result.body_template is None:
             raise UsageError(NO_STATE)
-        if correct is None:
-            correct = Correct()
+        if correct is None:  # the run's own (its parameter correct), else the default
+            run = result.parameters.get("correct")
+            correct = parse_correct(str(run), "correct") if run else Correct()
         self.correct = correct if isinstance(correct, Correct) else parse_correct(correct, "--correct")
         self.result, self.feeder = result, feeder_of(result.parameters)
-        self._axes_q = _quaternion(body_axes(result.body_template))
 
     def of(self, frame: FrameData):
         """(:class:`vibrofeed.orientation.States`, (N,) correct) of the parts of ``frame``."""
-        from ..postproc.orientation import _states, path_directions
+        from ..postproc.orientation import part_states, path_directions
         from ..postproc.path import along
 
         s = along(self.result, np.array([frame.index]), 0, frame.position[None])[0][0]
         tangent, up = path_directions(self.feeder, s)
-        states = _states(frame.orientation, self._axes_q, tangent, up)
+        states = part_states(frame.orientation, self.result.body_template, tangent, up)
         return states, self.correct.of(states)
 
     def categories(self, frame: FrameData) -> np.ndarray:
