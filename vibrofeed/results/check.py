@@ -468,6 +468,10 @@ class _Checker:
 # fall from the height of the scene, nor than MIN_SPEED_LIMIT whatever the drive.
 SPEED_FACTOR = 100.0
 MIN_SPEED_LIMIT = 1.0  # m/s
+# A run whose air jets fired: its parts may fly this many track sizes from the track (blown
+# off over the wall, they fall to the catch plane on a ballistic path) before they count as
+# escaped.
+JET_THROW = 4.0
 # Frames read at once by the physical checks (values of one float element).
 _BLOCK_VALUES = 2_000_000
 # A line's further sections must sit where their sine drive puts them to this fraction of the
@@ -687,7 +691,11 @@ class _Physics:
         region = None
         if track is not None and len(track):  # the track's box, a track's size around it
             lo, hi = track.min(axis=0), track.max(axis=0)
-            margin = float((hi - lo).max()) + self._surface_travel()
+            margin = float((hi - lo).max())
+            jet = self.f.get(f"{L.JET}/time")
+            if jet is not None and len(jet):  # a part an air jet blew off flies farther before it
+                margin *= JET_THROW  # falls to the catch plane
+            margin += self._surface_travel()
             region = (lo - margin, hi + margin)
         boundary = [_text(b) for b in np.ravel(self.f[f"{L.PARTS}/box"].attrs.get("boundary", []))] \
             if f"{L.PARTS}/box" in self.f else []

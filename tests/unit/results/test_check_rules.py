@@ -803,6 +803,19 @@ def test_parts_must_stay_within_a_tracks_size_and_the_surfaces_travel_of_the_tra
             "at frame 0 (t = 0 s), far outside the track" in found[0], found
 
 
+@pytest.mark.parametrize("offset, fails", [(0.0795, False), (0.0805, True)])
+def test_a_part_an_air_jet_blew_off_may_fly_four_track_sizes(tmp_path, offset, fails):
+    """With jet firings recorded (vibrofeed/jet), the floor's 20 mm size counts four times: a
+    part 79.5 mm beside it passes (it flies to the catch plane), 80.5 mm fails. Without them
+    the same part fails (the test above: a track's size)."""
+    x = np.tile(np.array([0.01, FLOOR[0][:, 1].max() + offset, 0.0]), (3, 1, 1))
+    path = sequence(tmp_path / "jet.h5", frames_of([[1]] * 3, x), track=FLOOR)
+    assert errors(path)  # no firing: far outside
+    with h5py.File(path, "r+") as f:
+        f[f"{L.JET}/time"] = np.array([0.001])
+    assert bool(errors(path)) == fails
+
+
 def test_a_run_whose_frames_hold_no_part_passes(tmp_path):
     path = write_result(tmp_path / "none.h5", [(k, k * 1e-3, parts([], np.zeros((0, 3)))) for k in range(3)])
     with h5py.File(path, "r") as f:
