@@ -5,8 +5,9 @@ the deck's own box inserted with ``insert/pack ... orientation constant`` in a r
 fraction of a micrometre across around where its centre of mass goes), then a short
 sub-hopping run (Gamma_n 0.8) that conveys it over the slot.
 
-Boxes 0.4 x 0.25 x 0.1 mm (L x W x T), a slot 0.14 mm wide (T < 0.14 mm < W) at its default
-place, past a ledge of 3/8 T = 37.5 um along the wall, 1 mm long:
+Boxes 0.4 x 0.3 x 0.1 mm (L x W x T), a slot 0.13 mm wide at its default place, along the
+wall (T < 0.13 mm < W/2: a flat box's centre lies beyond it), 0.63 mm long (0.3 to 0.75 of
+a 1.4 mm section 2):
 
 (a) a box lying flat along the track (W across) bridges it and leaves over the outlet edge;
 (b) one lying crosswise (L across) bridges it too;
