@@ -98,7 +98,7 @@ def check(found):
     assert set(f["id"].tolist()) == down  # fired at the face-down ones, once each
     assert len(f["id"]) == len(down)
     assert all(STATES[s] == "down" for s in f["state"])
-    assert np.allclose(f["end"] - f["start"], LINE["s2_jet_duration"])
+    assert np.allclose(f["end"] - f["start"], LINE["s2_jet_duration"], rtol=0, atol=1e-9)  # s
     assert set(rj["id"].tolist()) == down and set(rj["section"].tolist()) == {2}
     assert set(out["id"].tolist()) == up
     feeder = Feeder.from_values(found["parameters"])

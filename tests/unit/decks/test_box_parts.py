@@ -106,7 +106,7 @@ def test_the_solid_on_a_voxel_grid_matches_the_closed_forms(box):
     exact = mass_properties(box, 1.0)
     assert volume == pytest.approx(exact.mass, rel=2e-3)
     assert np.linalg.norm(com - exact.com) < 2e-3 * box.thickness
-    assert np.allclose(np.diag(inertia), np.diag(exact.inertia), rtol=5e-3)
+    assert np.allclose(np.diag(inertia), np.diag(exact.inertia), rtol=5e-3, atol=0)
     assert inertia[0, 2] == pytest.approx(exact.inertia[0, 2], rel=0.05, abs=1e-3 * exact.inertia.max())
 
 
@@ -127,8 +127,8 @@ def test_the_template_is_a_shell_whose_outline_is_the_box(box, counts, spheres):
     d = box.thickness / 2
     assert np.all(rows[:, 3] == d / 2)
     half = np.array([box.length, box.width, box.thickness]) / 2
-    assert np.allclose(rows[:, :3].max(axis=0) + d / 2, half, rtol=1e-12)
-    assert np.allclose(rows[:, :3].min(axis=0) - d / 2, -half, rtol=1e-12)
+    assert np.allclose(rows[:, :3].max(axis=0) + d / 2, half, rtol=0, atol=1e-15)  # m
+    assert np.allclose(rows[:, :3].min(axis=0) - d / 2, -half, rtol=0, atol=1e-15)  # m
     for k in range(3):  # spacing along each edge
         steps = np.diff(np.unique(np.round(rows[:, k], 15)))
         assert steps.max() <= CLUMP_SPACING * d * (1 + 1e-9)
@@ -153,7 +153,8 @@ def test_the_bumped_template_is_about_the_com_in_the_principal_frame():
     # the engine's tensor: diagonal, the closed form's eigenvalues (the template's frame)
     mass, six = engine_inertia(b, RHO)
     assert mass == props.mass and six[1] == six[2] == six[4] == 0
-    assert np.allclose(sorted([six[0], six[3], six[5]]), np.linalg.eigvalsh(props.inertia), rtol=1e-12)
+    assert np.allclose(sorted([six[0], six[3], six[5]]), np.linalg.eigvalsh(props.inertia), rtol=1e-12,
+                       atol=0)
     assert np.allclose(axes.T @ props.inertia @ axes, np.diag([six[0], six[3], six[5]]),
                        atol=1e-12 * six[5])
     # the tilt about y: tan 2a = 2 I_xz / (I_zz - I_xx)
@@ -188,7 +189,7 @@ def test_a_box_part_s_sizes():
     bumped = Part.from_values({"shape": "3", "part_size": "1e-3", "part_width": "5e-4",
                                "part_thickness": "3.5e-4", "bump_height": "5e-5",
                                "bump_diameter": "2e-4"})
-    assert bumped.tallest == pytest.approx(4e-4) and bumped.reach > part.reach
+    assert bumped.tallest == pytest.approx(4e-4, rel=1e-12) and bumped.reach > part.reach
     assert shape_code("box") == 3 and shape_code(3.0) == 3
 
 
@@ -220,8 +221,9 @@ def test_the_bulk_deck_refuses_a_bad_box_and_a_box_with_surface_forces():
 
 
 def test_thin_axis_finds_a_box_s_body_z():
-    assert np.allclose(thin_axis(box_template(BIG)), [0, 0, 1])
-    assert np.allclose(thin_axis(box_template(SMALL)), [0, 0, 1])  # W = T: the tie goes to z
+    assert np.allclose(thin_axis(box_template(BIG)), [0, 0, 1], rtol=0, atol=1e-12)
+    # W = T: the tie goes to z
+    assert np.allclose(thin_axis(box_template(SMALL)), [0, 0, 1], rtol=0, atol=1e-12)
     normal = principal_axes(SMALL_BUMP).T @ [0, 0, 1]  # the marked face's normal, body frame
     assert np.allclose(thin_axis(box_template(SMALL_BUMP)), normal, atol=1e-9)
 
@@ -233,7 +235,7 @@ def test_prepare_writes_the_box_template_and_its_mass(tmp_path):
               "gate_width": "0", "gate_at": "0.7"}
     prepared = prepare_bulk_feeder(values, tmp_path)
     written = np.loadtxt(tmp_path / "box.multisphere")
-    assert np.allclose(written, prepared.body_template, rtol=1e-15) and len(written) == 85
+    assert np.allclose(written, prepared.body_template, rtol=1e-15, atol=0) and len(written) == 85
     text = (tmp_path / "prepared.in").read_text()
     numbers = dict(line.split()[1::2] for line in text.splitlines() if line.startswith("variable"))
     v_cap = math.pi * 5e-5 ** 2 * (3e-4 - 5e-5) / 3

@@ -40,12 +40,12 @@ def test_a_box_stl_gives_the_box_closed_forms_in_the_box_frame(box_stl):
     assert np.allclose(s.moments, exact, rtol=1e-5, atol=0)  # ascending: x along L, z across T
     c, h = math.cos(math.radians(30)), math.sin(math.radians(30))
     assert np.allclose(s.axes, [[c, -h, 0], [h, c, 0], [0, 0, 1]], atol=1e-5)  # the box's turn
-    assert np.allclose(s.extents, [Lm, Wm, Tm], rtol=1e-5)
+    assert np.allclose(s.extents, [Lm, Wm, Tm], rtol=1e-5, atol=0)
     assert sizes(StlPart(box_stl, 1e-3)) == pytest.approx((Lm, Wm, Tm), rel=1e-5)
     mass, inertia = engine_inertia(StlPart(box_stl, 1e-3), 2330.0)
     assert mass == pytest.approx(2330.0 * volume, rel=1e-6)
     assert inertia[1] == inertia[2] == inertia[4] == 0.0
-    assert np.allclose(np.array(inertia)[[0, 3, 5]], 2330.0 * exact, rtol=1e-5)
+    assert np.allclose(np.array(inertia)[[0, 3, 5]], 2330.0 * exact, rtol=1e-5, atol=0)
 
 
 @pytest.mark.parametrize("method, spheres, bounds", [
@@ -141,14 +141,15 @@ def test_prepare_writes_the_template_and_the_variables_the_decks_read(tmp_path, 
         resolve(deck, {"shape": "stl", "part_file": box_stl, "part_size": "2e-3", "track_width": "3e-3"})
     prepared = prepare_bulk_feeder(values, tmp_path)
     rows = np.loadtxt(tmp_path / "stl.multisphere")
-    assert np.allclose(rows, prepared.body_template) and len(rows) == 20
+    assert np.allclose(rows, prepared.body_template, rtol=0, atol=1e-15) and len(rows) == 20
     text = (tmp_path / "prepared.in").read_text()
     got = {line.split()[1]: float(line.split()[3]) for line in text.splitlines()
            if line.startswith("variable") and "_stl" in line}
     assert got["n_sph_stl"] == 20
     assert got["m_stl"] == pytest.approx(2330 * L * W * T * 1e-9, rel=1e-6)
-    assert got["r_min_stl"] == pytest.approx(rows[:, 3].min())
-    assert got["r_ext_stl"] == pytest.approx(np.max(np.linalg.norm(rows[:, :3], axis=1) + rows[:, 3]))
+    assert got["r_min_stl"] == pytest.approx(rows[:, 3].min(), rel=1e-12)
+    assert got["r_ext_stl"] == \
+        pytest.approx(np.max(np.linalg.norm(rows[:, :3], axis=1) + rows[:, 3]), rel=1e-12)
     assert got["I_stl_xy"] == got["I_stl_xz"] == got["I_stl_yz"] == 0
     assert got["I_stl_xx"] < got["I_stl_yy"] < got["I_stl_zz"]
     assert "clump_spheres} != 20.0" in text  # a run by hand is held to the clump it was made for

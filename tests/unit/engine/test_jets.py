@@ -40,7 +40,7 @@ def test_a_crossing_is_timed_between_the_frames_and_only_parts_seen_at_both_coun
     # goes back
     hit, t, first = crossings(1.0, 0.0, [4, 1, 2], [1.5, 0.9, 1.1], 0.1,
                               [1, 2, 3, 4], [1.3, 1.4, 2.0, 0.5])
-    assert hit.tolist() == [0] and t == pytest.approx([0.025]) and first.tolist() == [True]
+    assert hit.tolist() == [0] and t == pytest.approx([0.025], rel=0, abs=1e-12) and first.tolist() == [True]
 
 
 def test_windows_merge_where_they_overlap_and_the_formula_is_zero_or_one():
@@ -66,7 +66,8 @@ def test_a_part_in_a_wrong_state_is_fired_at_after_the_delay_once_and_windows_ar
     prev = frame([1, 2], [0.9, 0.8], [DOWN, UP])
     now = frame([1, 2], [1.1, 1.2], [DOWN, UP])  # both cross; only the face-down one is fired at
     (f,) = s.sense(0.0, prev, 0.01, now)
-    assert f[:4] == (pytest.approx(0.005), 1, 2, 1) and f[4:6] == pytest.approx((0.025, 0.035))
+    assert f[:4] == (pytest.approx(0.005, rel=0, abs=1e-12), 1, 2, 1)
+    assert f[4:6] == pytest.approx((0.025, 0.035), rel=0, abs=1e-12)
     assert f[6] is False
     assert s.commands(0.01) == ["variable s2_jet_on equal (time>=0.025)*(time<0.035)"]
     assert s.sense(0.01, frame([1], [0.95], [DOWN]), 0.02, frame([1], [1.05], [DOWN])) == []  # once
@@ -76,7 +77,7 @@ def test_a_part_in_a_wrong_state_is_fired_at_after_the_delay_once_and_windows_ar
 def test_a_window_due_before_the_frame_that_saw_the_crossing_starts_then_and_is_late():
     s = station(delay=0.002)
     (f,) = s.sense(0.0, frame([7], [0.5], [DOWN]), 0.01, frame([7], [1.5], [DOWN]))
-    assert f[4:] == (0.01, pytest.approx(0.02), True)
+    assert f[4:] == (0.01, pytest.approx(0.02, rel=0, abs=1e-12), True)
 
 
 def test_the_state_is_read_at_the_frame_nearer_the_crossing():
@@ -104,7 +105,7 @@ class OneRank:
 def test_the_line_s_jets_give_commands_only_when_a_firing_is_new():
     jets = Jets(Feeder.from_values(LINE))
     (s,) = jets.stations
-    assert s.x_sense == pytest.approx(2e-3 + 0.3 * 3e-3) and s.section == 2
+    assert s.x_sense == pytest.approx(2e-3 + 0.3 * 3e-3, rel=0, abs=1e-15) and s.section == 2
     x = s.x_sense
     assert jets.step(OneRank(), 0.0, frame([1], [x - 1e-4], [DOWN])) == ([], None)
     commands, table = jets.step(OneRank(), 0.005, frame([1], [x + 1e-4], [DOWN]))
@@ -151,4 +152,5 @@ def test_a_delay_that_fires_past_the_section_warns():
 
 def test_the_jet_is_a_station_spanning_its_block():
     (st,) = [s for s in jet(length=4e-4, offset=1e-4).stations if s.kind == "jet"]
-    assert (st.section, st.start, st.end) == (2, pytest.approx(2.8e-3), pytest.approx(3.2e-3))
+    assert (st.section, st.start, st.end) == (2, pytest.approx(2.8e-3, rel=0, abs=1e-15),
+                                             pytest.approx(3.2e-3, rel=0, abs=1e-15))

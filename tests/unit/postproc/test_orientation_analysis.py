@@ -174,14 +174,17 @@ def test_a_gate_that_turns_parts_between_its_in_and_out(tmp_path):
     assert (gate["n_in"], gate["n_out"]) == (10, 10)
     assert gate["in_states"] == {"up": 7, "down": 0, "side": 3, "end": 0}
     assert gate["out_states"] == {"up": 8, "down": 0, "side": 2, "end": 0}
-    assert (gate["correct_in"], gate["correct_out"]) == (pytest.approx(0.4), pytest.approx(0.8))
+    assert (gate["correct_in"], gate["correct_out"]) == \
+        (pytest.approx(0.4, abs=1e-12), pytest.approx(0.8, abs=1e-12))
     assert gate["efficiency"] == pytest.approx(2.0, rel=1e-12)
     assert gate["rejected_share"] == 0.0
     assert gate["rejects_per_s"] is None                  # the reject table knows no gate
     # along the path: every part passes each 1 mm bin in two frames (0.5 mm apart)
-    assert o.census_x[5] == pytest.approx(5.5e-3) and o.census_count[5] == 20
-    assert o.census_fractions["up"][5] == pytest.approx(0.7) and o.census_correct[5] == pytest.approx(0.4)
-    assert o.census_fractions["side"][15] == pytest.approx(0.2) and o.census_correct[15] == pytest.approx(0.8)
+    assert o.census_x[5] == pytest.approx(5.5e-3, rel=0, abs=1e-15) and o.census_count[5] == 20
+    assert o.census_fractions["up"][5] == pytest.approx(0.7, abs=1e-12)
+    assert o.census_correct[5] == pytest.approx(0.4, abs=1e-12)
+    assert o.census_fractions["side"][15] == pytest.approx(0.2, abs=1e-12)
+    assert o.census_correct[15] == pytest.approx(0.8, abs=1e-12)
     assert o.correct_fraction == pytest.approx(0.8, abs=1e-12)        # as they leave
 
 
@@ -221,7 +224,8 @@ def test_the_body_axes_of_a_template_turned_in_its_frame():
     turned[:, :2] = BOX[:, :2] @ np.array([[c, s], [-s, c]])   # rows turned 30 deg about z
     axes = body_axes(turned)
     assert axes[:, 0] == pytest.approx([c, s, 0], abs=1e-9)
-    assert abs(axes[2, 2]) == pytest.approx(1.0, abs=1e-12) and np.linalg.det(axes) == pytest.approx(1.0)
+    assert abs(axes[2, 2]) == pytest.approx(1.0, abs=1e-12)
+    assert np.linalg.det(axes) == pytest.approx(1.0, abs=1e-12)
 
 
 # -- the path's direction -----------------------------------------------------------------
@@ -237,7 +241,8 @@ def test_a_bowls_helix_runs_into_its_chute_and_a_line_along_x():
     assert t[0] == pytest.approx([-math.cos(a), 0.0, math.sin(a)], abs=1e-9)
     assert np.einsum("ni,ni->n", t, up) == pytest.approx([0, 0, 0], abs=1e-12)
     line, up = path_directions(None, [0.0, np.nan])
-    assert line == pytest.approx(np.array([[1, 0, 0]] * 2)) and up == pytest.approx(np.array([[0, 0, 1]] * 2))
+    assert line == pytest.approx(np.array([[1, 0, 0]] * 2), abs=1e-12)
+    assert up == pytest.approx(np.array([[0, 0, 1]] * 2), abs=1e-12)
 
 
 # -- what is refused ----------------------------------------------------------------------
