@@ -3,9 +3,10 @@
 A part's state (:mod:`vibrofeed.orientation`: which face is up, grouped as ``up``, ``down``,
 ``side`` and ``end``; which end leads; its long axis's angle to the path) is read from its
 quaternion and the result's body template alone: the template's principal axes are its body
-frame (:func:`body_axes`: x along its longest spread, z through its thinnest, +z the body's
-own +z side where the template is laid out along the body axes), whatever the deck called its
-shape. What counts as correct is a :class:`vibrofeed.orientation.Correct`, given in words
+frame (:func:`vibrofeed.orientation.body_axes`: x along its longest spread, z through its
+thinnest, +z the body's own +z side where the template is laid out along the body axes),
+whatever the deck called its shape; the air jets classify the same way as they run. What
+counts as correct is a :class:`vibrofeed.orientation.Correct`, given in words
 (``"up, lengthwise"``); by default the run's own, its parameter ``correct`` (a result recorded
 before it: ``"up, lengthwise"``: :func:`vibrofeed.orientation.run_correct`). The path's
 direction where a part is (``tangent``) and the floor's normal (``up``) come from the feeder
@@ -51,7 +52,14 @@ import math
 import numpy as np
 
 from ..errors import InputError
-from ..orientation import STATES, Correct, classify, parse_correct, run_correct
+from ..orientation import (
+    STATES,
+    Correct,
+    axes_quaternion,
+    parse_correct,
+    run_correct,
+    turned_states,
+)
 from ..results import layout as L
 from .base import AnalysisBase
 from .feedrate import FeedRate, batch_rate, require_outlet, too_few_exits
@@ -66,54 +74,6 @@ SUMMARY_KEYS = ("correct", "correct_source", "run_correct", "within", "n_deliver
                 "recirculation_per_s", "recirculation_per_s_err", "recirculation_source",
                 "stations", "census_x", "census_fractions", "census_correct", "census_count",
                 "steady_from", "steady_to", "reason")
-# Off-diagonal second moments below this fraction of their trace: the template lies along
-# the body axes, which are then its principal axes as they are (no eigenvector's sign to pick).
-_ALIGNED = 1e-9
-
-
-def body_axes(template) -> np.ndarray:
-    """(3, 3) rotation whose columns are a clump template's principal axes in its body frame,
-    longest spread first, thinnest last (the frame of :mod:`vibrofeed.orientation`: x the
-    length, y the width, z the thickness). A template laid out along the body axes keeps them
-    (a permutation; equal spreads keep their order: a square chip stays as it is); another's
-    axes are its spread's eigenvectors, each with its largest component positive; the middle
-    one is turned so that the frame is right-handed."""
-    xyz = np.asarray(template, dtype=float)[:, :3]
-    xyz = xyz - xyz.mean(axis=0)
-    m = xyz.T @ xyz
-    off = m - np.diag(np.diag(m))
-    if np.abs(off).max() <= _ALIGNED * max(np.trace(m), 1e-300):
-        order = np.argsort(-np.diag(m), kind="stable")
-        axes = np.eye(3)[:, order]
-    else:
-        values, vectors = np.linalg.eigh(m)
-        axes = vectors[:, np.argsort(-values, kind="stable")]
-        axes = axes * np.sign(axes[np.argmax(np.abs(axes), axis=0), np.arange(3)])
-    if np.linalg.det(axes) < 0:
-        axes[:, 1] *= -1
-    return axes
-
-
-def _quaternion(matrix) -> np.ndarray:
-    """The unit quaternion (w, x, y, z) of a rotation matrix."""
-    m = np.asarray(matrix, dtype=float)
-    k = np.array([[m[0, 0] - m[1, 1] - m[2, 2], 0, 0, 0],
-                  [m[0, 1] + m[1, 0], m[1, 1] - m[0, 0] - m[2, 2], 0, 0],
-                  [m[0, 2] + m[2, 0], m[1, 2] + m[2, 1], m[2, 2] - m[0, 0] - m[1, 1], 0],
-                  [m[2, 1] - m[1, 2], m[0, 2] - m[2, 0], m[1, 0] - m[0, 1], m[0, 0] + m[1, 1] + m[2, 2]]])
-    values, vectors = np.linalg.eigh(k / 3.0)  # (Bar-Itzhack: the largest eigenvalue's vector)
-    x, y, z, w = vectors[:, np.argmax(values)]
-    return np.array([w, x, y, z]) * (1 if w >= 0 else -1)
-
-
-def _compose(q, p) -> np.ndarray:
-    """The quaternions q * p (N, 4): turning by p (the template's axes) first, then by q."""
-    w1, x1, y1, z1 = np.moveaxis(np.asarray(q, dtype=float).reshape(-1, 4), -1, 0)
-    w2, x2, y2, z2 = p
-    return np.stack([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
-                     w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2], axis=-1)
-
-
 def up_of(tangent) -> np.ndarray:
     """The floor's normal under a path running along ``tangent`` (N, 3): vertical with the
     tangent's slope taken out (module docstring)."""
@@ -153,17 +113,6 @@ def path_directions(feeder, s) -> tuple[np.ndarray, np.ndarray]:
         seg = np.clip(np.searchsorted(arc, s[on] - e.x0 - shift, side="right") - 1, 0, len(d) - 1)
         t[on] = d[seg] / np.linalg.norm(d[seg], axis=1, keepdims=True)
     return t, up_of(t)
-
-
-def _states(quaternions, axes_q, tangent, up):
-    return classify(_compose(quaternions, axes_q), tangent, up)
-
-
-def part_states(quaternions, template, tangent=(1.0, 0.0, 0.0), up=(0.0, 0.0, 1.0)):
-    """The :class:`~vibrofeed.orientation.States` of parts whose recorded ``quaternions`` (N, 4)
-    turn the body ``template`` (its axes as :func:`body_axes` finds them), along ``tangent`` and
-    ``up`` ((3,) or (N, 3)): what the analysis classifies, for pictures and other readers."""
-    return _states(quaternions, _quaternion(body_axes(template)), tangent, up)
 
 
 class Orientation(AnalysisBase):
@@ -244,7 +193,7 @@ class Orientation(AnalysisBase):
             self.correct_source = "given"
         self.within, self.start, self.end = float(within), start, end
         self.bins, self.batches, self.axis = bins, batches, axis
-        self._axes_q = _quaternion(body_axes(result.body_template))
+        self._axes_q = axes_quaternion(result.body_template)
         self._feedrate, self._singulation = feedrate, singulation
 
     def _compute(self, frames: np.ndarray) -> None:
@@ -282,7 +231,7 @@ class Orientation(AnalysisBase):
         n = len(times)
         tangent = np.broadcast_to(direction, (n, 3))
         q = sg.delivered if n else np.empty((0, 4))
-        states = _states(q, self._axes_q, tangent, up_of(tangent)) if n else None
+        states = turned_states(q, self._axes_q, tangent, up_of(tangent)) if n else None
         correct = self.correct.of(states) if n else np.zeros(0, dtype=bool)
         single = np.asarray(sg.singulated, dtype=bool)
         r.n_delivered, r.delivered_times = n, times
@@ -355,7 +304,7 @@ class Orientation(AnalysisBase):
             k, slot = np.nonzero(on)
             if len(k):
                 tangent, up = path_directions(feeder, s[k, slot])
-                st = _states(quats[k, slot], self._axes_q, tangent, up)
+                st = turned_states(quats[k, slot], self._axes_q, tangent, up)
                 which = np.clip(np.searchsorted(edges, s[k, slot], side="right") - 1, 0, self.bins - 1)
                 np.add.at(counts, (which, st.state), 1)
                 np.add.at(right, which, self.correct.of(st).astype(float))
@@ -368,7 +317,7 @@ class Orientation(AnalysisBase):
                     continue
                 frac = (c - s0[k, slot]) / (s1[k, slot] - s0[k, slot])
                 tangent, up = path_directions(feeder, s1[k, slot])
-                st = _states(quats[k + 1, slot], self._axes_q, tangent, up)
+                st = turned_states(quats[k + 1, slot], self._axes_q, tangent, up)
                 seen[j][0].append(t[k] + frac * (t[k + 1] - t[k]))
                 seen[j][1].append(ids[k, slot])
                 seen[j][2].append(np.c_[st.state, self.correct.of(st)])

@@ -203,3 +203,71 @@ def run_correct(parameters, within: float = LENGTHWISE) -> Correct:
     """What a run counts as correct: its parameter ``correct`` (``parameters``: a result's or a
     deck's, words or numbers), :data:`CORRECT` where it records none (a result older than it)."""
     return parse_correct(str(parameters.get("correct", CORRECT)), "correct", within)
+
+
+# -- a clump template's body frame ------------------------------------------------------
+# Off-diagonal second moments below this fraction of their trace: the template lies along
+# the body axes, which are then its principal axes as they are (no eigenvector's sign to pick).
+_ALIGNED = 1e-9
+
+
+def body_axes(template) -> np.ndarray:
+    """(3, 3) rotation whose columns are a clump template's principal axes in its body frame,
+    longest spread first, thinnest last (the frame of :mod:`vibrofeed.orientation`: x the
+    length, y the width, z the thickness). A template laid out along the body axes keeps them
+    (a permutation; equal spreads keep their order: a square chip stays as it is); another's
+    axes are its spread's eigenvectors, each with its largest component positive; the middle
+    one is turned so that the frame is right-handed."""
+    xyz = np.asarray(template, dtype=float)[:, :3]
+    xyz = xyz - xyz.mean(axis=0)
+    m = xyz.T @ xyz
+    off = m - np.diag(np.diag(m))
+    if np.abs(off).max() <= _ALIGNED * max(np.trace(m), 1e-300):
+        order = np.argsort(-np.diag(m), kind="stable")
+        axes = np.eye(3)[:, order]
+    else:
+        values, vectors = np.linalg.eigh(m)
+        axes = vectors[:, np.argsort(-values, kind="stable")]
+        axes = axes * np.sign(axes[np.argmax(np.abs(axes), axis=0), np.arange(3)])
+    if np.linalg.det(axes) < 0:
+        axes[:, 1] *= -1
+    return axes
+
+
+def _matrix_quaternion(matrix) -> np.ndarray:
+    """The unit quaternion (w, x, y, z) of a rotation matrix."""
+    m = np.asarray(matrix, dtype=float)
+    k = np.array([[m[0, 0] - m[1, 1] - m[2, 2], 0, 0, 0],
+                  [m[0, 1] + m[1, 0], m[1, 1] - m[0, 0] - m[2, 2], 0, 0],
+                  [m[0, 2] + m[2, 0], m[1, 2] + m[2, 1], m[2, 2] - m[0, 0] - m[1, 1], 0],
+                  [m[2, 1] - m[1, 2], m[0, 2] - m[2, 0], m[1, 0] - m[0, 1], m[0, 0] + m[1, 1] + m[2, 2]]])
+    values, vectors = np.linalg.eigh(k / 3.0)  # (Bar-Itzhack: the largest eigenvalue's vector)
+    x, y, z, w = vectors[:, np.argmax(values)]
+    return np.array([w, x, y, z]) * (1 if w >= 0 else -1)
+
+
+def _turned(q, p) -> np.ndarray:
+    """The quaternions q * p (N, 4): turning by p (the template's axes) first, then by q."""
+    w1, x1, y1, z1 = np.moveaxis(np.asarray(q, dtype=float).reshape(-1, 4), -1, 0)
+    w2, x2, y2, z2 = p
+    return np.stack([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+                     w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2], axis=-1)
+
+
+def axes_quaternion(template) -> np.ndarray:
+    """The quaternion (w, x, y, z) that turns the body frame of :func:`body_axes` into the
+    frame a clump ``template`` is laid out in (identity for a template along the body axes)."""
+    return _matrix_quaternion(body_axes(template))
+
+
+def turned_states(quaternions, axes_q, tangent=(1.0, 0.0, 0.0), up=(0.0, 0.0, 1.0)) -> States:
+    """The :class:`States` of parts whose recorded ``quaternions`` (N, 4) turn a template whose
+    axes are turned by ``axes_q`` (:func:`axes_quaternion`) from the body frame."""
+    return classify(_turned(quaternions, axes_q), tangent, up)
+
+
+def part_states(quaternions, template, tangent=(1.0, 0.0, 0.0), up=(0.0, 0.0, 1.0)):
+    """The :class:`~vibrofeed.orientation.States` of parts whose recorded ``quaternions`` (N, 4)
+    turn the body ``template`` (its axes as :func:`body_axes` finds them), along ``tangent`` and
+    ``up`` ((3,) or (N, 3)): what the analysis classifies, for pictures and other readers."""
+    return turned_states(quaternions, axes_quaternion(template), tangent, up)

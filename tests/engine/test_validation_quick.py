@@ -1,8 +1,9 @@
-"""Two short DEM cross-checks for the default suite (the full set: ctest -L validation).
+"""Short DEM cross-checks for the default suite (the full set: ctest -L validation).
 
-Each runs one sweep point of a validation case through `vibrofeed validate`,
-with the case file's own parameters and tolerances: a hopping part's lift-off,
-landings and flight times, and the conveying speed of a hopping part.
+Each runs a validation case, or one sweep point of it, through `vibrofeed validate`, with
+the case file's own parameters and tolerances: a hopping part's lift-off, landings and
+flight times, the conveying speed of a hopping part, a box's free rocking, its rocking
+onset and its tipping or sliding on an incline.
 """
 
 import json
@@ -49,5 +50,17 @@ def test_quick_free_rocking(tmp_path):
     proc = vibrofeed("validate", "free_rocking", "-o", tmp_path / "out", "--json")
     rows = json.loads(proc.stdout)
     assert {r["quantity"].split("[")[0] for r in rows} == {"impact_speed", "impact_ratio"}, proc.stderr
+    assert all(r["passed"] for r in rows), rows
+    assert proc.returncode == 0
+
+
+@pytest.mark.parametrize("name, quantity", [("rocking_onset", "rocks"), ("tip_or_slide", "regime")])
+def test_quick_rocking_and_tipping(tmp_path, name, quantity):
+    """Housner's onset (two aspect ratios, 0.85x and 1.15x the threshold) and tipping or sliding
+    on an incline (both sides of both boundaries): every run's regime equals the closed form's,
+    the case file's tolerance (abs 0), four short single-box runs each."""
+    proc = vibrofeed("validate", name, "-j", "2", "-o", tmp_path / "out", "--json")
+    rows = json.loads(proc.stdout)
+    assert len(rows) == 4 and {r["quantity"].split("[")[0] for r in rows} == {quantity}, proc.stderr
     assert all(r["passed"] for r in rows), rows
     assert proc.returncode == 0

@@ -10,8 +10,8 @@ orientations:
 * a part is **sensed** when its centre crossed the sensing point's x between the last frame
   and this one (each part once; a part first seen past it is not); the crossing's time is
   interpolated linearly between the two frames, its state classified
-  (vibrofeed.orientation.classify, tangent +x, up the floor's normal) at the frame nearer
-  the crossing;
+  (vibrofeed.orientation.turned_states: the body frame of the run's clump template, as the
+  analyses read it; tangent +x, up the floor's normal) at the frame nearer the crossing;
 * a part sensed **not** in the state the jet keeps gets a **firing window** [t + delay,
   t + delay + duration] (t its crossing). The frame interval limits when a crossing is
   seen: a window that would start before the frame that sensed it starts at that frame
@@ -43,7 +43,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..orientation import classify
+from ..orientation import axes_quaternion, turned_states
 
 
 def crossings(x_sense: float, t0: float, ids0, x0, t1: float, ids1, x1):
@@ -110,6 +110,7 @@ class Station:
     up: tuple = (0.0, 0.0, 1.0)
     tangent: tuple = (1.0, 0.0, 0.0)
     z_floor: float = -math.inf
+    axes_q: tuple = (1.0, 0.0, 0.0, 0.0)  # the template's axes (vibrofeed.orientation.axes_quaternion)
     windows: list = field(default_factory=list)  # (start, end, body id, first atom, last atom)
     sensed: set = field(default_factory=set)
 
@@ -134,7 +135,7 @@ class Station:
             if first:  # the orientation at the frame nearer the crossing
                 j = np.nonzero(prev["id"] == pid)[0]
                 q = prev["orientation"][j[0]] if len(j) else q
-            states = classify(q[None, :], self.tangent, self.up)
+            states = turned_states(q[None, :], self.axes_q, self.tangent, self.up)
             if self.keep.of(states)[0]:
                 continue
             start, late = t + self.delay, False
@@ -190,7 +191,7 @@ class Jets:
     each frame returns the commands to give before the next segment (the same on every rank)
     and, on rank 0, the new firings' table."""
 
-    def __init__(self, feeder):
+    def __init__(self, feeder, template=None):
         ox, oy, oz = feeder.line_origin
         self.stations = []
         for e in feeder.linear_sections:
@@ -202,7 +203,15 @@ class Jets:
                 duration=j.duration, mode=j.mode, up=e.floor_normal(),
                 z_floor=oz + e.lowest - feeder.part.size))
         self.ideal = any(s.mode == "ideal" for s in self.stations)
+        self.use_template(template)
         self._prev = None  # (time, {"id", "position", "orientation"}) of the last frame, rank 0
+
+    def use_template(self, template) -> None:
+        """Classify with the body frame of the clump ``template`` (n, 4) (None: the recorded
+        quaternion's own frame, a template laid out along the body axes)."""
+        q = (1.0, 0.0, 0.0, 0.0) if template is None else tuple(axes_quaternion(template))
+        for s in self.stations:
+            s.axes_q = q
 
     def step(self, comm, t: float, parts: dict | None, atoms: dict | None = None):
         """(commands for every rank, firing table or None on rank 0)."""

@@ -274,6 +274,8 @@ class BulkFrames:
             self.jets = Jets(self.feeder)
         self.atom_ranges = None  # {body: (first, last atom id)} at the last frame (ideal jets)
         self.track, self.template = prepared_geometry(spec)
+        if self.jets is not None:  # the jets classify in the analyses' body frame
+            self.jets.use_template(self.template)
         # a line's track: which vertices move with section 2 (None: not a line, or not told)
         self.track_sections = track_sections(self.track, variables) if self.line else None
         self.names = PER_ATOM + (("molecule",) if self.n_spheres > 1 else ())
@@ -300,6 +302,8 @@ class BulkFrames:
             self.warnings.append("no body template from the deck's prepare hook: orientations "
                                  "are relative to the first part's pose at the start")
         self.template = comm.bcast(template, root=0) if comm.size > 1 else template
+        if self.jets is not None:
+            self.jets.use_template(self.template)
 
     def frame(self, lmp, comm, time: float):
         inserted = int(round(lmp.variable("n_inserted")))  # collective: on every rank

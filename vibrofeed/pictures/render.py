@@ -209,7 +209,8 @@ class PartStates:
 
     def of(self, frame: FrameData):
         """(:class:`vibrofeed.orientation.States`, (N,) correct) of the parts of ``frame``."""
-        from ..postproc.orientation import part_states, path_directions
+        from ..orientation import part_states
+        from ..postproc.orientation import path_directions
         from ..postproc.path import along
 
         s = along(self.result, np.array([frame.index]), 0, frame.position[None])[0][0]

@@ -88,6 +88,21 @@ def test_the_state_is_read_at_the_frame_nearer_the_crossing():
     assert not station().sense(0.0, frame([1], [0.99], [UP]), 0.01, frame([1], [1.9], [DOWN]))
 
 
+def test_the_state_is_read_in_the_templates_body_frame_as_the_analyses_read_it():
+    # a template laid out with its length along y, its width along z and its thickness along
+    # x: recorded unturned, the part stands on a long side (its width upright), not face up
+    grid = np.array([[x, y, z] for x in (-1, 1) for y in (-4, -2, 0, 2, 4) for z in (-2, 2)], float)
+    template = np.column_stack([grid * 1e-4, np.full(len(grid), 5e-5)])
+    line = Jets(Feeder.from_values(LINE), template)
+    s = line.stations[0]
+    assert s.axes_q != (1.0, 0.0, 0.0, 0.0)
+    x = s.x_sense
+    (f,) = s.sense(0.0, frame([1], [x - 1e-4], [UP]), 0.01, frame([1], [x + 1e-4], [UP]))
+    assert f[3] == 2  # side (index of STATES): the analyses' part_states says the same
+    from vibrofeed.orientation import STATES, part_states
+    assert STATES[part_states(np.array([UP]), template).state[0]] == "side"
+
+
 def test_the_ideal_jet_holds_the_sensed_bodys_atoms_only():
     atoms = {"molecule": np.array([5, 5, 5, 6, 6, 6, -1]), "id": np.array([3, 1, 2, 4, 6, 5, 9])}
     ranges = atom_ranges(atoms)

@@ -10,8 +10,9 @@ import pytest
 from bulk_synthetic import OUTLET_X, RADIUS, feeder
 from vibrofeed.errors import InputError, ParameterError
 from vibrofeed.feeders.feeder import Feeder
+from vibrofeed.orientation import body_axes
 from vibrofeed.postproc.feedrate import batch_rate
-from vibrofeed.postproc.orientation import Orientation, body_axes, path_directions
+from vibrofeed.postproc.orientation import Orientation, path_directions
 from vibrofeed.results.reader import Result
 
 FRAMES = np.arange(0, 1.0 + 1e-9, 0.01)
