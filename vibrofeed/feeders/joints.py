@@ -58,13 +58,16 @@ class Joint:
                 f"join (parts would fall at the joint); {hint}")
         dz, dx = self.motion
         low, high = self.steps
-        tilted = not math.isclose(low, high, rel_tol=0, abs_tol=1e-15)
+        # the step the tilted floors leave differs from the parameter across the exit, or
+        # everywhere where the two widths differ (each floor is tilted about its own centre)
+        tilted = not (math.isclose(low, high, rel_tol=0, abs_tol=1e-15)
+                      and math.isclose(low, b.step, rel_tol=0, abs_tol=1e-15))
         if low <= dz:
             raise ParameterError(
                 f"{step}={b.step:g} m: the joint must step down by more than the floors move apart "
                 f"normal to them ({dz:.3g} m: the two drives' amp_n and phases), or section "
                 f"{b.number}'s floor rises above section {a.number}'s and parts catch its edge"
-                + (f" (with the cross tilts the step is {low:.3g} m at its least)" if tilted else ""))
+                + (f" (the floors as tilted leave a step of {low:.3g} m at its least)" if tilted else ""))
         if high >= part.tallest:
             raise ParameterError(f"{step}={b.step:g} m is not a small step: keep it below a part's "
                                  f"thickness ({part.tallest:g} m)"

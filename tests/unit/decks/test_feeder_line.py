@@ -526,3 +526,14 @@ def test_a_sections_tooling_defaults_are_the_decks():
     # section_from without s2_wiper_at: the deck's place (mid-length)
     given = {"track_length": 0.01, "s2_length": 8e-3, "s2_wiper_height": 4e-4, "part_size": 3e-4}
     assert section_from(given).wiper_at == float(deck["s2_wiper_at"])
+
+
+def test_a_narrower_section_two_tilted_alike_says_the_step_its_floor_leaves():
+    # each floor is tilted about its own centre line: a 1.4 mm section 1 into a 1.0 mm section 2,
+    # both at 15 deg, leaves s2_step - (1.4 - 1.0) mm / 2 * tan(15 deg) = 0.1 - 0.0536 mm at
+    # every y across the gate (0.9 mm), below the drives' relative normal motion (5e-5 m)
+    deck = Deck(DECKS / "bulk_feeder.liggghts")
+    values = line_values(track_width=1.4e-3, gate_width=9e-4, cross_tilt=15, amp_n=6e-5, s2_width=1e-3,
+                         s2_cross_tilt=15, s2_step=1e-4, s2_amp_n=1e-5, n_parts=0, inlet_rate=30)
+    with pytest.raises(ParameterError, match=r"s2_step=0.0001 m: .*leave a step of 4.64e-05 m at its least"):
+        resolve(deck, values)

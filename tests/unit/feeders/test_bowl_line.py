@@ -82,7 +82,7 @@ def test_the_joint_wants_the_chute_and_its_sway_either_way():
     Feeder.from_values({**BOWL_LINE, "s2_phase": 30}).check()
     with pytest.raises(ParameterError, match=r"^s2_step=5e-05 m: the joint must step down by more "
                                              r"than the floors move apart normal to them \(8e-05 m.*"
-                                             r"the step is 7.64e-05 m at its least"):
+                                             r"a step of 7.64e-05 m at its least"):
         Feeder.from_values({**BOWL_LINE, "s2_phase": 120}).check()
     with pytest.raises(ParameterError, match="recirculate=1: a bowl returns its rejects itself"):
         Feeder.from_values({**BOWL_LINE, "recirculate": 1}).check()
