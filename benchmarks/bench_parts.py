@@ -74,7 +74,7 @@ def main() -> None:
                 figures[shape].append(run(Path(tmp), shape, args.n_parts, args.t_end))
     print(f"Machine: {machine()}; bulk_feeder pre-filled with {args.n_parts} parts, {args.t_end:g} s of "
           f"vibration, 1 rank, liggghts -in without a dump, median of {args.repeats}\n")
-    print("| shape | spheres | steps | loop time | µs per part-step | part-steps per s | against the sphere |")
+    print("| shape | spheres | steps | loop time | µs per part-step | part-steps per s | vs sphere |")
     print("|---|---|---|---|---|---|---|")
     per = {s: statistics.median(t / (n * args.n_parts) for t, n, _ in f) for s, f in figures.items()}
     for shape, f in figures.items():
