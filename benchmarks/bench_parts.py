@@ -3,8 +3,8 @@ per part and per step, on the same track.
 
     .venv/bin/python benchmarks/bench_parts.py [--n-parts 60] [--t-end 0.1] [--repeats 3]
 
-Each shape runs the bulk_feeder deck by hand (`vibrofeed prepare`, then `liggghts -in`, no
-dump: the engine alone), its track pre-filled with --n-parts parts settled before the
+Each shape runs the bulk_feeder deck by hand (`vibrofeed prepare`, then `liggghts -in`, one
+dump at the end: the engine alone), its track pre-filled with --n-parts parts settled before the
 vibration, for --t-end seconds of vibration on one rank. The figure is the vibration run's
 loop time (LIGGGHTS' `Loop time`) over its steps and parts, the median of --repeats runs
 taken in turn (box, sphere, 1 x 0.5 mm chip, box, ...). Shapes:
@@ -50,12 +50,12 @@ def loop(text: str) -> tuple[float, int, int]:
 
 
 def run(tmp: Path, shape: str, n_parts: int, t_end: float) -> tuple[float, int, int]:
-    params = [*COMMON, *SHAPES[shape], f"n_parts={n_parts}", f"t_end={t_end:g}"]
+    params = [*COMMON, *SHAPES[shape], f"n_parts={n_parts}", f"t_end={t_end:g}", f"output_dt={t_end:g}"]
     args = [sys.executable, "-m", "vibrofeed.cli", "prepare", "bulk_feeder", "-o", str(tmp / shape)]
     for p in params:
         args += ["-p", p]
     line = subprocess.run(args, check=True, capture_output=True, text=True).stdout.strip().splitlines()[-1]
-    words = line.split() + ["-var", "dump_every", "0", "-log", "none", "-nocite"]
+    words = line.split() + ["-var", "dump_file", str(tmp / f"{shape}.dump"), "-log", "none", "-nocite"]
     out = subprocess.run(words, check=True, capture_output=True, text=True, cwd=tmp).stdout
     return loop(out)
 

@@ -25,6 +25,14 @@ last frame of the steady feeding window and the plots into one folder. The cases
     and tooling (feeders/bowl_line.toml, docs/bowl.md, "The exit line"): faster than the
     chute's queue, its floor tilted towards a wall, a side drop and a wiper; the dies leave
     one at a time.
+``orient``
+    Chip components (1.0 x 0.5 x 0.35 mm boxes, their marked face +z) delivered lengthwise
+    with the marked face up (feeders/orient_line.toml, docs/orientation.md, "The demo"): a
+    hopping bulk section shakes them onto a broad face and a gate files them lengthwise; a
+    faster section spaces them, a side drop takes those still crosswise and a camera with an
+    air jet blows off every part not up and lengthwise; the rejects return to the inlet. The
+    report adds the rate of correct single parts, each station's census and the
+    recirculation; the picture colours the parts by state.
 """
 
 from __future__ import annotations
@@ -39,7 +47,7 @@ DESCRIPTION = ("Run the main job: a feeder line (a bulk section, then a faster s
                "frame of the steady feeding window (DIR/CASE.png) and the plots (DIR/plots/). "
                "--case track runs the single uniform track it replaces, --case bowl a small "
                "vibratory bowl feeding dies, --case bowl-line that bowl with an exit line that "
-               "singulates them.")
+               "singulates them, --case orient a line that delivers chip components the right way up.")
 
 # The supply both cases share: 30 parts/s of 300 um silicon spheres dropped in clumps of
 # three above the track start, nothing pre-filled (a line that only drains is a batch,
@@ -77,7 +85,8 @@ BOWL = {"shape": "1", "part_size": "5e-4", "part_thickness": "2.5e-4", "n_parts"
 CASES = {"line": ("feeder_line", "bulk_feeder", {**SUPPLY, **LINE}),
          "track": ("bulk_feeder", "bulk_feeder", {**SUPPLY, **TRACK}),
          "bowl": ("bowl_feeder", "bowl_feeder", BOWL),
-         "bowl-line": ("bowl_line", "bowl_line.toml", {})}
+         "bowl-line": ("bowl_line", "bowl_line.toml", {}),
+         "orient": ("orient_line", "orient_line.toml", {})}
 
 
 def add_arguments(p) -> None:
@@ -86,7 +95,9 @@ def add_arguments(p) -> None:
     p.add_argument("--case", choices=sorted(CASES), default="line",
                    help="line (default): the singulating feeder line; track: the uniform track it "
                         "replaces, with the same supply; bowl: a small vibratory bowl feeding dies; "
-                        "bowl-line: that bowl with an exit line that singulates them")
+                        "bowl-line: that bowl with an exit line that singulates them; orient: chip "
+                        "components delivered lengthwise, marked face up (a gate, a side drop, a "
+                        "camera and an air jet)")
     p.add_argument("-o", "--output", default="results", metavar="DIR",
                    help="folder for the result, the picture and the plots (default: results)")
     p.add_argument("-p", "--param", action="append", metavar="NAME=VALUE",

@@ -25,6 +25,7 @@ path's coordinates, comma separated).
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cached_property
@@ -197,6 +198,9 @@ class MeshElement:
         """The STL as trimesh reads it (its frame and unit; vertices merged)."""
         import trimesh
 
+        if not os.path.isfile(self.file):  # (trimesh would take the name for STL text)
+            raise self._fail(("file",), f"no such file: {self.file}"
+                             + (" (a directory)" if os.path.isdir(self.file) else ""))
         try:
             mesh = trimesh.load_mesh(self.file, file_type="stl")
         except Exception as exc:  # (trimesh raises what its readers raise)

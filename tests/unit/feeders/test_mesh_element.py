@@ -244,8 +244,11 @@ def test_a_mesh_beyond_its_path_or_before_its_joint_is_refused(stl):
 
 
 def test_an_stl_that_cannot_be_read_is_refused(tmp_path, stl):
-    _refused(stl, f"element 2's file (s2_file): cannot read {tmp_path / 'none.stl'} as an STL",
+    _refused(stl, f"element 2's file (s2_file): no such file: {tmp_path / 'none.stl'}",
              s2_file=str(tmp_path / "none.stl"))
+    bad = tmp_path / "bad.stl"
+    bad.write_bytes(b"\x00\x01 not an STL")
+    _refused(stl, f"element 2's file (s2_file): {bad} holds no triangles", s2_file=str(bad))
     with pytest.raises(ParameterError, match=r"^element 2's path \(s2_path\): give at least two points"):
         Feeder.from_values(values(stl, s2_path="1,2,3"))
 
