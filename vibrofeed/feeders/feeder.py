@@ -237,12 +237,6 @@ class Feeder:
         owners = [e for e in self.elements for _ in e.bounds]
         return owners[k - 1]
 
-    @property
-    def is_line(self) -> bool:
-        """A feeder of more than one element (its joints are checked, its rejects counted per
-        section, its further elements' motion recorded)."""
-        return len(self.elements) > 1
-
     # ---------------------------------------------------------------- what it can do
     @property
     def n_elements(self) -> int:
