@@ -102,7 +102,6 @@ from .line import (
     batch_cuts,
     batch_means,
     bed_pass,
-    is_line,
     section_bounds,
     tooling,
     trend,
@@ -754,7 +753,7 @@ class FeedRate(AnalysisBase):
             names = BOWL_SECTIONS + tuple(f"s{e.number}" for e in feeder.elements[1:])
             for sec, name in zip(sections, names):
                 sec["name"] = name
-        if bowl or is_line(result.parameters):
+        if feeder is not None and feeder.several_sections:  # (a line; a bowl's helix and chute)
             r.sections = sections
             r.rejects_by_tooling = self._rejects_by_tooling(rejects, span)
 

@@ -50,12 +50,6 @@ DRIFT_SIGMAS = 3.0
 DRIFT_MIN_BATCHES = 6
 
 
-def is_line(parameters) -> bool:
-    """Whether the result is a feeder line (more than one driven section)."""
-    feeder = feeder_of(parameters)
-    return feeder is not None and feeder.is_line
-
-
 def section_bounds(parameters, edge: float) -> list[tuple[float, float]]:
     """[(from, to)] of each section along the path [m], the last one ending at the outlet
     ``edge``: the feeder's (:attr:`vibrofeed.feeders.Feeder.bounds`; a line's sections in

@@ -87,7 +87,7 @@ def along(result, frames, axis: int = 0, position=None) -> tuple[np.ndarray, np.
                      s * position[..., 0] + c * position[..., 1],
                      position[..., 2] - lift[:, 2][:, None]], axis=-1)
     coordinate = path_coordinate(b, rest)
-    if feeder.is_line:  # its exit line, in its own frame at rest (its amplitudes are far below a part)
+    if feeder.further_elements:  # its exit line, in its own frame at rest (its strokes are far below a part)
         coordinate = np.where(np.isnan(coordinate), feeder.line_coordinate(position), coordinate)
     return coordinate, coordinate
 

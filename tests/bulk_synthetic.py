@@ -194,7 +194,7 @@ def bed(path, frame_times, x_at, enter, leave, rejected=None, reject_seen=True, 
     import hashlib
 
     from vibrofeed.results import layout as L
-    from vibrofeed.results.writer import ResultWriter
+    from vibrofeed.results.writer import Recording, ResultWriter
 
     rng = np.random.default_rng(0)
     frame_times = np.asarray(frame_times, dtype=float)
@@ -218,7 +218,8 @@ def bed(path, frame_times, x_at, enter, leave, rejected=None, reject_seen=True, 
     w_ = ResultWriter(path, deck_name="synthetic_bulk", deck_path="synthetic_bulk.liggghts",
                       deck_text="# synthetic bulk feeder\n", variables=base, derived={"dt_used": 1e-6},
                       engine_version="LIGGGHTS (Version LIGGGHTS-PUBLIC 3.8.0, synthetic)", seed=1,
-                      run_id=hashlib.sha256(str(path).encode()).hexdigest(), outlet=outlet, line=line)
+                      run_id=hashlib.sha256(str(path).encode()).hexdigest(), outlet=outlet,
+                      recording=Recording(rejects=line))
     leave_x = np.array([x_at(t)[k] if np.isfinite(t) else np.nan for k, t in enumerate(leave)])
     for j, t in enumerate(frame_times):
         x = x_at(t)

@@ -191,7 +191,7 @@ def write_line_frames(path, frames, inserted, written, returns=False):
     frame's counts are written with ``written[k]`` over them (the test's own counts)."""
     from vibrofeed.engine.outlet import LineOutlet, gravity_vector
     from vibrofeed.results.layout import REJECTS
-    from vibrofeed.results.writer import ResultWriter
+    from vibrofeed.results.writer import Recording, ResultWriter
 
     w = ResultWriter(path, deck_name="synthetic_line", deck_path="synthetic_line.liggghts",
                      deck_text="# synthetic line\n",
@@ -199,8 +199,8 @@ def write_line_frames(path, frames, inserted, written, returns=False):
                                 **{k: ("0", "", "", "0") for k in ("s2_amp_t", "s2_amp_n", "s2_phase")}},
                      derived={"dt_used": 1e-6}, engine_version="LIGGGHTS (synthetic)", seed=1,
                      run_id=hashlib.sha256(str(path).encode()).hexdigest(),
-                     outlet={"outlet_x": 0.018, "catch_z": -5e-4, "method": "synthetic"}, line=True,
-                     sections=2, returns=returns)
+                     outlet={"outlet_x": 0.018, "catch_z": -5e-4, "method": "synthetic"},
+                     recording=Recording(sections=2, rejects=True, returns=returns))
     o = LineOutlet(0.018, -5e-4, gravity_vector(9.81, 0.0), (0.0, 0.01))
     for k, (ids, x) in enumerate(frames):
         p = parts(ids, x, radius=1.5e-4)

@@ -194,6 +194,7 @@ def _flights(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
 
 # --------------------------------------------------------------- kind: transport
 def _transport(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None:
+    from vibrofeed.postproc.path import bowl_of
     from vibrofeed.postproc.transport import Transport
     from vibrofeed.results.reader import Result
 
@@ -204,7 +205,7 @@ def _transport(case: Case, runs: list[Run], out: Outcome, fig_dir: Path) -> None
     for run in runs:
         p = dict(run.params)
         T = 1.0 / run.number("freq")
-        if "bowl_diameter" in p:  # a bowl: along its helix, against the drive the helix sees
+        if bowl_of(p) is not None:  # a bowl: along its helix, against the drive the helix sees
             model, dem = _bowl_rows(case, run, transient * T, out)
             out.rows.append(row(case, "mean_speed", run.label, model, dem, "m/s"))
             points.append((run, model, dem))

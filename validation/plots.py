@@ -101,13 +101,14 @@ def plot_chute(case, points, curve, helix: float, path: Path) -> Path:
 def plot_speed_curve(case, runs, points, axis: str, path: Path) -> Path:
     """Mean conveying speed vs the swept quantity: model curve, DEM points."""
     from ..models import deck as dm
+    from ..postproc.path import bowl_of
 
     plt = pyplot()
 
     xs = np.array([float(r.values[axis]) for r, _, _ in points])
     fig, ax = plt.subplots(figsize=(6, 4))
     lo, hi = xs.min(), xs.max()
-    bowl = "bowl_diameter" in points[0][0].params  # its model is the drive the helix sees: points
+    bowl = bowl_of(points[0][0].params) is not None  # its model is the drive the helix sees: points
     if hi > lo and len(points) > 1 and not case.zip_sweep and not bowl:
         # dense model curve between the swept values, other parameters as the first run
         base = dict(points[0][0].params)

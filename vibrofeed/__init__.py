@@ -20,6 +20,7 @@ _EXPORTS = {
     "RunRequest": "vibrofeed.engine.batch",
     "Result": "vibrofeed.results.reader",
     "ResultWriter": "vibrofeed.results.writer",
+    "Recording": "vibrofeed.results.writer",
     "check_file": "vibrofeed.results.check",
     "AnalysisBase": "vibrofeed.postproc",
     "Transport": "vibrofeed.postproc",

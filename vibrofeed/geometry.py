@@ -278,9 +278,7 @@ def feeder_names(feeder: Feeder) -> list[str]:
         names += ["part_width", "bump_height", "bump_diameter", "bump_at", "clump_spacing", "density"]
     if feeder.part.shape == 4:  # (the STL's template and mass; its file is a word, not held)
         names += ["part_width", "density", *STL_NUMBERS]
-    for e in feeder.elements:
-        names += e.deck_names(drive=feeder.is_line)
-    return names
+    return names + feeder.element_names()
 
 
 def prepare_bowl_feeder(values: Mapping[str, str], folder: str | Path) -> Prepared:

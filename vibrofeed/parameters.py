@@ -16,7 +16,7 @@ from collections.abc import Callable, Mapping
 from .bowl import check_bowl, climb_advice
 from .decks import RESERVED, Deck
 from .errors import ParameterError, ParameterWarning
-from .feeders.feeder import Feeder
+from .feeders.feeder import Feeder, inserts_between_walls
 from .feeders.linear import MAX_SECTIONS, keep_word
 from .feeders.records import Part
 from .orientation import correct_word
@@ -420,15 +420,7 @@ def _check_relations(p: Mapping[str, float]) -> None:
 def _check_feeder(p: Mapping[str, float]) -> None:
     """A line's sections and joints, and its rejects' return (vibrofeed.feeders: the rules
     live there, the deck repeats none of them)."""
-    if "part_size" in p and "track_width" in p and "bowl_diameter" not in p:
-        Feeder.from_values(p).check()  # (recirculate and return_delay among its checks)
-        return
-    recirculate = p.get("recirculate", 0.0)
-    if recirculate not in (0, 1):
-        raise ParameterError(f"recirculate={recirculate:g} must be 0 (rejects removed) or 1 "
-                             "(returned to the inlet)")
-    if p.get("return_delay", 0.0) < 0:
-        raise ParameterError(f"return_delay={p['return_delay']:g} s must be >= 0")
+    Feeder.check_values(p)
 
 
 def circumscribed_radius(p: Mapping[str, float]) -> float:
@@ -451,7 +443,7 @@ def _check_insertion(p: Mapping[str, float]) -> None:
     walls, 5 % of a part size in from each (decks/bulk_feeder.liggghts, regions inlet and
     fill): a track no wider than that and a part leaves them no volume, and LIGGGHTS stops
     with 'Unable to calculate region volume'."""
-    if "bowl_diameter" in p or (p.get("n_parts", 1) <= 0 and p.get("inlet_rate", 0) <= 0):
+    if not inserts_between_walls(p) or (p.get("n_parts", 1) <= 0 and p.get("inlet_rate", 0) <= 0):
         return
     across = 2 * circumscribed_radius(p) + 0.1 * p["part_size"]
     if p["track_width"] <= across:
@@ -488,7 +480,7 @@ def _check_inlet(p: Mapping[str, float]) -> None:
     insert what does not fit (a run a thousand times slower, or 'Unable to calculate region
     volume'), and what the run measures is the block's limit, not the rate asked for."""
     rate = p.get("inlet_rate", 0.0)
-    if "bowl_diameter" in p or rate <= 0:
+    if not inserts_between_walls(p) or rate <= 0:
         return
     capacity, fall = inlet_capacity(p)
     size = f"part_size={p['part_size']:g} m"

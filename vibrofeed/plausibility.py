@@ -19,6 +19,8 @@ import math
 import re
 from collections.abc import Collection, Mapping
 
+from .feeders.feeder import side_tools_unprefixed
+
 # Solids span about 500 (polymer foams excepted) to 22 590 kg/m³ (osmium).
 DENSITY_PLAUSIBLE = (100.0, 25_000.0)  # kg/m³
 DENSITY_MAX = 1e5  # kg/m³: four times osmium; no material
@@ -167,8 +169,9 @@ def _without_effect(p: Mapping[str, float], given: Collection[str]) -> list[str]
         idle["dt_unchecked"] = "allows a fixed dt beyond the contact's limits: dt=0 is automatic"
     if p.get("recirculate", 0.0) == 0:
         idle["return_delay"] = "delays the rejects' return to the inlet: recirculate=0 removes them"
-    # a line's tooling, section by section; the bowl's on its helix (no prefix, vibrofeed.bowl)
-    tooled = [f"s{k}_" for k in sorted(set(sections))] + ([""] if "bowl_diameter" in p else [])
+    # a line's tooling, section by section; the first element's if its own names place a side
+    # drop and a wiper (no prefix: a bowl's, on its helix, vibrofeed.bowl)
+    tooled = [f"s{k}_" for k in sorted(set(sections))] + ([""] if side_tools_unprefixed(p) else [])
     for s in tooled:
         if p.get(f"{s}wiper_height", 1.0) == 0:
             idle[f"{s}wiper_at"] = f"places the wiper: {s}wiper_height=0 has none"

@@ -241,7 +241,8 @@ class BulkFrames:
 
     Built on every rank (the deck's variables are evaluated collectively);
     :meth:`frame` returns (parts, events, rejects, counts) on rank 0, None elsewhere;
-    rejects (parts fallen off a side) only for a feeder line (``sections`` > 1), else None.
+    rejects (parts fallen off a side) only for a feeder that has them (a line:
+    vibrofeed.feeders.Feeder.has_rejects), else None.
     """
 
     def __init__(self, lmp, spec: dict):
@@ -256,31 +257,35 @@ class BulkFrames:
         # the feeder the deck's parameters describe (None: a deck of one's own without the
         # feeders' vocabulary, run as a single track)
         self.feeder = Feeder.from_values(variables) if "part_size" in variables else None
-        self.line = self.feeder is not None and self.feeder.is_line
-        self.outlet = (LineOutlet(*where, self.feeder.catch_x) if self.line
+        feeder = self.feeder
+        # parts fallen off a side, caught by the section they fell from (a line)
+        self.rejects = feeder is not None and feeder.has_rejects
+        self.outlet = (LineOutlet(*where, feeder.catch_x) if self.rejects
                        else Outlet(*where))
         # recirculation (a line's rejects back to the inlet): the driver's, never by hand
         self.returns = None
-        if self.line and float(variables.get("recirculate", 0)) > 0:
+        if feeder is not None and feeder.returns_rejects:
             from .returns import Returns
 
             self.returns = Returns(float(variables.get("return_delay", 0.0)),
                                    int(float(variables.get("seed", 5489))), lmp.dt)
         # a line's air jets (orienting stations): sensed and fired by the driver (.jets)
         self.jets = None
-        if self.line and any(getattr(e, "jet", None) is not None for e in self.feeder.linear_sections):
+        if feeder is not None and feeder.has_jets:
             from .jets import Jets
 
-            self.jets = Jets(self.feeder)
+            self.jets = Jets(feeder)
         self.atom_ranges = None  # {body: (first, last atom id)} at the last frame (ideal jets)
         self.track, self.template = prepared_geometry(spec)
         if self.jets is not None:  # the jets classify in the analyses' body frame
             self.jets.use_template(self.template)
-        # a line's track: which vertices move with section 2 (None: not a line, or not told)
-        self.track_sections = track_sections(self.track, variables) if self.line else None
+        # which vertices of the track move with which further element (None: it has none, or
+        # the track does not tell)
+        further = feeder is not None and bool(feeder.further_elements)
+        self.track_sections = track_sections(self.track, variables) if further else None
         self.names = PER_ATOM + (("molecule",) if self.n_spheres > 1 else ())
         self.warnings: list[str] = []
-        if self.line and self.track is not None and self.track_sections is None:
+        if further and self.track is not None and self.track_sections is None:
             self.warnings.append("the line's track mesh does not end with its further sections' "
                                  "meshes: the file cannot say which vertices move with which section")
         if self.template is not None and self.n_spheres > 1 and len(self.template) != self.n_spheres:
@@ -324,7 +329,7 @@ class BulkFrames:
                                      f"spheres at t = {time:g} s (identity orientation)")
         else:
             parts = spheres(atoms)
-        if self.line:
+        if self.rejects:
             events, rejects, counts = self.outlet.step(time, parts, inserted)
             if returned is not None:
                 counts["returned"] = returned
@@ -462,7 +467,7 @@ def set_up(lmp, spec: dict) -> None:
 def open_writer(spec: dict, derived: dict, ranks: int, natoms: int, bulk, sections: int = 1,
                 turns: bool = False):
     """Rank 0's result writer, flushed also when LIGGGHTS ends the process."""
-    from ..results.writer import ResultWriter
+    from ..results.writer import Recording, ResultWriter
 
     variables = {name: (value, *spec["var_meta"][name]) for name, value in spec["variables"].items()}
     writer = ResultWriter(
@@ -471,13 +476,12 @@ def open_writer(spec: dict, derived: dict, ranks: int, natoms: int, bulk, sectio
         derived=derived,
         engine_version=engine_version(spec["log"]), seed=spec.get("seed"),
         ranks=ranks, command=spec.get("command", ""), run_id=spec.get("run_id", ""),
-        capacity_hint=max(natoms // (bulk.n_spheres if bulk else 1), 1), sections=sections,
-        target_error=spec.get("target_error"), rotating=turns, description=spec.get("description"),
+        capacity_hint=max(natoms // (bulk.n_spheres if bulk else 1), 1),
+        recording=Recording.of(bulk.feeder if bulk is not None else None, sections, turns),
+        target_error=spec.get("target_error"), description=spec.get("description"),
         **({} if bulk is None else {"track": bulk.track, "outlet": bulk.outlet.attributes(),
-                                    "body_template": bulk.template, "line": bulk.line,
-                                    "track_sections": bulk.track_sections,
-                                    "returns": bulk.returns is not None,
-                                    "jet": bulk.jets is not None}))
+                                    "body_template": bulk.template,
+                                    "track_sections": bulk.track_sections}))
     flush_on_engine_exit(writer)
     return writer
 

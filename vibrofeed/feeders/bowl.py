@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .records import Drive
+from .records import Drive, number
 
 # description key (table, key) -> the bowl deck's name
 KEYS: dict[tuple[str, ...], str] = {
@@ -36,6 +36,33 @@ KEYS: dict[tuple[str, ...], str] = {
 }
 # A description's bowl must state these (the rest have the deck's defaults).
 NEEDED = ("diameter", "width", "turns", "helix_angle")
+
+
+# The deck's parameters a bowl's recorded motion follows from (:class:`Turn`): its drive, and
+# its diameter and track width (the stroke amp_t is along the track's centre line).
+TURN_NAMES = ("freq", "amp_t", "amp_n", "phase", "bowl_diameter", "track_width")
+
+
+@dataclass(frozen=True)
+class Turn:
+    """A bowl's surface motion as its deck's movers make it (decks/bowl_feeder.liggghts:
+    riggle about z, viblin along z): sines of ``freq`` [Hz], a turn of amplitude ``angle``
+    [rad] (the stroke amp_t along the track's centre line, at radius r_mid = bowl_diameter / 2 -
+    track_width / 2, over that radius) and a lift of amplitude ``lift`` [m], ``phase`` [deg]
+    ahead of the turn. What `vibrofeed check` holds a bowl's recorded angle and lift to."""
+
+    freq: float
+    angle: float
+    lift: float
+    phase: float
+
+    @classmethod
+    def from_values(cls, values) -> Turn:
+        """From the deck's parameters :data:`TURN_NAMES` alone (numbers or their strings; a
+        file's parameters may hold no more of the bowl): ParameterError naming one missing."""
+        r_mid = number(values, "bowl_diameter") / 2 - number(values, "track_width") / 2
+        return cls(freq=number(values, "freq"), angle=number(values, "amp_t") / r_mid,
+                   lift=number(values, "amp_n"), phase=number(values, "phase"))
 
 
 @dataclass(frozen=True)

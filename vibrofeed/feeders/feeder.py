@@ -84,7 +84,7 @@ class Feeder:
         if recirculate not in (0, 1):
             raise ParameterError(f"recirculate={recirculate:g} must be 0 (rejects removed) or 1 "
                                  "(returned to the inlet)")
-        if "bowl_diameter" in values:
+        if starts_with_bowl(values):
             from ..bowl import bowl_from
 
             numbers = {k: number(values, k) for k in values if _is_number(values[k])}
@@ -237,11 +237,57 @@ class Feeder:
         owners = [e for e in self.elements for _ in e.bounds]
         return owners[k - 1]
 
+    # ---------------------------------------------------------------- what it can do
     @property
-    def is_line(self) -> bool:
-        """A feeder of more than one element (its joints are checked, its rejects counted per
-        section, its further elements' motion recorded)."""
-        return len(self.elements) > 1
+    def n_elements(self) -> int:
+        """How many elements it has (the deck's ``sections``; a bowl is the first): each moves
+        with its own surface, whose motion a run records (section 1's, then each further
+        element's, FORMAT.md)."""
+        return len(self.elements)
+
+    @property
+    def further_elements(self) -> tuple:
+        """The elements after the first (a line's sections 2, 3 ...; a bowl's exit line): empty
+        for a single track or a bowl alone."""
+        return self.elements[1:]
+
+    @property
+    def several_sections(self) -> bool:
+        """Whether its path has more than one section (a line's elements; a bowl's helix and
+        chute): the analyses report it section by section."""
+        return len(self.bounds) > 1
+
+    @property
+    def rotates(self) -> bool:
+        """Whether its first element's surface turns about the z axis (a bowl's torsion): a
+        run records its angle and rate beside its position (FORMAT.md)."""
+        return isinstance(self.elements[0], BowlElement)
+
+    @property
+    def has_rejects(self) -> bool:
+        """Whether parts that leave it over a side before the outlet edge are caught and
+        counted, by the section they fell from (a catch plane under its further elements: a
+        line, a bowl's exit line). A single track's walls hold its parts; a bowl alone drops
+        them back into itself (:func:`vibrofeed.postproc.path.falls`)."""
+        return bool(self.further_elements)
+
+    @property
+    def returns_rejects(self) -> bool:
+        """Whether its rejects come back to the inlet (``recirculate``; a feeder with rejects)."""
+        return self.has_rejects and self.recirculate
+
+    @property
+    def has_jets(self) -> bool:
+        """Whether an element carries an air jet (an orienting station the driver senses and
+        fires, vibrofeed.engine.jets; a run records its firings)."""
+        return any(getattr(e, "jet", None) is not None for e in self.elements)
+
+    def element_names(self) -> list[str]:
+        """The deck's names of its elements' numbers its geometry and checks read (what the
+        prepare hook holds a run by hand to): every element's, with the drives where it has
+        joints (a joint's check reads the drives on either side of it)."""
+        drive = bool(self.joints)
+        return [name for e in self.elements for name in e.deck_names(drive=drive)]
 
     @property
     def linear_sections(self) -> list[LinearSection]:
@@ -323,6 +369,23 @@ class Feeder:
         return out
 
     # ---------------------------------------------------------------- checks
+    @classmethod
+    def check_values(cls, values: Mapping) -> None:
+        """The feeder's rules as the parameter rules apply them (vibrofeed.parameters), to a
+        set that may be partial: a line's (or a single track's) whole :meth:`check` once its
+        part and section 1's track are given; else only its rejects' return (``recirculate``,
+        ``return_delay``): a partial set, or a bowl, whose exit line is checked with its
+        geometry (vibrofeed.geometry.prepare_bowl_feeder)."""
+        if "part_size" in values and "track_width" in values and not starts_with_bowl(values):
+            cls.from_values(values).check()  # (recirculate and return_delay among its checks)
+            return
+        recirculate = number(values, "recirculate", 0.0)
+        if recirculate not in (0, 1):
+            raise ParameterError(f"recirculate={recirculate:g} must be 0 (rejects removed) or 1 "
+                                 "(returned to the inlet)")
+        if number(values, "return_delay", 0.0) < 0:
+            raise ParameterError(f"return_delay={number(values, 'return_delay'):g} s must be >= 0")
+
     def check(self) -> None:
         """Everything about the feeder's shape: each further section on its own and every
         joint (one-line ParameterError naming the parameter). Section 1 and the parts are
@@ -331,12 +394,12 @@ class Feeder:
         p = self.values or {}
         if number(p, "return_delay", 0.0) < 0:
             raise ParameterError(f"return_delay={number(p, 'return_delay'):g} s must be >= 0")
-        if not self.is_line:
+        if not self.further_elements:
             if self.recirculate and self.linear_sections:
                 raise ParameterError("recirculate=1: a single track has no rejects to return; "
                                      "a line (sections >= 2) has")
             return
-        further = self.elements[1:]
+        further = self.further_elements
         if self.recirculate and self.bowl is not None:
             raise ParameterError("recirculate=1: a bowl returns its rejects itself (they fall back "
                                  "into it); its exit line's rejects are removed")
@@ -350,6 +413,30 @@ class Feeder:
         if self.elements[0].drive.waveform != 0:
             raise ParameterError("a line (sections >= 2) drives its sections with sines (waveform=0) "
                                  "in this version")
+
+
+# ---------------------------------------------------------------- the parameters' feeder
+# What the parameter rules ask of a set of parameters that may be partial (vibrofeed.parameters,
+# vibrofeed.plausibility), before a Feeder can be read from it.
+def starts_with_bowl(values: Mapping) -> bool:
+    """Whether the feeder of these parameters starts with a bowl: they name its
+    ``bowl_diameter`` (module docstring; :meth:`Feeder.from_values` decides by this too)."""
+    return "bowl_diameter" in values
+
+
+def inserts_between_walls(values: Mapping) -> bool:
+    """Whether the feeder of these parameters inserts its parts (its inlet's and its pre-fill's)
+    into blocks between its first track's walls (decks/bulk_feeder.liggghts, regions inlet and
+    fill), whose room and rate the parameter rules check; a bowl drops them into itself."""
+    return not starts_with_bowl(values)
+
+
+def side_tools_unprefixed(values: Mapping) -> bool:
+    """Whether the side drop's and the wiper's names without a prefix (``drop_from``,
+    ``wiper_height`` ...) place tools of the first element: a bowl's, on its helix. A line's
+    section 1 carries none (a gate only); its further sections' are ``s<k>_drop_from`` ...
+    (vibrofeed.feeders.linear.KEYS)."""
+    return starts_with_bowl(values)
 
 
 def section_index(s, joints, edge: float) -> np.ndarray:

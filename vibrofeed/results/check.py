@@ -10,6 +10,7 @@ import h5py
 import numpy as np
 
 from ..errors import ParameterError, said
+from ..feeders.bowl import TURN_NAMES, Turn
 from ..feeders.feeder import Feeder
 from ..models.constants import G
 from . import layout as L
@@ -51,6 +52,15 @@ def numeric_parameters(f: h5py.File) -> dict[str, float]:
     return out
 
 
+def feeder_of_numbers(params: dict[str, float]) -> Feeder | None:
+    """The feeder a file's numeric parameters describe, or None: not a feeder's vocabulary (a
+    deck of one's own, a synthetic file's few numbers), or values no feeder is made of."""
+    try:
+        return Feeder.from_values(params)
+    except (ParameterError, KeyError, ValueError, ArithmeticError):
+        return None
+
+
 def format_version(f: h5py.File) -> tuple[int, int]:
     version = f[L.PARAMETERS].attrs.get("format_version") if L.PARAMETERS in f else None
     try:
@@ -65,10 +75,20 @@ class _Checker:
         self.allow_incomplete = allow_incomplete
         self.problems: list[Problem] = []
         self.frames = 0
-        # a feeder line records each section's motion (format 1.4 on)
-        sections = numeric_parameters(f).get("sections", 1.0)
+        params = numeric_parameters(f)
+        # the feeder its parameters describe, read once (None: not a feeder's vocabulary)
+        self.feeder = feeder_of_numbers(params)
+        # the sections whose motion the file records (format 1.4 on): one per element of its
+        # feeder, else as many as its parameter `sections` says (FORMAT.md, "Feeder lines")
+        sections = float(self.feeder.n_elements) if self.feeder is not None else params.get("sections", 1.0)
         self.sections = max(1, int(round(sections))) if math.isfinite(sections) else 1
         self.records_sections = format_version(f) >= L.SECTIONS_SINCE
+
+    @property
+    def further_sections(self) -> range:
+        """The sections after the first whose motion the file records (2 ... sections): a
+        line's, a bowl's exit line's; none for a single track or a bowl alone."""
+        return range(2, self.sections + 1)
 
     def error(self, where, message):
         self.problems.append(Problem("error", where, message))
@@ -356,7 +376,7 @@ class _Checker:
     def track_sections(self, n_vertices: int):
         """A line's split of the track into sections (FORMAT.md, "Feeder lines")."""
         if L.TRACK_SECTION not in self.f:
-            if self.sections > 1 and self.records_sections:
+            if self.further_sections and self.records_sections:
                 self.error(L.TRACK_SECTION, f"missing: a line of {self.sections} sections must say "
                                             "which section each track vertex belongs to")
             return
@@ -562,11 +582,8 @@ class _Physics:
             return
         step, time = step[()], time[()]
         dt = self.time_step(step, time)
-        try:  # the feeder the parameters describe, to ask which sections are driven
-            feeder = Feeder.from_values(self.p)
-        except (ParameterError, KeyError):
-            feeder = None  # (not a feeder's vocabulary: every section is taken as driven)
-        for k in range(2, self.c.sections + 1):
+        feeder = self.c.feeder  # (None, not a feeder's vocabulary: every section is taken as driven)
+        for k in self.c.further_sections:
             motion = [self.f.get(f"{L.surface_path(k)}/{e}/value") for e in ("position", "velocity")]
             if any(not isinstance(m, h5py.Dataset) or m.shape != (len(step), 3) for m in motion):
                 continue  # missing or misshapen: reported with the layout
@@ -640,8 +657,7 @@ class _Physics:
         motion = {e: g.get(f"{e}/value") for e in ("angle", "angular_velocity", "position", "velocity")}
         if any(not isinstance(m, h5py.Dataset) or m.shape != (len(step), 3) for m in motion.values()):
             return  # missing or misshapen: reported with the layout
-        names = ("freq", "amp_t", "amp_n", "phase", "bowl_diameter", "track_width")
-        missing = [n for n in names if n not in self.p]
+        missing = [n for n in TURN_NAMES if n not in self.p]
         if missing:
             self.c.error(L.SURFACE, f"the bowl's drive ({', '.join(missing)}) is not among the "
                                     "recorded parameters: its motion cannot be verified")
@@ -651,18 +667,18 @@ class _Physics:
             self.c.error(L.SURFACE, "no time step recorded (derived/dt_used): the bowl's motion "
                                     "cannot be verified")
             return
-        p = self.p
-        theta_amp = p["amp_t"] / (p["bowl_diameter"] / 2 - p["track_width"] / 2)
-        pos, vel = sine_drive(p["freq"], theta_amp, p["amp_n"], p["phase"], dt, step, time)
-        omega = 2 * math.pi * p["freq"]
+        turn = Turn.from_values(self.p)  # (the bowl element's: its drive turns it about z)
+        theta_amp = turn.angle
+        pos, vel = sine_drive(turn.freq, theta_amp, turn.lift, turn.phase, dt, step, time)
+        omega = 2 * math.pi * turn.freq
         zero = np.zeros_like(pos[:, 0])
         for element, want, scale, unit, atol in (
                 ("angle", np.column_stack([zero, zero, pos[:, 0]]), theta_amp, "rad", 1e-15),
                 ("angular_velocity", np.column_stack([zero, zero, vel[:, 0]]), theta_amp * omega,
                  "rad/s", 1e-12),
-                ("position", np.column_stack([zero, zero, pos[:, 2]]), p["amp_n"], "m",
+                ("position", np.column_stack([zero, zero, pos[:, 2]]), turn.lift, "m",
                  DRIVE_ATOL["position"]),
-                ("velocity", np.column_stack([zero, zero, vel[:, 2]]), p["amp_n"] * omega, "m/s",
+                ("velocity", np.column_stack([zero, zero, vel[:, 2]]), turn.lift * omega, "m/s",
                  DRIVE_ATOL["velocity"])):
             self.against_drive(f"{L.SURFACE}/{element}/value", f"the bowl's {element}",
                                motion[element][()], want, DRIVE_RTOL * scale + atol, unit, time)

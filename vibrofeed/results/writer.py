@@ -17,10 +17,11 @@ convention prescribes, and are reused by later particles.
 A bulk feeder's run adds (FORMAT.md, "Bulk feeders"): the parts' orientation,
 the outlet event table (:meth:`ResultWriter.write_events`), the mass balance
 (``counts`` of :meth:`ResultWriter.write_frame`), the track mesh and the body
-template; a feeder line also each further section's motion (``sections``,
-``section_surfaces`` of :meth:`ResultWriter.write_frame`) and the section of each
-track vertex. Each is created only when the run has it, so the files of other decks
-keep the layout they always had.
+template; a feeder line also each further section's motion (``section_surfaces`` of
+:meth:`ResultWriter.write_frame`), the section of each track vertex and its rejects; a
+bowl its rotation. What a run records of its feeder is one :class:`Recording`, from the
+feeder (:meth:`Recording.of`). Each is created only when the run has it, so the files of
+other decks keep the layout they always had.
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ import socket
 import threading
 import time as _time
 from collections.abc import Mapping
+from dataclasses import dataclass
 
 import h5py
 import numpy as np
@@ -125,6 +127,54 @@ class SlotMap:
         return slots
 
 
+@dataclass(frozen=True)
+class Recording:
+    """What a run records of its feeder beyond every file's parts and section 1's surface
+    (FORMAT.md, "Bulk feeders" and "Feeder lines"); each is created only when the run has it.
+
+    sections:
+        the sections whose motion is recorded: section 1 in ``L.SURFACE``, each further one in
+        ``L.surface_path(k)`` (a line's, a bowl's exit line's); every frame then gives
+        ``sections - 1`` ``section_surfaces``.
+    rotating:
+        the surface also turns about the z axis (a bowl): records ``L.ROTATION_ELEMENTS`` in
+        ``L.SURFACE``; every frame then gives ``surface_rotation``.
+    rejects:
+        parts that leave over a side are caught: creates the reject table (``L.REJECTS``, the
+        outlet's attributes) and records the ``rejected`` count (``L.LINE_COUNTS``).
+    returns:
+        the rejects come back to the inlet: records the ``returned`` count too
+        (``L.RETURN_COUNTS``).
+    jet:
+        an air jet (an orienting station): creates its firing table (``L.JET``), filled by
+        :meth:`ResultWriter.write_events` with ``path`` L.JET.
+    """
+
+    sections: int = 1
+    rotating: bool = False
+    rejects: bool = False
+    returns: bool = False
+    jet: bool = False
+
+    def __post_init__(self):
+        if int(self.sections) < 1:
+            raise ValueError(f"sections must be >= 1, got {self.sections}")
+        if self.returns and not self.rejects:
+            raise ValueError("returns without a line: only a feeder line has rejects to return")
+
+    @classmethod
+    def of(cls, feeder, sections: int = 1, rotating: bool = False) -> Recording:
+        """What a run of ``feeder`` records (vibrofeed.feeders.Feeder: its rejects, their
+        return, its air jets; None: a deck without the feeders' vocabulary, which has none of
+        them), whose deck defines the motion of ``sections`` sections and, ``rotating``, its
+        surface's rotation: what the deck defines is what is recorded (vibrofeed.engine.worker
+        reads both from it, and refuses a deck that defines fewer sections than the feeder has)."""
+        if feeder is None:
+            return cls(sections=sections, rotating=rotating)
+        return cls(sections=sections, rotating=rotating, rejects=feeder.has_rejects,
+                   returns=feeder.returns_rejects, jet=feeder.has_jets)
+
+
 class ResultWriter:
     """Create an H5MD result file and append frames to it.
 
@@ -159,25 +209,13 @@ class ResultWriter:
         ``{"outlet_x": m, "catch_z": m, "method": text}``: creates the (empty)
         outlet event table at once, so that a run in which no part leaves
         still has one. :meth:`write_events` creates it otherwise.
-    line:
-        a feeder line (sections > 1): creates the reject table (``L.REJECTS``, the
-        outlet's attributes) and records the ``rejected`` count (``L.LINE_COUNTS``).
-    returns:
-        a line that recirculates its rejects: records the ``returned`` count too
-        (``L.RETURN_COUNTS``).
-    sections:
-        the sections whose motion is recorded: section 1 in ``L.SURFACE``, each further
-        one in ``L.surface_path(k)``; every frame then gives ``sections - 1``
-        ``section_surfaces``.
+    recording:
+        What the run records of its feeder (:class:`Recording`: its further sections' motion,
+        the surface's rotation, the rejects, their return, an air jet's firings); the
+        default records none of them.
     track_sections:
         ``(V,)`` the section (1-based) of each vertex of ``track``, stored as
         ``L.TRACK_SECTION``: at frame k a vertex sits at rest + its section's position.
-    rotating:
-        the surface also turns about the z axis (a bowl): records ``L.ROTATION_ELEMENTS`` in
-        ``L.SURFACE``; every frame then gives ``surface_rotation``.
-    jet:
-        a line with an air jet (an orienting station): creates its firing table (``L.JET``),
-        filled by :meth:`write_events` with ``path`` L.JET.
     target_error:
         the feed rate's relative error the run stops at (``--target-error``), recorded as
         ``parameters/run@target_error``; :meth:`finish` records why it stopped.
@@ -189,12 +227,11 @@ class ResultWriter:
                  engine_version: str, seed: int | None, ranks: int = 1,
                  command: str = "", run_id: str = "", capacity_hint: int = 1,
                  max_delay: float = 0.25, track=None, body_template=None,
-                 outlet: Mapping | None = None, line: bool = False, sections: int = 1,
-                 track_sections=None, returns: bool = False, target_error: float | None = None,
-                 rotating: bool = False, description: Mapping | None = None, jet: bool = False):
-        if returns and not line:
-            raise ValueError("returns without a line: only a feeder line has rejects to return")
+                 outlet: Mapping | None = None, recording: Recording = Recording(),
+                 track_sections=None, target_error: float | None = None,
+                 description: Mapping | None = None):
         self.path = str(path)
+        self.recording = recording
         self.slots = SlotMap()
         self.frames = 0          # frames handed over
         self.written = 0         # frames on disk
@@ -210,10 +247,8 @@ class ResultWriter:
         n_chunk = int(min(max(capacity_hint, 1), 4096))
         self._chunk_parts = n_chunk
         self._chunk_frames = int(max(1, min(1024, _CHUNK_BYTES // (8 * 3 * n_chunk))))
-        if int(sections) < 1:
-            raise ValueError(f"sections must be >= 1, got {sections}")
-        self.sections = int(sections)
-        self.rotating = bool(rotating)
+        self.sections = int(recording.sections)
+        self.rotating = bool(recording.rotating)
 
         self.file = h5py.File(self.path, "w")
         f = self.file
@@ -254,10 +289,10 @@ class ResultWriter:
             set_unit(f.create_dataset(L.BODY_TEMPLATE, data=template), "m")
         if outlet is not None:
             self._create_outlet(outlet)
-        if line:  # a feeder line: its reject table (empty until a part falls off) and count
+        if recording.rejects:  # its reject table (empty until a part falls off) and count
             self._create_outlet(outlet or {}, L.REJECTS)
-            self._count_names = L.RETURN_COUNTS if returns else L.LINE_COUNTS
-        if jet:  # a line with an air jet: its firings (empty until it fires)
+            self._count_names = L.RETURN_COUNTS if recording.returns else L.LINE_COUNTS
+        if recording.jet:  # an air jet: its firings (empty until it fires)
             self._create_table(L.JET)
         f.flush()
         # Flush from a thread too, so a frame waits at most max_delay even when

@@ -155,11 +155,11 @@ def test_a_recirculating_lines_result_counts_its_returns_and_is_checked(tmp_path
 
 
 def test_returns_need_a_line(tmp_path):
-    from vibrofeed.results.writer import ResultWriter
+    from vibrofeed.results.writer import Recording, ResultWriter
 
     with pytest.raises(ValueError, match="returns without a line"):
         ResultWriter(tmp_path / "x.h5", deck_name="x", deck_path="x", deck_text="", variables={},
-                     derived={}, engine_version="", seed=None, returns=True)
+                     derived={}, engine_version="", seed=None, recording=Recording(returns=True))
     assert not (tmp_path / "x.h5").exists()
 
 

@@ -38,7 +38,7 @@ def cache(tmp_path, monkeypatch):
 def test_the_exit_line_starts_at_the_chutes_end_on_its_centre_line():
     f = Feeder.from_values(BOWL_LINE)
     bowl, line = f.elements
-    assert isinstance(bowl, BowlElement) and isinstance(line, LinearSection) and f.is_line
+    assert isinstance(bowl, BowlElement) and isinstance(line, LinearSection) and f.further_elements == (line,)
     assert line.x0 == pytest.approx(OUTLET_X, rel=1e-12) and f.bowl is bowl.bowl
     # the chute's floor at its end, high (inner) edge: the helix's end height, the chute's rise,
     # half the width's cross tilt up from the centre line

@@ -31,7 +31,7 @@ def cache(tmp_path, monkeypatch):
 def test_the_chute_descends_from_its_step_by_its_slope():
     f = Feeder.from_values(LINE)
     c = f.elements[1]
-    assert isinstance(c, Chute) and f.is_line and f.sections == 2
+    assert isinstance(c, Chute) and f.further_elements == (c,) and f.sections == 2
     assert (c.x0, c.x1) == (4e-3, pytest.approx(7e-3, abs=1e-15))
     # high edge (y = +0.6 mm): 80 um below at its start, 80 um + 3 mm tan 5 at its end
     assert c.entry_z(6e-4) == pytest.approx(-8e-5, abs=1e-18)

@@ -29,7 +29,7 @@ THREE = {
 
 def test_three_sections_lie_end_to_end_along_the_path():
     f = Feeder.from_values(THREE)
-    assert f.sections == 3 and f.is_line
+    assert f.sections == 3 and f.n_elements == 3
     assert [c for b in f.bounds for c in b] == pytest.approx([0.0, 4e-3, 4e-3, 9e-3, 9e-3, 12e-3],
                                                              abs=1e-15)
     assert f.path_end == pytest.approx(12e-3, abs=1e-15)
@@ -133,7 +133,7 @@ def test_a_bowl_is_its_helix_then_its_chute():
     assert b.length == pytest.approx(helix, rel=1e-12)
     assert f.bounds == [(0.0, pytest.approx(helix, rel=1e-12)),
                         (pytest.approx(helix, rel=1e-12), pytest.approx(helix + 8e-3, rel=1e-12))]
-    assert not f.is_line and f.stations == []
+    assert not f.further_elements and f.stations == []
 
 
 def test_sections_out_of_range_are_refused():

@@ -53,7 +53,7 @@ def stl(tmp_path):
 def test_the_mesh_is_placed_with_its_path_starting_at_the_joint_along_x(stl):
     f = Feeder.from_values(values(stl))
     e = f.elements[1]
-    assert isinstance(e, MeshElement) and f.is_line and f.sections == 2
+    assert isinstance(e, MeshElement) and f.further_elements == (e,) and f.sections == 2
     want = np.column_stack([4e-3 + PLAN[:, 0] * 1e-3, PLAN[:, 1] * 1e-3, np.full(4, -5e-5)])
     assert np.abs(e.points - want).max() <= 1e-15
     assert e.path_length == pytest.approx(13e-3, abs=1e-15)

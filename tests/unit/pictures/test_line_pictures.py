@@ -16,7 +16,7 @@ import pytest
 from helpers import parts
 from vibrofeed.pictures import scene
 from vibrofeed.results.reader import Result
-from vibrofeed.results.writer import ResultWriter
+from vibrofeed.results.writer import Recording, ResultWriter
 
 JOINT = 0.004
 N_FRAMES = 4
@@ -51,9 +51,10 @@ def line_file(path, split=True, sections=2):
     w = ResultWriter(path, deck_name="synthetic_line", deck_path="synthetic_line.liggghts",
                      deck_text="# synthetic line\n", variables=variables, derived={"dt_used": 1e-6},
                      engine_version="LIGGGHTS (synthetic)", seed=1,
-                     run_id=hashlib.sha256(str(path).encode()).hexdigest(), line=True,
+                     run_id=hashlib.sha256(str(path).encode()).hexdigest(),
+                     recording=Recording(sections=sections, rejects=True),
                      outlet={"outlet_x": JOINT + 3e-3, "catch_z": -5e-4, "method": "synthetic"},
-                     track=rest_track(), track_sections=SPLIT if split else None, sections=sections)
+                     track=rest_track(), track_sections=SPLIT if split else None)
     for k in range(N_FRAMES):
         (p1, v1), (p2, v2) = motion(k)
         # part 1 on section 1 moving with it, part 2 on section 2 moving 1 cm/s faster than it

@@ -177,7 +177,7 @@ def test_along_a_bowls_helix_the_state_is_read_against_the_helix(tmp_path):
     (postproc.orientation.path_directions), not as along a line's +x."""
     from vibrofeed.bowl import bowl_from
     from vibrofeed.pictures.render import PartStates
-    from vibrofeed.results.writer import ResultWriter
+    from vibrofeed.results.writer import Recording, ResultWriter
 
     bowl = {"bowl_diameter": 0.02, "track_width": 1.2e-3, "helix_angle": 3.0, "turns": 1.5,
             "wall_height": 1e-3, "cone_angle": 3.0, "cross_tilt": 3.0, "lip_height": 0.0,
@@ -190,7 +190,7 @@ def test_along_a_bowls_helix_the_state_is_read_against_the_helix(tmp_path):
     w = ResultWriter(tmp_path / "bowl.h5", deck_name="bowl_feeder", deck_path="bowl_feeder.liggghts",
                      deck_text="#\n", variables={k: (repr(v), "", k, repr(v)) for k, v in bowl.items()},
                      derived={"dt_used": 1e-6}, engine_version="LIGGGHTS (synthetic)", seed=1,
-                     run_id="b" * 64, rotating=True, body_template=BOX)
+                     run_id="b" * 64, recording=Recording(rotating=True), body_template=BOX)
     p = parts([1, 2], points, radius=2.7e-4)
     p["orientation"] = q
     w.write_frame(0, 0.0, p, [0, 0, 0], [0, 0, 0], surface_rotation=([0, 0, 0], [0, 0, 0]))

@@ -13,7 +13,7 @@ from vibrofeed.bowl import THETA_END, bowl_from, track_drive
 from vibrofeed.postproc.feedrate import dilute_limit
 from vibrofeed.postproc.path import along, outlet_x, path_end
 from vibrofeed.results.reader import Result
-from vibrofeed.results.writer import ResultWriter
+from vibrofeed.results.writer import Recording, ResultWriter
 
 BOWL = {"bowl_diameter": 0.02, "track_width": 1.2e-3, "helix_angle": 3.0, "turns": 1.5,
         "wall_height": 1e-3, "cone_angle": 3.0, "cross_tilt": 3.0, "lip_height": 0.0,
@@ -29,7 +29,7 @@ def write_bowl(path, angles, lifts, points):
     variables = {k: (repr(v), "", k, repr(v)) for k, v in BOWL.items()}
     w = ResultWriter(path, deck_name="bowl_feeder", deck_path="bowl_feeder.liggghts", deck_text="#\n",
                      variables=variables, derived={"dt_used": 1e-6}, engine_version=ENGINE,
-                     seed=1, run_id="x" * 64, rotating=True)
+                     seed=1, run_id="x" * 64, recording=Recording(rotating=True))
     for k, (a, z) in enumerate(zip(angles, lifts)):
         c, s = math.cos(a), math.sin(a)
         lab = np.column_stack([c * points[:, 0] - s * points[:, 1], s * points[:, 0] + c * points[:, 1],

@@ -12,7 +12,7 @@ from helpers import parts, write_result
 from vibrofeed.results import layout as L
 from vibrofeed.results.check import check_file
 from vibrofeed.results.reader import Result
-from vibrofeed.results.writer import ResultWriter
+from vibrofeed.results.writer import Recording, ResultWriter
 
 DRIVE = {"freq": 100.0, "amp_t": 5e-5, "amp_n": 3e-5, "phase": -30.0, "bowl_diameter": 0.02,
          "track_width": 1.2e-3}
@@ -47,7 +47,7 @@ def write_file(path, drive=DRIVE, tamper=None, frames=12, derived=None):
     variables = {k: (repr(v), "", k, repr(v)) for k, v in drive.items()}
     w = ResultWriter(path, deck_name="bowl_feeder", deck_path="bowl_feeder.liggghts", deck_text="#\n",
                      variables=variables, derived=derived, engine_version=ENGINE,
-                     seed=1, run_id="y" * 64, rotating=True)
+                     seed=1, run_id="y" * 64, recording=Recording(rotating=True))
     for k, s in enumerate(steps):
         w.write_frame(int(s), float(s * DT), parts([1], [[0.0, -9.4e-3, 1e-3 + lift[k]]], radius=1.5e-4),
                       [0, 0, lift[k]], [0, 0, vz[k]], surface_rotation=([0, 0, angle[k]], [0, 0, rate[k]]))
@@ -121,7 +121,7 @@ def test_a_bowl_run_that_wrote_no_frame_has_no_motion_to_verify(tmp_path):
     variables = {k: (repr(v), "", k, repr(v)) for k, v in DRIVE.items()}
     w = ResultWriter(tmp_path / "died.h5", deck_name="bowl_feeder", deck_path="bowl_feeder.liggghts",
                      deck_text="#\n", variables=variables, derived={}, engine_version=ENGINE, seed=1,
-                     run_id="c" * 64, rotating=True)
+                     run_id="c" * 64, recording=Recording(rotating=True))
     w.finish("failed", "the engine died before the first frame")
     report = check_file(tmp_path / "died.h5", allow_incomplete=True)
     assert report.ok and [p.message for p in report.problems] == [
@@ -150,7 +150,7 @@ def test_a_chute_after_the_bowl_is_checked_standing_still_not_against_a_drive(tm
         variables = {k: (repr(v), "", k, repr(v)) for k, v in chute.items()}
         w = ResultWriter(path, deck_name="bowl_feeder", deck_path="bowl_feeder.liggghts", deck_text="#\n",
                          variables=variables, derived={"dt_used": DT}, engine_version=ENGINE,
-                         seed=1, run_id="y" * 64, rotating=True, sections=2)
+                         seed=1, run_id="y" * 64, recording=Recording(sections=2, rotating=True))
         for k, s in enumerate(steps):
             turn = ([0, 0, angle[k]], [0, 0, rate[k]])
             w.write_frame(int(s), float(s * DT), parts([1], [[0.0, -9.4e-3, 1e-3 + lift[k]]], radius=1.5e-4),

@@ -20,7 +20,7 @@ from vibrofeed.results import check as check_module
 from vibrofeed.results import layout as L
 from vibrofeed.results.check import check_file
 from vibrofeed.results.reader import Result
-from vibrofeed.results.writer import ResultWriter
+from vibrofeed.results.writer import Recording, ResultWriter
 
 G = 9.81  # m/s^2, FORMAT.md's g
 FREQ_ONLY = {"freq": ("50", "Hz", "vibration frequency", "50")}  # no amplitude: no surface speed
@@ -520,7 +520,7 @@ def balance(path, present, counts, events=(), line=False, returns=False, rejects
     w = ResultWriter(path, deck_name="d", deck_path="d", deck_text="d", variables=variables,
                      derived={"dt_used": 1e-6}, engine_version="LIGGGHTS (synthetic)", seed=1,
                      run_id="b" * 64, outlet={"outlet_x": 0.02, "catch_z": -5e-4, "method": "m"},
-                     line=line, returns=returns, sections=2 if line else 1)
+                     recording=Recording(sections=2 if line else 1, rejects=line, returns=returns))
 
     def table(ids, **extra):
         n = len(ids)

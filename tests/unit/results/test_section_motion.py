@@ -22,7 +22,7 @@ from vibrofeed.errors import ResultError
 from vibrofeed.results import layout as L
 from vibrofeed.results.check import DRIVE_RTOL, check_file
 from vibrofeed.results.reader import Result
-from vibrofeed.results.writer import ResultWriter
+from vibrofeed.results.writer import Recording, ResultWriter
 
 DT = 2e-6             # s, the run's step
 EVERY = 500           # steps between frames
@@ -78,10 +78,10 @@ def write_line(path, shift=None, sections=2, track_sections=True, derived=None, 
     w = ResultWriter(path, deck_name="synthetic_line", deck_path="synthetic_line.liggghts",
                      deck_text="# synthetic line\n", variables=variables, derived=derived,
                      engine_version="LIGGGHTS (Version LIGGGHTS-PUBLIC 3.8.0, synthetic)", seed=1,
-                     run_id=hashlib.sha256(str(path).encode()).hexdigest(), line=True,
+                     run_id=hashlib.sha256(str(path).encode()).hexdigest(),
+                     recording=Recording(sections=sections, rejects=True),
                      outlet={"outlet_x": JOINT + 3e-3, "catch_z": -5e-4, "method": "synthetic"},
-                     track=track, track_sections=split if track_sections else None,
-                     sections=sections)
+                     track=track, track_sections=split if track_sections else None)
     for k, (step, t) in enumerate(zip(steps[:frames], times[:frames])):
         s1 = [S1["amp_t"] * math.sin(w1 * t), 0, S1["amp_n"] * math.sin(w1 * t)]
         v1 = [S1["amp_t"] * w1 * math.cos(w1 * t), 0, S1["amp_n"] * w1 * math.cos(w1 * t)]
@@ -169,8 +169,8 @@ def test_a_single_track_has_one_section(tmp_path):
 def test_writer_refuses_a_frame_without_every_sections_motion(tmp_path):
     track, split = two_sections()
     w = ResultWriter(tmp_path / "w.h5", deck_name="d", deck_path="d", deck_text="d", variables={},
-                     derived={}, engine_version="LIGGGHTS", seed=1, sections=2, track=track,
-                     track_sections=split)
+                     derived={}, engine_version="LIGGGHTS", seed=1, recording=Recording(sections=2),
+                     track=track, track_sections=split)
     with pytest.raises(ValueError, match="1 further section"):
         w.write_frame(0, 0.0, parts([1], [[0, 0, 0]]), np.zeros(3), np.zeros(3))
     assert w.frames == 0  # refused before anything was taken
@@ -179,8 +179,8 @@ def test_writer_refuses_a_frame_without_every_sections_motion(tmp_path):
     w.finish()
     with pytest.raises(ValueError, match="track_sections must lie in 1..2"):
         ResultWriter(tmp_path / "b.h5", deck_name="d", deck_path="d", deck_text="d", variables={},
-                     derived={}, engine_version="LIGGGHTS", seed=1, sections=2, track=track,
-                     track_sections=split + 1)
+                     derived={}, engine_version="LIGGGHTS", seed=1, recording=Recording(sections=2),
+                     track=track, track_sections=split + 1)
 
 
 def test_a_line_of_format_1_3_still_reads(line, tmp_path):

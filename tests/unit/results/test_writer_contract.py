@@ -13,7 +13,7 @@ from vibrofeed.results import layout as L
 from vibrofeed.results import writer as writer_module
 from vibrofeed.results.check import check_file
 from vibrofeed.results.reader import Result
-from vibrofeed.results.writer import ResultWriter
+from vibrofeed.results.writer import Recording, ResultWriter
 
 
 def new_writer(path, **kw):
@@ -255,7 +255,7 @@ def test_a_line_records_each_further_sections_motion_under_its_own_observable(tm
     """Three sections, each with its own motion, all frames in one batch: section k's
     (position, velocity) read back from surface_path(k), none swapped or shifted."""
     path = tmp_path / "line.h5"
-    w = new_writer(path, max_delay=60.0, sections=3,
+    w = new_writer(path, max_delay=60.0, recording=Recording(sections=3),
                    variables={"sections": ("3", "", "sections", "1")})
 
     def motion(k, j):  # section k at frame j: values no other (section, frame) shares
@@ -282,7 +282,7 @@ def test_a_line_records_each_further_sections_motion_under_its_own_observable(tm
 
 @pytest.mark.parametrize("given", [0, 1, 3])
 def test_a_frame_with_the_wrong_number_of_further_sections_is_refused_whole(tmp_path, given):
-    w = new_writer(tmp_path / "n.h5", sections=3)
+    w = new_writer(tmp_path / "n.h5", recording=Recording(sections=3))
     further = [([0, 0, 0], [0, 0, 0])] * given
     with pytest.raises(ValueError, match=rf"records 3 section\(s\): give the motion of 2 further "
                                          rf"section\(s\), got {given}$"):
@@ -292,7 +292,7 @@ def test_a_frame_with_the_wrong_number_of_further_sections_is_refused_whole(tmp_
 
 
 def test_a_further_sections_motion_must_be_three_components(tmp_path):
-    w = new_writer(tmp_path / "c.h5", sections=2)
+    w = new_writer(tmp_path / "c.h5", recording=Recording(sections=2))
     for p, v in (([0, 0], [0, 0, 0]), ([0, 0, 0], [0, 0, 0, 0])):
         with pytest.raises(ValueError):
             w.write_frame(0, 0.0, parts([1], [[0, 0, 0]]), [0, 0, 0], [0, 0, 0],
@@ -307,7 +307,7 @@ _TRIANGLES = np.array([[0, 1, 2], [0, 2, 3]], dtype=np.int32)
 
 
 def test_track_sections_from_1_to_the_last_recorded_section_are_stored(tmp_path):
-    w = new_writer(tmp_path / "s.h5", sections=2, track=(_VERTICES, _TRIANGLES),
+    w = new_writer(tmp_path / "s.h5", recording=Recording(sections=2), track=(_VERTICES, _TRIANGLES),
                    track_sections=np.array([1, 1, 2, 2]))   # both ends of 1..sections
     w.finish()
     with Result(tmp_path / "s.h5") as r:
@@ -326,20 +326,20 @@ def test_track_sections_from_1_to_the_last_recorded_section_are_stored(tmp_path)
 def test_track_sections_outside_the_recorded_sections_or_not_one_per_vertex_are_refused(
         tmp_path, sections, match):
     with pytest.raises(ValueError, match=match):
-        new_writer(tmp_path / "s.h5", sections=2, track=(_VERTICES, _TRIANGLES),
+        new_writer(tmp_path / "s.h5", recording=Recording(sections=2), track=(_VERTICES, _TRIANGLES),
                    track_sections=np.array(sections))
 
 
 def test_track_sections_need_a_track(tmp_path):
     with pytest.raises(ValueError, match="without a track"):
-        new_writer(tmp_path / "s.h5", sections=2, track_sections=np.array([1, 2]))
+        new_writer(tmp_path / "s.h5", recording=Recording(sections=2), track_sections=np.array([1, 2]))
 
 
 @pytest.mark.parametrize("returns", [False, True])
 def test_a_line_counts_its_rejects_and_a_recirculating_one_its_returns(tmp_path, returns):
     names = L.RETURN_COUNTS if returns else L.LINE_COUNTS
     counts = {name: 10 + j for j, name in enumerate(names)}   # one value per name, told apart
-    w = new_writer(tmp_path / "l.h5", line=True, sections=2, returns=returns)
+    w = new_writer(tmp_path / "l.h5", recording=Recording(sections=2, rejects=True, returns=returns))
     w.write_frame(0, 0.0, parts([1], [[0, 0, 0]]), [0, 0, 0], [0, 0, 0], counts=counts,
                   section_surfaces=[([0, 0, 0], [0, 0, 0])])
     w.finish()
@@ -351,25 +351,25 @@ def test_a_line_counts_its_rejects_and_a_recirculating_one_its_returns(tmp_path,
 
 def test_a_line_without_returns_does_not_ask_for_them_and_one_with_them_does(tmp_path):
     line_counts = {name: 0 for name in L.LINE_COUNTS}   # no "returned"
-    w = new_writer(tmp_path / "a.h5", line=True, sections=2)
+    w = new_writer(tmp_path / "a.h5", recording=Recording(sections=2, rejects=True))
     w.write_frame(0, 0.0, parts([1], [[0, 0, 0]]), [0, 0, 0], [0, 0, 0], counts=line_counts,
                   section_surfaces=[([0, 0, 0], [0, 0, 0])])
     assert w.frames == 1
     w.close()
-    w = new_writer(tmp_path / "b.h5", line=True, sections=2, returns=True)
+    w = new_writer(tmp_path / "b.h5", recording=Recording(sections=2, rejects=True, returns=True))
     with pytest.raises(ValueError, match="counts lacks returned"):
         w.write_frame(0, 0.0, parts([1], [[0, 0, 0]]), [0, 0, 0], [0, 0, 0], counts=line_counts,
                       section_surfaces=[([0, 0, 0], [0, 0, 0])])
     w.close()
     with pytest.raises(ValueError, match="returns without a line"):
-        new_writer(tmp_path / "c.h5", returns=True)
+        new_writer(tmp_path / "c.h5", recording=Recording(returns=True))
 
 
 def test_a_rotating_surface_records_its_angle_and_rate_in_section_1(tmp_path):
     """Batched frames: each frame's angle and angular velocity land in SURFACE's angle and
     angular_velocity, not swapped (the rate differs from the angle at every frame)."""
     path = tmp_path / "bowl.h5"
-    w = new_writer(path, max_delay=60.0, rotating=True)
+    w = new_writer(path, max_delay=60.0, recording=Recording(rotating=True))
     angles = [[0, 0, 0.25 * j] for j in range(3)]
     rates = [[0, 0, 2.0 + j] for j in range(3)]
     for j in range(3):
@@ -389,7 +389,7 @@ def test_a_rotating_surface_records_its_angle_and_rate_in_section_1(tmp_path):
 
 
 def test_a_rotating_surface_needs_its_rotation_at_every_frame_and_no_other_takes_one(tmp_path):
-    w = new_writer(tmp_path / "r.h5", rotating=True)
+    w = new_writer(tmp_path / "r.h5", recording=Recording(rotating=True))
     with pytest.raises(ValueError, match="needs surface_rotation"):
         w.write_frame(0, 0.0, parts([1], [[0, 0, 0]]), [0, 0, 0], [0, 0, 0])
     w.close()
@@ -406,12 +406,12 @@ def test_a_rotating_surface_needs_its_rotation_at_every_frame_and_no_other_takes
 @pytest.mark.parametrize("sections", [0, -1])
 def test_a_writer_of_fewer_than_one_section_is_refused(tmp_path, sections):
     with pytest.raises(ValueError, match=f"sections must be >= 1, got {sections}"):
-        new_writer(tmp_path / "s.h5", sections=sections)
+        new_writer(tmp_path / "s.h5", recording=Recording(sections=sections))
 
 
 def test_a_lines_rejects_record_one_section_number_per_event(tmp_path):
     """FORMAT.md: the reject table is the outlet's plus ``section`` (E,), int32."""
-    w = new_writer(tmp_path / "r.h5", line=True, sections=2)
+    w = new_writer(tmp_path / "r.h5", recording=Recording(sections=2, rejects=True))
     w.write_events({"time": [0.1, 0.2], "id": [7, 9], "position": np.zeros((2, 3)),
                     "velocity": np.zeros((2, 3)), "section": [2, 1]}, L.REJECTS)
     w.write_frame(0, 0.0, parts([1], [[0, 0, 0]]), [0, 0, 0], [0, 0, 0],

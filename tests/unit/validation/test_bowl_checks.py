@@ -11,7 +11,7 @@ from vibrofeed.bowl import bowl_from, track_drive
 from vibrofeed.errors import CaseError
 from vibrofeed.models.deck import transport
 from vibrofeed.results.reader import Result
-from vibrofeed.results.writer import ResultWriter
+from vibrofeed.results.writer import Recording, ResultWriter
 from vibrofeed.validation.crosscheck import bowl_speeds, min_distance
 
 ENGINE = "LIGGGHTS (Version LIGGGHTS-PUBLIC 3.8.0, synthetic)"
@@ -27,7 +27,7 @@ def bowl_writer(path) -> ResultWriter:
     variables = {k: (repr(v), "", k, repr(v)) for k, v in BOWL.items()}
     return ResultWriter(path, deck_name="bowl_feeder", deck_path="b.liggghts", deck_text="#\n",
                         variables=variables, derived={"dt_used": 1e-6}, engine_version=ENGINE, seed=1,
-                        run_id="b" * 64, rotating=True)
+                        run_id="b" * 64, recording=Recording(rotating=True))
 
 
 def test_speeds_along_the_helix_and_the_model_at_each_parts_radius(tmp_path):

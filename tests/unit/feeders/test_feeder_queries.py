@@ -1,0 +1,115 @@
+"""What the rest of vibrofeed asks a feeder instead of its kind (vibrofeed.feeders.Feeder): how
+many elements it has, whether it turns, has rejects, returns them, carries an air jet, reports
+by section; the parameter rules' questions of a set that may be partial; a bowl's turn. Four
+feeders built by hand: a single track, a two-section line, a bowl alone, a bowl with an exit
+line."""
+
+import math
+
+import pytest
+
+from vibrofeed.errors import ParameterError
+from vibrofeed.feeders import Feeder
+from vibrofeed.feeders.bowl import TURN_NAMES, Turn
+from vibrofeed.feeders.feeder import inserts_between_walls, side_tools_unprefixed, starts_with_bowl
+
+# a 4 mm track, 1.2 mm wide, for 300 um spheres
+TRACK = {"part_size": 3e-4, "shape": 0, "track_length": 4e-3, "track_width": 1.2e-3,
+         "wall_height": 1e-3, "freq": 100, "amp_t": 3e-5, "amp_n": 5e-5, "phase": 0}
+# and a 5 mm section 2, 60 um below it, with a side drop
+LINE = {**TRACK, "sections": 2, "s2_length": 5e-3, "s2_width": 1.2e-3, "s2_wall_height": 6e-4,
+        "s2_step": 6e-5, "s2_freq": 100, "s2_amp_t": 1.2e-4, "s2_amp_n": 2e-5, "s2_phase": 0,
+        "s2_drop_from": 0.2, "s2_drop_to": 0.6, "s2_drop_width": 4e-4}
+# a bowl 20 mm across, its track 1.2 mm wide climbing half a turn at 3 degrees to an 8 mm chute
+BOWL = {"bowl_diameter": 0.02, "track_width": 1.2e-3, "helix_angle": 3.0, "turns": 0.5,
+        "wall_height": 1e-3, "chute_length": 8e-3, "part_size": 3e-4, "shape": 0,
+        "freq": 75, "amp_t": 2e-4, "amp_n": 4e-5, "phase": -60}
+# and a 10 mm exit section after its chute
+BOWL_LINE = {**BOWL, "sections": 2, "s2_length": 0.01, "s2_width": 1.5e-3, "s2_wall_height": 1e-3,
+             "s2_step": 5e-5, "s2_freq": 75, "s2_amp_t": 4e-4, "s2_amp_n": 4e-5, "s2_phase": -60}
+
+
+@pytest.mark.parametrize("values, elements, several, rotates, rejects", [
+    (TRACK, 1, False, False, False),
+    (LINE, 2, True, False, True),
+    (BOWL, 1, True, True, False),        # its path: the helix, then the chute
+    (BOWL_LINE, 2, True, True, True),
+])
+def test_each_feeder_says_what_it_has(values, elements, several, rotates, rejects):
+    f = Feeder.from_values(values)
+    assert f.n_elements == elements and f.further_elements == f.elements[1:]
+    assert len(f.further_elements) == elements - 1
+    assert f.several_sections is several
+    assert f.rotates is rotates
+    assert f.has_rejects is rejects
+    assert f.returns_rejects is False and f.has_jets is False
+
+
+def test_only_a_feeder_with_rejects_returns_them():
+    assert Feeder.from_values({**LINE, "recirculate": 1}).returns_rejects is True
+    assert Feeder.from_values({**BOWL_LINE, "recirculate": 1}).returns_rejects is True
+    # a single track has none to return (its check refuses recirculate=1: not asked here)
+    assert Feeder.from_values({**TRACK, "recirculate": 1}).returns_rejects is False
+
+
+def test_an_air_jet_on_a_further_section_is_seen():
+    jet = {**LINE, "s2_drop_to": 0, "s2_jet_force": 1e-6, "s2_jet_at": 0.25}
+    assert Feeder.from_values(jet).has_jets is True
+    assert Feeder.from_values({**jet, "s2_jet_force": 0}).has_jets is False
+
+
+def test_the_drives_are_held_where_the_feeder_has_joints():
+    """A joint's check reads the drives on either side of it: a line holds every element's
+    drive; a single track only its geometry (its drive is no part of it); a bowl's numbers are
+    held by its own prepared.in lines (none here), its exit line's with their drives."""
+    single = Feeder.from_values(TRACK).element_names()
+    assert "track_length" in single and "track_width" in single
+    assert not {"freq", "amp_t", "amp_n", "phase"} & set(single)
+    line = Feeder.from_values(LINE).element_names()
+    assert {"freq", "amp_t", "s2_freq", "s2_amp_n", "s2_step", "s2_drop_from"} <= set(line)
+    assert Feeder.from_values(BOWL).element_names() == []
+    exit_line = Feeder.from_values(BOWL_LINE).element_names()
+    assert {"s2_length", "s2_freq", "s2_amp_t"} <= set(exit_line) and "bowl_diameter" not in exit_line
+
+
+@pytest.mark.parametrize("values, bowl", [(TRACK, False), (LINE, False), (BOWL, True), (BOWL_LINE, True),
+                                          ({"bowl_diameter": 0.02}, True), ({"freq": 50}, False)])
+def test_the_parameter_rules_questions_of_a_partial_set(values, bowl):
+    """Asked of any set, a partial one too (no Feeder is made of it)."""
+    assert starts_with_bowl(values) is bowl
+    assert inserts_between_walls(values) is not bowl      # a bowl drops its parts into itself
+    assert side_tools_unprefixed(values) is bowl          # drop_from, wiper_height: the bowl's helix
+    if len(values) > 2:  # a whole feeder decides its kind by the same test
+        assert Feeder.from_values(values).rotates is bowl
+
+
+def test_check_values_checks_a_whole_line_and_only_the_return_of_the_rest():
+    Feeder.check_values(LINE)
+    too_narrow = {**LINE, "s2_width": 2e-4}   # narrower than a part: section 2's own check
+    with pytest.raises(ParameterError, match="s2_width"):
+        Feeder.check_values(too_narrow)
+    # a partial set and a bowl: their rejects' return only
+    Feeder.check_values({"freq": 50})
+    Feeder.check_values({**BOWL_LINE, "s2_width": 2e-4})   # (checked with its geometry instead)
+    for values in ({"recirculate": 2}, {**BOWL, "recirculate": 0.5}):
+        with pytest.raises(ParameterError, match=r"recirculate=.* must be 0 \(rejects removed\) or 1"):
+            Feeder.check_values(values)
+    with pytest.raises(ParameterError, match=r"return_delay=-0.1 s must be >= 0"):
+        Feeder.check_values({**BOWL, "return_delay": -0.1})
+    with pytest.raises(ParameterError, match=r"return_delay=-0.1 s must be >= 0"):
+        Feeder.check_values({**LINE, "return_delay": -0.1})
+
+
+def test_a_bowls_turn_is_its_stroke_over_its_centre_lines_radius():
+    # r_mid = 10 mm - 0.6 mm = 9.4 mm: 200 um along it turns the bowl by 21.3 mrad
+    turn = Turn.from_values(BOWL)
+    assert turn.angle == pytest.approx(2e-4 / 9.4e-3, rel=1e-12)
+    assert (turn.freq, turn.lift, turn.phase) == (75.0, pytest.approx(4e-5, rel=1e-12), -60.0)
+    # its parameters alone make it (a file may record no more of the bowl), strings as well
+    alone = Turn.from_values({name: repr(float(BOWL[name])) for name in TURN_NAMES})
+    assert alone.angle == pytest.approx(turn.angle, rel=1e-12)
+    # the bowl element's own geometry agrees: the same centre line
+    assert Feeder.from_values(BOWL).bowl.r_mid == pytest.approx(9.4e-3, rel=1e-12)
+    assert math.isclose(2e-4 / Feeder.from_values(BOWL).bowl.r_mid, turn.angle, rel_tol=1e-12)
+    with pytest.raises(ParameterError, match="track_width"):
+        Turn.from_values({k: v for k, v in BOWL.items() if k != "track_width"})
