@@ -92,3 +92,38 @@ def test_the_bowl_line_case_speeds_the_dies_up_at_its_joint_as_its_description_s
     # sliding, not hopping: the normal stroke below 1 g
     drive = feeder.elements[1].drive
     assert drive.amp_n * (2 * math.pi * drive.freq) ** 2 < 9.81
+
+
+def test_the_orient_case_files_boxes_lengthwise_and_blows_off_the_wrong_ones_as_its_comments_say():
+    """feeders/orient_line.toml: its rules as docs/orientation.md states them, each a closed form
+    of the part's dimensions: the gate passes a box only lengthwise (W <= width < L), the side
+    drop drops a crosswise box and keeps a lengthwise one (W/2 <= width < L/2), the jet keeps
+    the part's correct state and pushes a part across the tilted floor against friction
+    (its force along the floor beyond the weight's share down the tilt and the friction of
+    what it still presses on the floor), the bulk section hops (Gamma_n > 1), the second
+    slides (Gamma_n < 1); the feeder checks as a whole (joints)."""
+    from vibrofeed.decks import feeders_dir
+    from vibrofeed.orientation import parse_correct
+
+    name, deck, given = CASES["orient"]
+    assert (name, deck, given) == ("orient_line", "orient_line.toml", {})
+    described = Deck.find(feeders_dir() / deck)
+    values = resolve(described, {})
+    feeder = Feeder.from_values(values)
+    feeder.check()
+    part = feeder.part
+    L, W, T = part.size, part.width, part.thickness
+    one, two = feeder.elements
+    assert W <= one.gate.width < L
+    assert W / 2 <= two.side_drop.width < L / 2
+    jet = two.jet
+    assert jet.keeps_correct and jet.keep == part.correct == parse_correct("up, lengthwise")
+    mass = float(values["density"]) * L * W * T
+    weight = mass * 9.81
+    mu, tilt, angle = float(values["mu"]), math.radians(two.cross_tilt), math.radians(jet.angle)
+    along = jet.force * math.cos(angle)
+    resist = weight * math.sin(tilt) + mu * max(weight * math.cos(tilt) - jet.force * math.sin(angle), 0.0)
+    assert along > 1.5 * resist  # it pushes the part off within its window, with a margin
+    w1, w2 = (2 * math.pi * e.drive.freq for e in (one, two))
+    assert one.drive.amp_n * w1 ** 2 / 9.81 > 1 > two.drive.amp_n * w2 ** 2 / 9.81
+    assert float(values["recirculate"]) == 1 and float(values["inlet_rate"]) > 0  # fed, not drained
