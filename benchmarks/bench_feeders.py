@@ -1,11 +1,14 @@
 """Benchmark of feeder descriptions: their generated deck against today's deck, and
 `vibrofeed run` against plain `liggghts -in` of the generated deck, side by side.
 
-    .venv/bin/python benchmarks/bench_feeders.py [--feeder demo-line|bowl-line] [--pairs 5] [--t-end 0.3]
+    .venv/bin/python benchmarks/bench_feeders.py [--feeder demo-line|bowl-line|orient-line]
+                                                 [--pairs 5] [--t-end 0.3]
 
-The feeder is the demo line (feeders/demo_line.toml, the parameters of `vibrofeed demo`) or
-the bowl with its exit line (feeders/bowl_line.toml, `vibrofeed demo --case bowl-line`),
-run for --t-end seconds of vibration on one rank. Each comparison runs its two commands in
+The feeder is the demo line (feeders/demo_line.toml, the parameters of `vibrofeed demo`),
+the bowl with its exit line (feeders/bowl_line.toml, `vibrofeed demo --case bowl-line`) or
+the orientation line (feeders/orient_line.toml, `vibrofeed demo --case orient`: by hand its
+jet never fires and its rejects are not returned, `-var recirculate 0`), run for --t-end
+seconds of vibration on one rank. Each comparison runs its two commands in
 turn, A B A B ..., after one warm-up pair, as whole processes; it prints each command's
 median wall time and the median of the pairs' ratios A/B (a ratio pair by pair holds when
 the machine's speed drifts), as a Markdown table for BENCHMARKS.md:
@@ -70,7 +73,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--pairs", type=int, default=5)
     ap.add_argument("--t-end", type=float, default=0.3)
-    ap.add_argument("--feeder", choices=("demo-line", "bowl-line"), default="demo-line")
+    ap.add_argument("--feeder", choices=("demo-line", "bowl-line", "orient-line"), default="demo-line")
     args = ap.parse_args()
     toml = ROOT / "feeders" / f"{args.feeder.replace('-', '_')}.toml"
     sys.path.insert(0, str(ROOT))
@@ -98,6 +101,8 @@ def main() -> None:
         generated = shlex.split(line)[2]
         hand = shlex.split(line) + ["-log", "none", "-nocite", "-var", "dump_file",
                                     str(tmp / "d.dump")]
+        if args.feeder == "orient-line":  # (the deck refuses recirculate=1 by hand)
+            hand += ["-var", "recirculate", "0"]
         driver = VIBROFEED + ["run", generated, "-q", "-o", "c.h5", "-p", t_end]
         rows.append(("`vibrofeed run` / `liggghts -in` of the generated deck",
                      paired(driver, hand, args.pairs, tmp / "prep")))
