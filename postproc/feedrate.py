@@ -102,6 +102,7 @@ from .line import (
     batch_cuts,
     batch_means,
     bed_pass,
+    fired_at,
     section_bounds,
     tooling,
     trend,
@@ -758,23 +759,26 @@ class FeedRate(AnalysisBase):
             r.rejects_by_tooling = self._rejects_by_tooling(rejects, span)
 
     def _rejects(self, feeder) -> dict:
-        """Every reject: ``time``, ``section`` (1-based, along the path) and ``where`` (its path
-        coordinate [m]): a bowl's falls back into it, where they left its track, and the parts
-        a line (or a bowl's exit line) lost over a side, where they crossed the catch plane
-        (empty for a single track)."""
+        """Every reject: ``time``, ``section`` (1-based, along the path), ``where`` (its path
+        coordinate [m]) and ``id`` (-1 for a bowl's fall): a bowl's falls back into it, where
+        they left its track, and the parts a line (or a bowl's exit line) lost over a side,
+        where they crossed the catch plane (empty for a single track)."""
         r, line = self.results, self.result.rejects
         shift = feeder.path_shift if feeder is not None else 0.0
         time = [np.asarray(line["time"], dtype=float)]
         section = [np.asarray(line["section"], dtype=np.int64)]
         where = [np.asarray(line["position"][:, self.axis], dtype=float) + shift]
+        ids = [np.asarray(line["id"], dtype=np.int64)]
         if feeder is not None and feeder.bowl is not None:
             fell = np.asarray(r.fell_where, dtype=float)
             time.append(np.asarray(r.fell_times, dtype=float))
             section.append((feeder.section_at(fell) + 1).astype(np.int64))
             where.append(fell)
+            ids.append(np.full(len(fell), -1, dtype=np.int64))
         time, section, where = np.concatenate(time), np.concatenate(section), np.concatenate(where)
+        ids = np.concatenate(ids)
         order = np.argsort(time, kind="stable")
-        return {"time": time[order], "section": section[order], "where": where[order]}
+        return {"time": time[order], "section": section[order], "where": where[order], "id": ids[order]}
 
     def _section(self, k: int, lo: float, hi: float, v, interval, window_t, n, flux: tuple,
                  rejects: dict, span: tuple) -> dict:
@@ -812,6 +816,9 @@ class FeedRate(AnalysisBase):
         which = tooling(rejects["where"], rejects["section"], stations, size)
         has = {kind: any(st.kind == kind for st in stations)
                for kind in ("side_drop", "wiper", "jet", "slot")}
+        if has["jet"]:  # a part a jet fired at is the jet's reject, wherever it fell
+            blown = fired_at(rejects["id"], rejects["time"], rejects["section"], result.jet_firings)
+            which = np.where(blown, TOOLING.index("jet"), which)
         out = {}
         for k, name in enumerate(TOOLING):
             if name in ("jet", "slot") and not has[name]:

@@ -43,6 +43,9 @@ WIPER_REACH = 3.0
 # A part a jet blows off crosses the catch plane within this many part sizes downstream of
 # the jet's block (it flies on along the path as it falls), or one upstream.
 JET_REACH = 5.0
+# A part a jet fired at that falls off its section within this time of its window's end fell
+# because of the jet, wherever it crossed the catch plane (over a side drop, too) [s].
+JET_FALL = 0.2
 # A drift counts when the last third's mean differs from the first third's by more than
 # this many combined standard errors.
 DRIFT_SIGMAS = 3.0
@@ -135,7 +138,7 @@ def tooling(where, section, stations, size: float) -> np.ndarray:
     stretch on its section widened by a part size either way, or a slot's the same way; else a
     jet's block widened by a part size upstream and :data:`JET_REACH` downstream; else from
     :data:`WIPER_REACH` part sizes upstream of a wiper's face to its bar's downstream end;
-    else other."""
+    else other. (The feed rate then gives a jet the parts it fired at: :func:`fired_at`.)"""
     s = np.asarray(where, dtype=float)
     section = np.broadcast_to(np.asarray(section), s.shape)
     out = np.full(len(s), TOOLING.index("other"))
@@ -145,6 +148,25 @@ def tooling(where, section, stations, size: float) -> np.ndarray:
         for st in (st for st in stations if st.kind == kind):  # (a side drop is decided last)
             hit = (section == st.section) & (s >= st.start - before * size) & (s <= st.end + after * size)
             out[hit] = TOOLING.index(kind)
+    return out
+
+
+def fired_at(ids, times, sections, firings) -> np.ndarray:
+    """Which rejects (``ids``, ``times`` [s], ``sections``, one per reject) fell because a jet
+    fired at them: a firing of the same part on the same section (``firings``: the result's
+    :attr:`~vibrofeed.results.reader.Result.jet_firings`) whose window started before the
+    fall and ended at most :data:`JET_FALL` before it. (E,) bool."""
+    ids = np.asarray(ids, dtype=np.int64)
+    out = np.zeros(len(ids), dtype=bool)
+    f_id = np.asarray(firings.get("id", []), dtype=np.int64)
+    if not len(f_id) or not len(ids):
+        return out
+    f_sec = np.asarray(firings["section"], dtype=np.int64)
+    start, end = np.asarray(firings["start"], dtype=float), np.asarray(firings["end"], dtype=float)
+    times, sections = np.asarray(times, dtype=float), np.asarray(sections, dtype=np.int64)
+    for i in range(len(ids)):
+        k = (f_id == ids[i]) & (f_sec == sections[i])
+        out[i] = bool(np.any(k & (start <= times[i]) & (times[i] <= end + JET_FALL)))
     return out
 
 

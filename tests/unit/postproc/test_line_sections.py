@@ -538,3 +538,20 @@ def test_unsteady_tells_speeds_in_millimetres_per_second():
          "drifts": True}
     assert unsteady([t]) == ("not steady: the bed's conveying speed on section 2 falls 500.0 -> "
                              "250.0 mm/s over the window (more than 3 standard errors: 30 mm/s)")
+
+
+def test_a_reject_a_jet_fired_at_is_the_jets_wherever_it_fell():
+    from vibrofeed.postproc.line import JET_FALL, fired_at
+
+    # part 7 fired at on section 2 over [0.10, 0.115] s; part 8 on section 2 long before; part 9
+    # on section 3 (a jet of another section)
+    firings = {"id": np.array([7, 8, 9]), "section": np.array([2, 2, 3]),
+               "start": np.array([0.10, 0.01, 0.10]), "end": np.array([0.115, 0.025, 0.115])}
+    ids = np.array([7, 7, 8, 9, 10, 7])
+    times = np.array([0.12, 0.115 + JET_FALL + 1e-6, 0.3, 0.12, 0.12, 0.09])
+    sections = np.array([2, 2, 2, 2, 2, 2])
+    got = fired_at(ids, times, sections, firings)
+    # in its window's reach; too long after; fell long after; another section's; never fired
+    # at; fell before the window opened
+    assert got.tolist() == [True, False, False, False, False, False]
+    assert not fired_at(ids, times, sections, {"id": np.array([], dtype=np.int64)}).any()
