@@ -40,7 +40,7 @@ SHAPES = {
     "sphere": ["shape=0", "part_size=5e-4"],
     "chip": ["shape=1", "part_size=1e-3", "part_thickness=3.5e-4"],
 }
-COMMON = ["track_length=8e-3", "track_width=3e-3", "youngs=2e7", "inlet_rate=0"]
+COMMON = ["track_length=8e-3", "track_width=3e-3", "wall_height=2e-3", "youngs=2e7", "inlet_rate=0"]
 
 
 def loop(text: str) -> tuple[float, int, int]:
@@ -54,7 +54,10 @@ def run(tmp: Path, shape: str, n_parts: int, t_end: float) -> tuple[float, int, 
     args = [sys.executable, "-m", "vibrofeed.cli", "prepare", "bulk_feeder", "-o", str(tmp / shape)]
     for p in params:
         args += ["-p", p]
-    line = subprocess.run(args, check=True, capture_output=True, text=True).stdout.strip().splitlines()[-1]
+    done = subprocess.run(args, capture_output=True, text=True)
+    if done.returncode != 0:
+        sys.exit(f"{shape}: {done.stderr.strip()}")
+    line = done.stdout.strip().splitlines()[-1]
     words = line.split() + ["-var", "dump_file", str(tmp / f"{shape}.dump"), "-log", "none", "-nocite"]
     out = subprocess.run(words, check=True, capture_output=True, text=True, cwd=tmp).stdout
     return loop(out)
@@ -72,6 +75,7 @@ def main() -> None:
         for _ in range(args.repeats):
             for shape in args.shapes:
                 figures[shape].append(run(Path(tmp), shape, args.n_parts, args.t_end))
+                print(f"{shape}: {figures[shape][-1]}", file=sys.stderr, flush=True)
     print(f"Machine: {machine()}; bulk_feeder pre-filled with {args.n_parts} parts, {args.t_end:g} s of "
           f"vibration, 1 rank, liggghts -in without a dump, median of {args.repeats}\n")
     print("| shape | spheres | steps | loop time | µs per part-step | part-steps per s | vs sphere |")
