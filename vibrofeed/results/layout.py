@@ -121,11 +121,13 @@ EVENT_TABLES = {OUTLET: OUTLET_ELEMENTS, REJECTS: REJECT_ELEMENTS, JET: JET_ELEM
 # the track, including those still falling to the box floor) and lost the parts
 # that disappeared without an event (must stay 0).
 MASS_BALANCE_COUNTS = ("inserted", "on_track", "exited", "lost")
-# A feeder line (sections > 1) also counts its rejects, the parts that fell off a side
-# (one event each in REJECTS): inserted = on_track + exited + rejected + lost.
+# A run whose feeder has rejects (vibrofeed.feeders.Feeder.has_rejects, a line) also counts
+# them, the parts that fell off a side (one event each in REJECTS):
+# inserted = on_track + exited + rejected + lost.
 LINE_COUNTS = MASS_BALANCE_COUNTS + ("rejected",)
-# A line that recirculates (recirculate=1) also counts the parts returned to the inlet so
-# far, each a new part and part of inserted (format 1.5): returned <= rejected.
+# A line that returns its rejects (Feeder.returns_rejects: recirculate=1) also counts the
+# parts returned to the inlet so far, each a new part and part of inserted (format 1.5):
+# returned <= rejected.
 RETURN_COUNTS = LINE_COUNTS + ("returned",)
 
 # Time-dependent observables of the vibrating surface, shape (frames, 3).

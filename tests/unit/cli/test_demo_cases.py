@@ -14,6 +14,19 @@ from vibrofeed.feeders import Feeder
 from vibrofeed.parameters import resolve
 
 
+def described_case(case: str, name: str, toml: str):
+    """(deck, resolved values, checked Feeder) of the demo case whose description is
+    feeders/``toml`` and whose result is ``name``."""
+    from vibrofeed.decks import feeders_dir
+
+    assert CASES[case] == (name, toml, {})
+    described = Deck.find(feeders_dir() / toml)
+    values = resolve(described, {})
+    feeder = Feeder.from_values(values)
+    feeder.check()
+    return described, values, feeder
+
+
 @pytest.mark.parametrize("case", ["line", "track"])
 def test_each_case_is_a_valid_run_of_the_bulk_feeder(case):
     name, deck, given = CASES[case]
@@ -72,16 +85,9 @@ def test_the_bowl_line_case_speeds_the_dies_up_at_its_joint_as_its_description_s
     the exit section, by the single-part models (the chute's: vibrofeed.bowl.chute_mean_speed);
     the joint sound (Feeder.check)."""
     from vibrofeed.bowl import chute_mean_speed
-    from vibrofeed.cli.demo import CASES
-    from vibrofeed.decks import feeders_dir
     from vibrofeed.models.deck import transport
 
-    name, deck, given = CASES["bowl-line"]
-    assert (name, deck, given) == ("bowl_line", "bowl_line.toml", {})
-    described = Deck.find(feeders_dir() / deck)
-    values = resolve(described, {})
-    feeder = Feeder.from_values(values)
-    feeder.check()
+    described, values, feeder = described_case("bowl-line", "bowl_line", "bowl_line.toml")
     assert [e.kind for e in feeder.elements] == ["bowl", "linear"]
     p = {k: float(v) for k, v in values.items()
          if k in described.variables and described.variables[k].is_numeric}
@@ -102,15 +108,9 @@ def test_the_orient_case_files_boxes_lengthwise_and_blows_off_the_wrong_ones_as_
     (its force along the floor beyond the weight's share down the tilt and the friction of
     what it still presses on the floor), the bulk section hops (Gamma_n > 1), the second
     slides (Gamma_n < 1); the feeder checks as a whole (joints)."""
-    from vibrofeed.decks import feeders_dir
     from vibrofeed.orientation import parse_correct
 
-    name, deck, given = CASES["orient"]
-    assert (name, deck, given) == ("orient_line", "orient_line.toml", {})
-    described = Deck.find(feeders_dir() / deck)
-    values = resolve(described, {})
-    feeder = Feeder.from_values(values)
-    feeder.check()
+    _, values, feeder = described_case("orient", "orient_line", "orient_line.toml")
     part = feeder.part
     L, W, T = part.size, part.width, part.thickness
     one, two = feeder.elements

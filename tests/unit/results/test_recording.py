@@ -4,20 +4,11 @@ and the rotation as the deck defines them; and the files it makes."""
 
 import h5py
 import pytest
+from feeder_values import BOWL, BOWL_LINE, LINE, TRACK
 
 from vibrofeed.feeders import Feeder
 from vibrofeed.results import layout as L
 from vibrofeed.results.writer import Recording, ResultWriter
-
-TRACK = {"part_size": 3e-4, "shape": 0, "track_length": 4e-3, "track_width": 1.2e-3,
-         "wall_height": 1e-3, "freq": 100, "amp_t": 3e-5, "amp_n": 5e-5, "phase": 0}
-LINE = {**TRACK, "sections": 2, "s2_length": 5e-3, "s2_width": 1.2e-3, "s2_wall_height": 6e-4,
-        "s2_step": 6e-5, "s2_freq": 100, "s2_amp_t": 1.2e-4, "s2_amp_n": 2e-5, "s2_phase": 0}
-BOWL = {"bowl_diameter": 0.02, "track_width": 1.2e-3, "helix_angle": 3.0, "turns": 0.5,
-        "wall_height": 1e-3, "chute_length": 8e-3, "part_size": 3e-4, "shape": 0,
-        "freq": 75, "amp_t": 2e-4, "amp_n": 4e-5, "phase": -60}
-BOWL_LINE = {**BOWL, "sections": 2, "s2_length": 0.01, "s2_width": 1.5e-3, "s2_wall_height": 1e-3,
-             "s2_step": 5e-5, "s2_freq": 75, "s2_amp_t": 4e-4, "s2_amp_n": 4e-5, "s2_phase": -60}
 
 
 @pytest.mark.parametrize("values, sections, rotating, want", [
