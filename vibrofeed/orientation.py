@@ -38,7 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import ParameterError
-from .rotations import quaternion_matrices
+from .rotations import matrix_quaternion, quaternion_matrices, quaternion_product
 
 # The body faces by their outward normals; index k: axis k // 2, sign + for even k.
 FACES = ("+x", "-x", "+y", "-y", "+z", "-z")
@@ -234,36 +234,16 @@ def body_axes(template) -> np.ndarray:
     return axes
 
 
-def _matrix_quaternion(matrix) -> np.ndarray:
-    """The unit quaternion (w, x, y, z) of a rotation matrix."""
-    m = np.asarray(matrix, dtype=float)
-    k = np.array([[m[0, 0] - m[1, 1] - m[2, 2], 0, 0, 0],
-                  [m[0, 1] + m[1, 0], m[1, 1] - m[0, 0] - m[2, 2], 0, 0],
-                  [m[0, 2] + m[2, 0], m[1, 2] + m[2, 1], m[2, 2] - m[0, 0] - m[1, 1], 0],
-                  [m[2, 1] - m[1, 2], m[0, 2] - m[2, 0], m[1, 0] - m[0, 1], m[0, 0] + m[1, 1] + m[2, 2]]])
-    values, vectors = np.linalg.eigh(k / 3.0)  # (Bar-Itzhack: the largest eigenvalue's vector)
-    x, y, z, w = vectors[:, np.argmax(values)]
-    return np.array([w, x, y, z]) * (1 if w >= 0 else -1)
-
-
-def _turned(q, p) -> np.ndarray:
-    """The quaternions q * p (N, 4): turning by p (the template's axes) first, then by q."""
-    w1, x1, y1, z1 = np.moveaxis(np.asarray(q, dtype=float).reshape(-1, 4), -1, 0)
-    w2, x2, y2, z2 = p
-    return np.stack([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
-                     w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2], axis=-1)
-
-
 def axes_quaternion(template) -> np.ndarray:
     """The quaternion (w, x, y, z) that turns the body frame of :func:`body_axes` into the
     frame a clump ``template`` is laid out in (identity for a template along the body axes)."""
-    return _matrix_quaternion(body_axes(template))
+    return matrix_quaternion(body_axes(template))
 
 
 def turned_states(quaternions, axes_q, tangent=(1.0, 0.0, 0.0), up=(0.0, 0.0, 1.0)) -> States:
     """The :class:`States` of parts whose recorded ``quaternions`` (N, 4) turn a template whose
     axes are turned by ``axes_q`` (:func:`axes_quaternion`) from the body frame."""
-    return classify(_turned(quaternions, axes_q), tangent, up)
+    return classify(quaternion_product(quaternions, axes_q), tangent, up)
 
 
 def part_states(quaternions, template, tangent=(1.0, 0.0, 0.0), up=(0.0, 0.0, 1.0)):

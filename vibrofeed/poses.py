@@ -26,6 +26,7 @@ from .errors import ParameterError
 from .feeders.records import number
 from .geometry import Prepared, box_lines
 from .mesh import MeshBuilder, write_stl
+from .rotations import matrix_quaternion
 
 STANDS = {0: "flat", 1: "side", 2: "end"}
 #: the box axis (0 x/L, 1 y/W, 2 z/T) standing vertical for each ``stand``
@@ -54,15 +55,6 @@ def pose_matrix(stand: int, facing: int, tilt: float = 0.0) -> np.ndarray:
     c, s = math.cos(math.radians(tilt)), math.sin(math.radians(tilt))
     Ry = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
     return Ry @ P
-
-
-def matrix_quaternion(R: np.ndarray) -> np.ndarray:
-    """The unit quaternion (w, x, y, z), w >= 0, of a rotation matrix."""
-    from scipy.spatial.transform import Rotation
-
-    x, y, z, w = Rotation.from_matrix(R).as_quat()
-    q = np.array([w, x, y, z])
-    return q if w >= 0 else -q
 
 
 def pose_dims(values: Mapping[str, str]) -> tuple[float, float, float]:
