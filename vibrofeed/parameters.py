@@ -188,7 +188,8 @@ RULES: dict[str, Callable[[float], str | None]] = {
 # Section 2's drive and walls are section 1's kind: the same limits.
 SECTION_2_TWINS = {"s2_length": "track_length", "s2_width": "track_width",
                    "s2_wall_height": "wall_height", "s2_freq": "freq", "s2_amp_t": "amp_t",
-                   "s2_amp_n": "amp_n", "s2_phase": "phase", "s2_cross_tilt": "cross_tilt"}
+                   "s2_amp_n": "amp_n", "s2_phase": "phase", "s2_cross_tilt": "cross_tilt",
+                   "s2_amp_c": "amp_n", "s2_phase_c": "phase"}
 RULES.update({twin: RULES[name] for twin, name in SECTION_2_TWINS.items()})
 # A line's section k >= 3 (a feeder description's, docs/feeders.md) has section 2's names
 # with its own number: s3_amp_n takes s2_amp_n's rule.
@@ -385,7 +386,7 @@ MAX_FRAMES = 1_000_000
 def _check_relations(p: Mapping[str, float]) -> None:
     """Limits that involve several parameters."""
     drives = (("amp_n", "freq"), ("amp_t", "freq"),
-              *((f"s{k}_amp_{a}", f"s{k}_freq") for k in range(2, MAX_SECTIONS + 1) for a in "nt"))
+              *((f"s{k}_amp_{a}", f"s{k}_freq") for k in range(2, MAX_SECTIONS + 1) for a in "ntc"))
     for amp, freq in drives:
         if amp in p and freq in p:
             speed = 2 * math.pi * p[freq] * p[amp]
@@ -823,8 +824,10 @@ def run_steps(p: Mapping[str, float]) -> tuple[float, float] | None:
     dt = p.get("dt", 0.0)
     if dt <= 0:
         drives = [(p.get("freq", 0.0), p.get("amp_t", 0.0), p.get("amp_n", 0.0))]
-        drives += [(p.get(f"s{k}_freq", 0.0), p.get(f"s{k}_amp_t", 0.0), p.get(f"s{k}_amp_n", 0.0))
-                   for k in range(2, int(p.get("sections", 1)) + 1)]
+        # (a cross stroke adds to the along one: the decks' peak speed is the amplitudes' norm)
+        drives += [(p.get(f"s{k}_freq", 0.0),
+                    math.hypot(p.get(f"s{k}_amp_t", 0.0), p.get(f"s{k}_amp_c", 0.0)),
+                    p.get(f"s{k}_amp_n", 0.0)) for k in range(2, int(p.get("sections", 1)) + 1)]
         freq, amp_t, amp_n = max(drives, key=lambda d: d[0] * math.hypot(d[1], d[2]))
         times = contact_times({**p, "freq": freq, "amp_t": amp_t, "amp_n": amp_n})
         if times is None:

@@ -47,12 +47,19 @@ class Joint:
         """One-line ParameterError naming b's parameter when the joint is not sound."""
         a, b = self.a, self.b
         step = b.name(("step",))
-        sway = getattr(a, "sway", 0.0)  # (a bowl's chute end also moves across)
+        chute = getattr(a, "sway", 0.0)  # (a bowl's chute end also moves across)
+        cross = a.drive.sway_from(b.drive)  # (and so do cross strokes)
+        sway = chute + cross
         if b.width < a.exit_width + 2 * sway:
-            exit_ = (f"the bowl's chute ({a.exit_width:g} m, swaying {sway:.3g} m either way with "
-                     "the torsion)" if sway else f"section {a.number}'s exit ({a.exit_width:g} m)")
-            hint = ("widen it or shorten chute_length" if sway
-                    else f"narrow section {a.number} with its gate")
+            moves = (f"swaying {sway:.3g} m either way with the torsion" if chute and not cross
+                     else f"the two moving {sway:.3g} m apart across" if sway else "")
+            exit_ = (f"the bowl's chute ({a.exit_width:g} m, {moves})" if chute
+                     else f"section {a.number}'s exit ({a.exit_width:g} m{', ' + moves if moves else ''})")
+            hint = ("widen it or shorten chute_length" if chute
+                    else f"narrow section {a.number} with its gate"
+                    + (" or lessen the cross strokes ("
+                       + ", ".join(e.name(("drive", "amp_c")) for e in (a, b) if e.drive.amp_c) + ")"
+                       if cross else ""))
             raise ParameterError(
                 f"{b.name(('width',))}={b.width:g} m is narrower than {exit_}: the elements do not "
                 f"join (parts would fall at the joint); {hint}")

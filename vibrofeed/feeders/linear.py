@@ -43,6 +43,8 @@ KEYS: dict[tuple[str, ...], tuple[str | None, str | None]] = {
     ("drive", "amp_t"): ("amp_t", "amp_t"),
     ("drive", "amp_n"): ("amp_n", "amp_n"),
     ("drive", "phase"): ("phase", "phase"),
+    ("drive", "amp_c"): (None, "amp_c"),
+    ("drive", "phase_c"): (None, "phase_c"),
     ("drive", "waveform"): ("waveform", None),
     ("drive", "duty"): ("duty", None),
     ("gate", "width"): ("gate_width", None),
@@ -125,7 +127,8 @@ class LinearSection:
         drive = Drive(freq=get(("drive", "freq")), amp_t=get(("drive", "amp_t")),
                       amp_n=get(("drive", "amp_n")), phase=get(("drive", "phase"), 0.0),
                       waveform=int(get(("drive", "waveform"), 0.0)) if first else 0,
-                      duty=get(("drive", "duty"), 0.7) if first else 0.7)
+                      duty=get(("drive", "duty"), 0.7) if first else 0.7,
+                      amp_c=get(("drive", "amp_c"), 0.0), phase_c=get(("drive", "phase_c"), 0.0))
         step = 0.0 if first else get(("step",))
         gate = side_drop = wiper = jet = slot = None
         if first and get(("gate", "width"), 0.0) > 0:
@@ -254,7 +257,7 @@ class LinearSection:
         motion, s<k>_surface_*)."""
         k, s = self.number, f"s{self.number}"
         level = "+".join(f"v_s{j}_step" for j in range(2, k + 1))
-        out = sine_commands(k)
+        out = sine_commands(k, cross=self.drive.amp_c != 0)
         out["derived"].append(
             f"variable {s}_low equal -({level}+v_{s}_width*tan(v_{s}_cross_tilt*PI/180))")
         return out
@@ -301,9 +304,12 @@ class LinearSection:
         (one-line ParameterError naming the parameter); ``last``: its end is the outlet edge."""
         n = self.name
         end = "the outlet edge" if last else f"the end of section {self.number}"
-        if self.width < part.widest:
+        # parts arrive at a later section through the joint, whose check keeps its width at least
+        # the exit's before it: one that a gate filed lengthwise needs room for a box's width only
+        need = part.widest if self.number == 1 else part.abreast
+        if self.width < need:
             raise ParameterError(f"{n(('width',))}={self.width:g} m is narrower than a part "
-                                 f"({part.widest:g} m across)")
+                                 f"({need:g} m across{' riding lengthwise' if need < part.widest else ''})")
         radius = part.tallest / 2
         if self.wall_height <= radius:
             raise ParameterError(f"{n(('wall_height',))}={self.wall_height:g} m is no higher than a "
@@ -485,36 +491,52 @@ def keep_word(text: str, name: str = "jet.keep") -> str:
     return correct_word(text, name)
 
 
-def sine_commands(k: int) -> dict[str, list[str]]:
+def sine_commands(k: int, cross: bool = False) -> dict[str, list[str]]:
     """Element ``k``'s commands as a sine drive along x and z moves its mesh
     ``track_s<k>.stl``, its tunables ``s<k>_freq``, ``amp_t``, ``amp_n``, ``phase``: ``derived``
     (its angular frequency and phase; the element adds its lowest floor ``s<k>_low``),
     ``peak``, ``catch`` (below ``s<k>_low``), ``mesh`` (placed where its sine puts it at
-    t = 0) and ``motion`` (the movers and the recorded motion, s<k>_surface_*)."""
+    t = 0) and ``motion`` (the movers and the recorded motion, s<k>_surface_*). ``cross``: a
+    third sine across (y), ``s<k>_amp_c`` leading by ``s<k>_phase_c``, moved as z is; without
+    it the commands are those of a drive along x and z alone, to the character."""
     s = f"s{k}"
     half = f"$(v_{s}_omega*v_dt_used/2)"
-    return {
+    gain = f"$(v_{s}_amp_{{a}}*v_{s}_omega*v_dt_used/sin(v_{s}_omega*v_dt_used/2))"
+
+    def riemann(a: str, phi: str) -> str:
+        # where the viblin mover puts the mesh at step n: its placed offset plus the movers'
+        # sum of v dt (check.sine_drive's closed form)
+        return (f"$(v_{s}_amp_{a}*sin(v_{s}_{phi}))&\n+{gain.format(a=a)}&\n"
+                f"*sin(step*{half})*cos((step+1)*{half}+$(v_{s}_{phi}))")
+
+    def mover(a: str, axis: str, phi: str) -> str:
+        return (f"fix {s}_shake_{a} all move/mesh mesh track_{s} viblin axis {axis} order 1 "
+                f"amplitude ${{{s}_amp_{a}}} &\n     phase $(v_{s}_{phi}-PI/2) period $(1/v_{s}_freq)")
+
+    amps = f"v_{s}_amp_t^2+v_{s}_amp_n^2" + (f"+v_{s}_amp_c^2" if cross else "")
+    y = f"$(v_{s}_amp_c*sin(v_{s}_phic))" if cross else "0"
+    out = {
         "derived": [f"variable {s}_omega equal 2*PI*v_{s}_freq",
-                    f"variable {s}_phi equal v_{s}_phase*PI/180"],
-        "peak": [f"variable {s}_peak equal v_{s}_omega*sqrt(v_{s}_amp_t^2+v_{s}_amp_n^2)"],
+                    f"variable {s}_phi equal v_{s}_phase*PI/180"]
+        + ([f"variable {s}_phic equal v_{s}_phase_c*PI/180"] if cross else []),
+        "peak": [f"variable {s}_peak equal v_{s}_omega*sqrt({amps})"],
         "catch": [f"variable {s}_catch equal v_{s}_low-(v_{s}_amp_n+2*v_r_ext)"],
         "mesh": [f"fix track_{s} all mesh/surface file ${{mesh_dir}}/track_{s}.stl type 2 "
-                 f"move 0 0 $(v_{s}_amp_n*sin(v_{s}_phi))"],
+                 f"move 0 {y} $(v_{s}_amp_n*sin(v_{s}_phi))"],
         "motion": [
             f"fix {s}_shake_t all move/mesh mesh track_{s} wiggle amplitude ${{{s}_amp_t}} 0 0 "
             f"period $(1/v_{s}_freq)",
-            f"fix {s}_shake_n all move/mesh mesh track_{s} viblin axis 0 0 1 order 1 amplitude "
-            f"${{{s}_amp_n}} &\n     phase $(v_{s}_phi-PI/2) period $(1/v_{s}_freq)",
-            f"variable {s}_surface_x equal &\n"
-            f"$(v_{s}_amp_t*v_{s}_omega*v_dt_used/sin(v_{s}_omega*v_dt_used/2))&\n"
-            f"*sin(step*{half})*cos((step+1)*{half})",
-            f"variable {s}_surface_y equal 0",
-            f"variable {s}_surface_z equal &\n"
-            f"$(v_{s}_amp_n*sin(v_{s}_phi))&\n"
-            f"+$(v_{s}_amp_n*v_{s}_omega*v_dt_used/sin(v_{s}_omega*v_dt_used/2))&\n"
-            f"*sin(step*{half})*cos((step+1)*{half}+$(v_{s}_phi))",
-            f"variable {s}_surface_vx equal $(v_{s}_amp_t*v_{s}_omega)*cos($(v_{s}_omega)*time)",
-            f"variable {s}_surface_vy equal 0",
-            f"variable {s}_surface_vz equal "
-            f"$(v_{s}_amp_n*v_{s}_omega)*cos($(v_{s}_omega)*time+$(v_{s}_phi))"],
+            mover("n", "0 0 1", "phi")]
+        + ([mover("c", "0 1 0", "phic")] if cross else [])
+        + [f"variable {s}_surface_x equal &\n"
+           f"{gain.format(a='t')}&\n"
+           f"*sin(step*{half})*cos((step+1)*{half})",
+           f"variable {s}_surface_y equal " + (f"&\n{riemann('c', 'phic')}" if cross else "0"),
+           f"variable {s}_surface_z equal &\n{riemann('n', 'phi')}",
+           f"variable {s}_surface_vx equal $(v_{s}_amp_t*v_{s}_omega)*cos($(v_{s}_omega)*time)",
+           f"variable {s}_surface_vy equal "
+           + (f"$(v_{s}_amp_c*v_{s}_omega)*cos($(v_{s}_omega)*time+$(v_{s}_phic))" if cross else "0"),
+           f"variable {s}_surface_vz equal "
+           f"$(v_{s}_amp_n*v_{s}_omega)*cos($(v_{s}_omega)*time+$(v_{s}_phi))"],
     }
+    return out

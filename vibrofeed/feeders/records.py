@@ -121,7 +121,10 @@ def _stl(values: Mapping):
 class Drive:
     """An element's vibration: ``freq`` [Hz], displacement amplitudes along (``amp_t``) and
     normal to (``amp_n``) its floor [m], the normal motion's lead ``phase`` [deg], and the
-    waveform (0 sine; 1-4 as include/surface_motion.liggghts, with ``duty``)."""
+    waveform (0 sine; 1-4 as include/surface_motion.liggghts, with ``duty``). A further
+    linear section may also move across its track: ``amp_c`` [m] along +y, leading the
+    tangential motion by ``phase_c`` [deg] (a cross stroke: it rocks a part on its side over
+    onto a broad face, docs/orientation.md)."""
 
     freq: float
     amp_t: float
@@ -129,11 +132,18 @@ class Drive:
     phase: float = 0.0
     waveform: int = 0
     duty: float = 0.7
+    amp_c: float = 0.0
+    phase_c: float = 0.0
 
     @property
     def peak_speed(self) -> float:
-        """The sine's peak surface speed [m/s]."""
-        return 2 * math.pi * self.freq * math.hypot(self.amp_t, self.amp_n)
+        """The sine's peak surface speed [m/s] (at most: the cross stroke's phase ignored)."""
+        return 2 * math.pi * self.freq * math.hypot(self.amp_t, self.amp_n, self.amp_c)
+
+    def sway_from(self, other: Drive) -> float:
+        """How far two floors driven by this and ``other`` move apart across the track at most
+        [m]: the amplitude of their cross strokes' difference (as :meth:`relative_to` along z)."""
+        return _apart(self.freq, other.freq, self.amp_c, other.amp_c, self.phase_c, other.phase_c)
 
     def relative_to(self, other: Drive) -> tuple[float, float]:
         """How far two floors driven by this and ``other`` move apart at most [m]: normal (dz)
@@ -141,12 +151,19 @@ class Drive:
         sqrt(a1^2 + a2^2 - 2 a1 a2 cos(phase1 - phase2)) normal, |amp_t1 - amp_t2| along
         (both start at sin(w t)); of two frequencies: the sum of the amplitudes (the phases
         drift)."""
+        dz = _apart(self.freq, other.freq, self.amp_n, other.amp_n, self.phase, other.phase)
         if self.freq != other.freq:
-            return self.amp_n + other.amp_n, self.amp_t + other.amp_t
-        a1, a2 = self.amp_n, other.amp_n
-        dphi = math.radians(self.phase - other.phase)
-        dz = math.sqrt(max(a1 * a1 + a2 * a2 - 2 * a1 * a2 * math.cos(dphi), 0.0))
+            return dz, self.amp_t + other.amp_t
         return dz, abs(self.amp_t - other.amp_t)
+
+
+def _apart(f1: float, f2: float, a1: float, a2: float, phase1: float, phase2: float) -> float:
+    """The largest difference of a1 sin(w1 t + phase1) and a2 sin(w2 t + phase2) [m], phases
+    in degrees: the amplitude of the difference at one frequency, the sum at two."""
+    if f1 != f2:
+        return a1 + a2
+    dphi = math.radians(phase1 - phase2)
+    return math.sqrt(max(a1 * a1 + a2 * a2 - 2 * a1 * a2 * math.cos(dphi), 0.0))
 
 
 # ------------------------------------------------------------------ tooling stations

@@ -503,10 +503,10 @@ DRIVE_RTOL = 1e-6
 DRIVE_ATOL = {"position": 1e-15, "velocity": 1e-12}  # m, m/s
 
 
-def sine_drive(freq, amp_t, amp_n, phase, dt, step, time):
+def sine_drive(freq, amp_t, amp_n, phase, dt, step, time, amp_c=0.0, phase_c=0.0):
     """((n, 3) position [m], (n, 3) velocity [m/s]) of a section under LIGGGHTS' sine movers at
     ``step`` (n,) and ``time`` (n,) [s], from where it was placed at t = 0 (amp_n sin(phi) along
-    z; FORMAT.md, "Feeder lines").
+    z, amp_c sin(phi_c) along y; FORMAT.md, "Feeder lines").
 
     wiggle (x) and viblin (z) move the mesh by v(t_j) dt at each step j = 1..n, v = A w cos(w t
     + phi), so x(n) = A w dt sum_j cos(j th + phi), th = w dt, which sums to
@@ -523,8 +523,13 @@ def sine_drive(freq, amp_t, amp_n, phase, dt, step, time):
     z = amp_n * math.sin(phi) + amp_n * gain * ramp * np.cos((step + 1) * half + phi)
     vx = amp_t * w * np.cos(w * time)
     vz = amp_n * w * np.cos(w * time + phi)
-    zero = np.zeros_like(step)
-    return np.column_stack([x, zero, z]), np.column_stack([vx, zero, vz])
+    if amp_c:
+        phi_c = math.radians(phase_c)
+        y = amp_c * math.sin(phi_c) + amp_c * gain * ramp * np.cos((step + 1) * half + phi_c)
+        vy = amp_c * w * np.cos(w * time + phi_c)
+    else:
+        y = vy = np.zeros_like(step)
+    return np.column_stack([x, y, z]), np.column_stack([vx, vy, vz])
 
 
 class _Physics:
@@ -607,8 +612,9 @@ class _Physics:
                                     f"{k}'s motion cannot be verified")
                 continue
             drive = [self.p[n] for n in names]
-            expected = sine_drive(*drive, dt, step, time)
-            amp = max(abs(drive[1]), abs(drive[2]))
+            cross = [self.p.get(f"s{k}_{n}", 0.0) for n in L.SECTION_CROSS]
+            expected = sine_drive(*drive, dt, step, time, *cross)
+            amp = max(abs(drive[1]), abs(drive[2]), abs(cross[0]))
             omega = 2 * math.pi * drive[0]
             for element, got, want, scale, unit in (
                     ("position", motion[0][()], expected[0], amp, "m"),

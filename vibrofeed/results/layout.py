@@ -169,6 +169,9 @@ def surface_variables(section: int) -> tuple[tuple[str, ...], tuple[str, ...]]:
 # The sine drive of section k >= 2 (a line's sections are sine-driven): the parameters
 # s<k>_freq [Hz], s<k>_amp_t, s<k>_amp_n [m], s<k>_phase [deg].
 SECTION_DRIVE = ("freq", "amp_t", "amp_n", "phase")
+# ... and, where the section moves across its track too, s<k>_amp_c [m] and s<k>_phase_c [deg]
+# (absent: 0, as in the files written before cross strokes existed).
+SECTION_CROSS = ("amp_c", "phase_c")
 
 TIME_UNIT = "s"
 

@@ -103,6 +103,8 @@ BULK = {
     "s2_amp_t": (0, True, 0.01, True, None),
     "s2_amp_n": (0, True, 0.01, True, None),
     "s2_phase": (-INF, False, INF, False, None),
+    "s2_amp_c": (0, True, 0.01, True, None),
+    "s2_phase_c": (-INF, False, INF, False, None),
     "s2_drop_from": (0, True, 1, True, None),
     "s2_drop_to": (0, True, 1, True, None),
     "s2_drop_width": (0, True, INF, False, None),
@@ -413,3 +415,10 @@ def test_an_inlet_beyond_its_block_is_refused_before_the_engine(given, named):
     with pytest.raises(ParameterError, match="^" + re.escape(named)):
         resolve(Deck.find(DECKS / "bulk_feeder.liggghts"), given)
     assert resolve(Deck.find(DECKS / "bulk_feeder.liggghts"), {"inlet_rate": "1000", "n_parts": "0"})
+
+
+def test_a_cross_stroke_counts_in_the_surface_speed_limit():
+    bulk = Deck(DECKS / "bulk_feeder.liggghts")
+    freq = MAX_SURFACE_SPEED / (2 * math.pi * 0.005)  # 0.005 m at this freq: the limit
+    with pytest.raises(ParameterError, match=r"^s2_amp_c=0.005 m at s2_freq=.* m/s peak"):
+        resolve(bulk, {"sections": "2", "s2_amp_c": "0.005", "s2_freq": repr(freq * (1 + 1e-9))})

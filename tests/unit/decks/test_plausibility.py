@@ -181,6 +181,9 @@ def test_a_parameter_the_deck_does_not_declare_takes_its_neutral_value(p, name, 
     ({"sections": 2.0, "s3_freq": 80.0}, "s3_freq", "shapes a feeder line's section 3: sections=2 has none"),
     ({"sections": 3.0, "s3_phase": 20.0, "s3_amp_n": 0.0}, "s3_phase",
      "shifts the normal motion against the tangential one: one of them is 0"),
+    ({"sections": 2.0, "s2_phase_c": 90.0, "s2_amp_c": 0.0}, "s2_phase_c",
+     "shifts the cross stroke: s2_amp_c=0 has none"),
+    ({"sections": 3.0, "s3_phase_c": 90.0}, "s3_phase_c", "shifts the cross stroke: s3_amp_c=0 has none"),
 ])
 def test_a_further_sections_idle_parameters_are_named_as_section_2s(p, name, why):
     assert advice(p, {name}) == [f"parameter {name} has no effect: it {why}"]

@@ -188,3 +188,33 @@ def test_prepared_in_holds_a_run_by_hand_to_the_values_it_was_checked_for(tmp_pa
     assert "run vibrofeed prepare again with the new value" in text
     assert sorted(p.name for p in (tmp_path / "m").glob("track*.stl")) == [
         "track.stl", "track_s2.stl", "track_s3.stl"]
+
+
+def test_a_cross_stroke_adds_a_third_mover_and_its_recorded_sway_to_that_section_only(tmp_path):
+    text = TWO.replace("amp_n = 2e-5 }", "amp_n = 2e-5, amp_c = 4e-5, phase_c = 10 }")
+    values = read(described(tmp_path, text)).values
+    assert (float(values["s2_amp_c"]), float(values["s2_phase_c"])) == (4e-5, 10.0)
+    feeder = Feeder.from_values(values)
+    assert (feeder.elements[1].drive.amp_c, feeder.elements[1].drive.phase_c) == (4e-5, 10.0)
+    files = line_files(feeder)
+    motion, derived = files["line_motion.in"], files["line_derived.in"]
+    assert re.search(r"^fix s2_shake_c all move/mesh mesh track_s2 viblin axis 0 1 0 order 1 "
+                     r"amplitude \$\{s2_amp_c\} &\n     phase \$\(v_s2_phic-PI/2\)", motion, re.M)
+    assert "variable s2_phic equal v_s2_phase_c*PI/180" in derived
+    assert "variable s2_peak equal v_s2_omega*sqrt(v_s2_amp_t^2+v_s2_amp_n^2+v_s2_amp_c^2)" in derived
+    assert "variable s2_surface_vy equal $(v_s2_amp_c*v_s2_omega)*cos($(v_s2_omega)*time+$(v_s2_phic))" \
+        in motion
+    # placed where its sine puts it at t = 0, across as normal to the floor
+    assert "move 0 $(v_s2_amp_c*sin(v_s2_phic)) $(v_s2_amp_n*sin(v_s2_phi))" in files["line_meshes.in"]
+    # without one, the commands of a drive along x and z alone
+    plain = line_files(Feeder.from_values(read(described(tmp_path, TWO, "p.toml")).values))
+    assert "shake_c" not in plain["line_motion.in"] and "phic" not in plain["line_derived.in"]
+    assert "variable s2_surface_y equal 0" in plain["line_motion.in"]
+
+
+def test_the_first_section_has_no_cross_stroke(tmp_path):
+    first = "[[element]]\nkind = \"linear\"\nlength = 0.004"
+    text = TWO.replace(first, first + "\ndrive = { freq = 100, amp_c = 1e-5 }", 1)
+    with pytest.raises(ParameterError, match=r"element 1: drive.amp_c: a cross stroke moves a later "
+                                             r"section in this version"):
+        read(described(tmp_path, text))

@@ -72,6 +72,28 @@ def test_joint_motion_in_closed_form():
     assert f.joints[0].motion[0] == pytest.approx(5e-5, rel=1e-12)
 
 
+def test_cross_strokes_sway_the_joint_apart_in_closed_form():
+    f = Feeder.from_values({**THREE, "s2_amp_c": 3e-5, "s2_phase_c": 90, "s3_amp_c": 4e-5})
+    one, two = f.joints
+    # from a section without one: its own amplitude; 3 and 4 (x 1e-5) a quarter period apart: 5
+    assert f.linear_sections[1].drive.sway_from(f.linear_sections[0].drive) == pytest.approx(3e-5, rel=1e-12)
+    assert two.a.drive.sway_from(two.b.drive) == pytest.approx(5e-5, rel=1e-12)
+    # (the floors along and normal move as before)
+    assert one.motion == (pytest.approx(3e-5, rel=1e-12), pytest.approx(9e-5, rel=1e-12))
+    # the peak surface speed counts it: 2 pi 100 Hz |(1e-4, 1e-5, 4e-5)|
+    assert two.b.drive.peak_speed == pytest.approx(2 * math.pi * 100 * math.sqrt(1e-8 + 1e-10 + 1.6e-9),
+                                                   rel=1e-12)
+
+
+def test_a_joint_whose_walls_sway_into_the_path_is_refused_naming_the_strokes():
+    # section 3 (0.8 mm) swaying against section 2's 0.6 mm exit: up to 0.1 mm either way fits
+    Feeder.from_values({**THREE, "s3_amp_c": 0.9e-4}).check()
+    with pytest.raises(ParameterError) as err:
+        Feeder.from_values({**THREE, "s3_amp_c": 1.2e-4}).check()
+    assert ("s3_width=0.0008 m is narrower than section 2's exit (0.0006 m, the two moving 0.00012 m "
+            "apart across)") in str(err.value) and "(s3_amp_c)" in str(err.value)
+
+
 def test_tooling_stations_where_the_numbers_put_them():
     stations = Feeder.from_values(THREE).stations
     assert [(s.section, s.kind) for s in stations] == [(1, "gate"), (2, "side_drop"), (2, "wiper")]
@@ -152,3 +174,18 @@ def test_an_air_jet_is_a_station_spanning_its_block():
     assert (jet.section, jet.element, jet.kind, jet.name) == (2, 2, "jet", "s2.jet")
     centre = 4e-3 + 0.25 * 5e-3 + 2e-4
     assert (jet.start, jet.end) == pytest.approx((centre - 2.5e-4, centre + 2.5e-4), rel=0, abs=1e-15)
+
+
+BOX_LINE = {"sections": 2, "shape": 3, "part_size": 1e-3, "part_width": 5e-4, "part_thickness": 3.5e-4,
+            "track_length": 4e-3, "track_width": 1.4e-3, "wall_height": 1e-3, "gate_width": 6e-4,
+            "gate_at": 0.5, "freq": 100, "amp_t": 1e-4, "amp_n": 5e-5,
+            "s2_length": 5e-3, "s2_width": 7.5e-4, "s2_wall_height": 1e-3, "s2_step": 1e-4,
+            "s2_freq": 100, "s2_amp_t": 1e-4, "s2_amp_n": 5e-5}
+
+
+def test_a_later_section_needs_room_for_a_box_riding_lengthwise_only():
+    # behind a 0.6 mm gate the boxes (1.0 x 0.5 mm) arrive lengthwise: 0.75 mm holds them
+    Feeder.from_values(BOX_LINE).check()
+    with pytest.raises(ParameterError, match=r"^s2_width=0.00045 m is narrower than a part "
+                                             r"\(0.0005 m across riding lengthwise\)$"):
+        Feeder.from_values({**BOX_LINE, "s2_width": 4.5e-4, "gate_width": 4.5e-4}).check()

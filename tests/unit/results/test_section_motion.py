@@ -44,14 +44,17 @@ def mover_sum(amp, freq, phase_deg, steps):
     return amp * math.sin(phi) + x, amp * w * np.cos(w * n * DT + phi)
 
 
-def section2_motion():
-    """(steps (F,), times (F,), position (F, 3), velocity (F, 3)) of section 2 at the frames."""
+def section2_motion(cross=None):
+    """(steps (F,), times (F,), position (F, 3), velocity (F, 3)) of section 2 at the frames;
+    ``cross`` ({"s2_amp_c": .., "s2_phase_c": ..}): it also moves across (a third mover, y)."""
     steps = np.arange(N_FRAMES) * EVERY
     x, vx = mover_sum(S2["s2_amp_t"], S2["s2_freq"], 0.0, int(steps[-1]))
     z, vz = mover_sum(S2["s2_amp_n"], S2["s2_freq"], S2["s2_phase"], int(steps[-1]))
-    zero = np.zeros(N_FRAMES)
-    return (steps, steps * DT, np.column_stack([x[steps], zero, z[steps]]),
-            np.column_stack([vx[steps], zero, vz[steps]]))
+    y = vy = np.zeros(int(steps[-1]) + 1)
+    if cross:
+        y, vy = mover_sum(cross["s2_amp_c"], S2["s2_freq"], cross["s2_phase_c"], int(steps[-1]))
+    return (steps, steps * DT, np.column_stack([x[steps], y[steps], z[steps]]),
+            np.column_stack([vx[steps], vy[steps], vz[steps]]))
 
 
 def two_sections():
@@ -63,17 +66,21 @@ def two_sections():
     return (np.vstack([v1, v2]), np.vstack([t, t + 4])), np.repeat([1, 2], 4)
 
 
-def write_line(path, shift=None, sections=2, track_sections=True, derived=None, frames=N_FRAMES):
+def write_line(path, shift=None, sections=2, track_sections=True, derived=None, frames=N_FRAMES,
+               cross=None, cross_recorded=True):
     """A complete two-section line result; ``shift(position, velocity)`` may alter section 2's
     recorded motion in place before it is written. ``sections=1`` records section 1 only;
-    ``derived`` replaces the derived values ({"dt_used": DT}); ``frames``: the first ones only."""
-    steps, times, s2_pos, s2_vel = section2_motion()
+    ``derived`` replaces the derived values ({"dt_used": DT}); ``frames``: the first ones only;
+    ``cross``: section 2 also moves across (section2_motion), its parameters recorded unless
+    ``cross_recorded`` is false."""
+    steps, times, s2_pos, s2_vel = section2_motion(cross)
     derived = {"dt_used": DT} if derived is None else derived
     if shift is not None:
         shift(s2_pos, s2_vel)
     w1 = 2 * math.pi * S1["freq"]
     variables = {name: (repr(value), "", name, repr(value))
-                 for name, value in {**S1, **S2, "sections": 2, "track_length": JOINT}.items()}
+                 for name, value in {**S1, **S2, **(cross if cross and cross_recorded else {}),
+                                     "sections": 2, "track_length": JOINT}.items()}
     track, split = two_sections()
     w = ResultWriter(path, deck_name="synthetic_line", deck_path="synthetic_line.liggghts",
                      deck_text="# synthetic line\n", variables=variables, derived=derived,
@@ -223,6 +230,31 @@ def test_section_2_one_percent_off_its_drive_fails(tmp_path, element, axis):
 
     found = errors(write_line(tmp_path / "off.h5", shift))
     assert any(f"/observables/surface_s2/{element}/value" in e and "at frame 7" in e for e in found), found
+
+
+CROSS = {"s2_amp_c": 4e-5, "s2_phase_c": 60.0}
+
+
+def test_a_section_moving_across_its_track_passes_check(tmp_path):
+    path = write_line(tmp_path / "cross.h5", cross=CROSS)
+    assert errors(path) == []
+    with Result(path) as r:
+        p2, _ = r.section_surface(2)
+    # it did move across: its sway spans most of twice the amplitude over two periods
+    assert np.ptp(p2[:, 1]) > CROSS["s2_amp_c"]
+
+
+def test_a_cross_stroke_one_percent_off_fails(tmp_path):
+    def shift(pos, vel):
+        pos[5:, 1] += 0.01 * CROSS["s2_amp_c"]
+
+    assert any("section 2's position" in e for e in errors(write_line(tmp_path / "c.h5", shift, cross=CROSS)))
+
+
+def test_a_cross_motion_without_its_drive_among_the_parameters_fails(tmp_path):
+    # (a file before cross strokes: no s2_amp_c, taken as 0: a section that swayed is off its drive)
+    path = write_line(tmp_path / "c.h5", cross=CROSS, cross_recorded=False)
+    assert any("section 2's position" in e for e in errors(path))
 
 
 def test_check_tolerance_is_a_millionth_of_the_amplitude(tmp_path):
