@@ -27,27 +27,15 @@ from pathlib import Path
 from .. import stl_part
 from ..errors import ParameterError
 from ..orientation import correct_word
-from . import bowl, chute, mesh_element
-from .linear import KEYS, MAX_SECTIONS, deck_names, keep_word
+from . import mesh_element
+from .kinds import KINDS
+from .linear import MAX_SECTIONS, keep_word
 from .records import JET_MODES, SHAPES, shape_code
 
-
-def _kind_keys(kind: str, k: int) -> tuple[dict, dict]:
-    """(every key the kind knows, the keys element ``k`` of that kind takes -> deck name)."""
-    if kind == "bowl":
-        return bowl.KEYS, (dict(bowl.KEYS) if k == 1 else {})
-    if kind == "chute":
-        known = {(key,): None for key in chute.KEYS}
-        return known, ({} if k == 1 else {(key,): chute.deck_name(k, key) for key in chute.KEYS})
-    if kind == "mesh":
-        return mesh_element.KEYS, ({} if k == 1 else {key: mesh_element.deck_name(k, key)
-                                                      for key in mesh_element.KEYS})
-    return KEYS, deck_names(k)
-
 SUFFIX = ".toml"
-ELEMENT_KINDS = ("bowl", "linear", "chute", "mesh")
+ELEMENT_KINDS = tuple(KINDS)
 # The deck a description becomes: the project deck its first element's kind runs on.
-TEMPLATES = {"linear": "bulk_feeder", "bowl": "bowl_feeder"}
+TEMPLATES = {name: kind.template for name, kind in KINDS.items() if kind.template}
 # table -> {key: deck name}; the element's keys are vibrofeed.feeders.linear.KEYS
 TABLES: dict[str, dict[str, str]] = {
     "feeder": {"incline": "incline"},
@@ -149,7 +137,7 @@ def aliases(kinds: list[str]) -> dict[str, str]:
     out = {f"{table}.{key}": name for table, keys in TABLES.items() for key, name in keys.items()}
     for k, kind in enumerate(kinds, start=1):
         out.update({f"element.{k}." + ".".join(key): name
-                    for key, name in _kind_keys(kind, k)[1].items()})
+                    for key, name in KINDS[kind].keys(k)[1].items()})
     return out
 
 
@@ -224,17 +212,17 @@ def _element(path: Path, k: int, element: dict, last: bool) -> dict[str, str]:
     if k == 1 and kind not in TEMPLATES:
         raise _fail(path, f"{where}: kind = {kind!r}: the first element is a linear section or a "
                           "bowl (the supply falls onto it)")
-    if k > 1 and kind == "bowl":
-        raise _fail(path, f"{where}: kind = 'bowl': a bowl is the first element (the supply's "
+    if k > 1 and not KINDS[kind].later:
+        raise _fail(path, f"{where}: kind = {kind!r}: a {kind} is the first element (the supply's "
                           "store); elements after it are its exit line")
     if kind == "mesh" and not last:
         raise _fail(path, f"{where}: kind = 'mesh': a mesh element is the last element in this "
                           "version (its path's end is the outlet edge)")
-    known, names = _kind_keys(kind, k)
+    known, names = KINDS[kind].keys(k)
     singles = [key[0] for key in known if len(key) == 1]
     tables = sorted({key[0] for key in known if len(key) == 2})
-    codes = {"chute": chute.KIND_CODE, "mesh": mesh_element.KIND_CODE}
-    out = {f"s{k}_kind": str(codes[kind])} if kind in codes else {}
+    code = KINDS[kind].code
+    out = {f"s{k}_kind": str(code)} if code else {}  # (a linear section's 0 is the default)
     for key, value in element.items():
         if key == "kind":
             continue
@@ -260,9 +248,7 @@ def _element(path: Path, k: int, element: dict, last: bool) -> dict[str, str]:
         out[names[(key,)]] = _value(path, f"element.{k}.{key}", value)
     if isinstance(element.get("jet"), dict) and "force" not in element["jet"]:
         raise _fail(path, f"{where}'s jet has no force: give jet.force [N] (on a part wholly in it)")
-    needed = {"chute": ("length", "width", "slope"), "bowl": bowl.NEEDED,
-              "mesh": mesh_element.NEEDED}.get(kind, ("length", "width"))
-    for key in needed:
+    for key in KINDS[kind].needed:
         if (key,) not in set(_given(element)):
             raise _fail(path, f"{where} has no {key}: every {kind} element states its own")
     return out
@@ -381,18 +367,11 @@ def deck_text(description: Description, template: str, variables: dict) -> str:
             _declaration("sections", str(n), "-", "elements of the feeder")]
     seconds = [v for v in variables.values() if v.name.startswith("s2_")]
     for k in range(2, n + 1):
-        if description.kinds[k - 1] == "chute":
-            out.append(_declaration(f"s{k}_kind", str(chute.KIND_CODE), "-",
-                                    f"element {k}'s kind: {chute.KIND_CODE} a chute"))
-            for suffix, unit, text in chute.KEYS.values():
-                name = f"s{k}_{suffix}"
-                default = variables[f"s2_{suffix}"].default if f"s2_{suffix}" in variables else "0"
-                out.append(_declaration(name, values.get(name, default), unit, text))
-            continue
-        if description.kinds[k - 1] == "mesh":
-            code = mesh_element.KIND_CODE
-            out.append(_declaration(f"s{k}_kind", str(code), "-", f"element {k}'s kind: {code} a mesh"))
-            for suffix, unit, text in mesh_element.KEYS.values():
+        kind = KINDS[description.kinds[k - 1]]
+        if kind.tunables is not None:  # (its own declarations, after its kind's code)
+            out.append(_declaration(f"s{k}_kind", str(kind.code), "-",
+                                    f"element {k}'s kind: {kind.code} a {kind.name}"))
+            for suffix, unit, text in kind.tunables.values():
                 name = f"s{k}_{suffix}"
                 default = variables[f"s2_{suffix}"].default if f"s2_{suffix}" in variables else "0"
                 out.append(_declaration(name, values.get(name, default), unit, text))

@@ -23,11 +23,9 @@ import numpy as np
 
 from ..errors import ParameterError
 from .bowl import BowlElement
-from .chute import KIND_CODE as CHUTE
-from .chute import Chute
 from .joints import Joint
+from .kinds import BY_CODE, later_kinds_text
 from .linear import MAX_SECTIONS, LinearSection
-from .mesh_element import KIND_CODE as MESH
 from .mesh_element import MeshElement
 from .records import Drive, Part, number
 
@@ -98,16 +96,11 @@ class Feeder:
             raise ParameterError(f"sections={n:g} must be a whole number from 1 to {MAX_SECTIONS}")
         elements, x0, level = ([first], first.x1, 0.0) if first else ([], 0.0, 0.0)
         for k in range(len(elements) + 1, int(n) + 1):
-            kind = number(values, f"s{k}_kind", 0.0) if k > 1 else 0.0
-            if kind == CHUTE:
-                s = Chute.from_values(values, k, x0, level)
-            elif kind == MESH:
-                s = MeshElement.from_values(values, k, x0, level)
-            elif kind == 0:
-                s = LinearSection.from_values(values, k, x0, level, part)
-            else:
-                raise ParameterError(f"s{k}_kind={kind:g} must be 0 (a linear section), "
-                                     f"{CHUTE} (a chute) or {MESH} (a mesh)")
+            code = number(values, f"s{k}_kind", 0.0) if k > 1 else 0.0
+            kind = BY_CODE.get(code)
+            if kind is None:
+                raise ParameterError(f"s{k}_kind={code:g} must be {later_kinds_text()}")
+            s = kind.build(values, k, x0, level, part)
             elements.append(s)
             x0, level = s.x1, s.exit_level
         return cls(part, tuple(elements), bool(recirculate), values)
