@@ -313,3 +313,20 @@ def channel(points, width, wall, holes=(), flipped=()):
     for k in flipped:
         t[k] = t[k][::-1]
     return v, t
+
+
+def place_one_body(at, quaternion, seed: int, half: float = 1e-7) -> list[str]:
+    """LIGGGHTS commands (after a bulk feeder's deck) that remove its pre-fill and insert one part
+    of the deck's own template with its centre of mass at ``at`` (3,) [m], turned by
+    ``quaternion`` (w, x, y, z), in a block ``half`` either way around it; the mass balance
+    counts it as the one part inserted."""
+    lo, hi = (np.asarray(at) - half).tolist(), (np.asarray(at) + half).tolist()
+    return [
+        "delete_atoms region fill mol yes",
+        f"region vf_here block {lo[0]!r} {hi[0]!r} {lo[1]!r} {hi[1]!r} {lo[2]!r} {hi[2]!r} units box "
+        "volume_limit 1e-30",
+        f"fix vf_put all insert/pack seed {seed} distributiontemplate pdd insert_every once "
+        "overlapcheck yes all_in no vel constant 0 0 0 "
+        f"orientation constant {' '.join(repr(float(v)) for v in quaternion)} region vf_here "
+        "particles_in_region 1 ntry_mc 10000",
+        "variable n_inserted delete", "variable n_inserted equal f_vf_put[1]"]

@@ -23,6 +23,7 @@ import math
 import numpy as np
 import pytest
 
+from helpers import place_one_body
 from vibrofeed.decks import Deck
 from vibrofeed.engine.runner import run_deck
 from vibrofeed.feeders.feeder import Feeder, section_from
@@ -75,17 +76,7 @@ def placement(stand, facing):
 
 def run(path, pose):
     at, q = placement(*POSES[pose])
-    h = 1e-7
-    lo, hi = (at - h).tolist(), (at + h).tolist()
-    commands = [
-        "delete_atoms region fill mol yes",
-        f"region vf_here block {lo[0]!r} {hi[0]!r} {lo[1]!r} {hi[1]!r} {lo[2]!r} {hi[2]!r} units box "
-        "volume_limit 1e-30",
-        f"fix vf_put all insert/pack seed {PRIMES[0]} distributiontemplate pdd insert_every once "
-        "overlapcheck yes all_in no vel constant 0 0 0 "
-        f"orientation constant {' '.join(repr(float(v)) for v in q)} region vf_here "
-        "particles_in_region 1 ntry_mc 10000",
-        "variable n_inserted delete", "variable n_inserted equal f_vf_put[1]"]
+    commands = place_one_body(at, q, PRIMES[0])
     run_deck(Deck.find("bulk_feeder"), values(LINE), path, before_run=commands)
     with Result(path) as r:
         mb, out, rej = r.mass_balance, r.outlet, r.rejects

@@ -71,11 +71,9 @@ KINDS: dict[str, Kind] = {
     "bowl": Kind("bowl", None, _bowl_keys, bowl.NEEDED, None, template="bowl_feeder"),
     "linear": Kind("linear", 0, _linear_keys, ("length", "width"),
                    _linear, template="bulk_feeder"),
-    "chute": Kind("chute", chute.KIND_CODE, _chute_keys, ("length", "width", "slope"),
-                  _chute,
-                  tunables={(key,): row for key, row in chute.KEYS.items()}),
-    "mesh": Kind("mesh", mesh_element.KIND_CODE, _mesh_keys, mesh_element.NEEDED,
-                 _mesh,
+    "chute": Kind("chute", chute.KIND_CODE, _chute_keys, ("length", "width", "slope"), _chute,
+                  tunables=chute.KEYS),
+    "mesh": Kind("mesh", mesh_element.KIND_CODE, _mesh_keys, mesh_element.NEEDED, _mesh,
                  tunables=mesh_element.KEYS),
 }
 BY_CODE: dict[int, Kind] = {kind.code: kind for kind in KINDS.values() if kind.code is not None}

@@ -515,7 +515,7 @@ def sine_commands(k: int, cross: bool = False) -> dict[str, list[str]]:
 
     amps = f"v_{s}_amp_t^2+v_{s}_amp_n^2" + (f"+v_{s}_amp_c^2" if cross else "")
     y = f"$(v_{s}_amp_c*sin(v_{s}_phic))" if cross else "0"
-    out = {
+    return {
         "derived": [f"variable {s}_omega equal 2*PI*v_{s}_freq",
                     f"variable {s}_phi equal v_{s}_phase*PI/180"]
         + ([f"variable {s}_phic equal v_{s}_phase_c*PI/180"] if cross else []),
@@ -539,4 +539,3 @@ def sine_commands(k: int, cross: bool = False) -> dict[str, list[str]]:
            f"variable {s}_surface_vz equal "
            f"$(v_{s}_amp_n*v_{s}_omega)*cos($(v_{s}_omega)*time+$(v_{s}_phi))"],
     }
-    return out

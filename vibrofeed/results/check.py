@@ -520,15 +520,14 @@ def sine_drive(freq, amp_t, amp_n, phase, dt, step, time, amp_c=0.0, phase_c=0.0
     gain = w * dt / math.sin(half) if half else 0.0  # 2 (1 + th^2/24 ...): the sum's scale
     ramp = np.sin(step * half)
     x = amp_t * gain * ramp * np.cos((step + 1) * half)
-    z = amp_n * math.sin(phi) + amp_n * gain * ramp * np.cos((step + 1) * half + phi)
     vx = amp_t * w * np.cos(w * time)
-    vz = amp_n * w * np.cos(w * time + phi)
-    if amp_c:
-        phi_c = math.radians(phase_c)
-        y = amp_c * math.sin(phi_c) + amp_c * gain * ramp * np.cos((step + 1) * half + phi_c)
-        vy = amp_c * w * np.cos(w * time + phi_c)
-    else:
-        y = vy = np.zeros_like(step)
+
+    def viblin(amp, lead):  # (z and y: placed at amp sin(lead), then the movers' sum)
+        return (amp * math.sin(lead) + amp * gain * ramp * np.cos((step + 1) * half + lead),
+                amp * w * np.cos(w * time + lead))
+
+    y, vy = viblin(amp_c, math.radians(phase_c))
+    z, vz = viblin(amp_n, phi)
     return np.column_stack([x, y, z]), np.column_stack([vx, vy, vz])
 
 
