@@ -11,8 +11,6 @@ import os
 import sys
 import time
 
-from tqdm import tqdm
-
 from .values import duration
 
 LINE_MIN, LINE_MAX = 5.0, 60.0
@@ -58,6 +56,8 @@ class RunProgress:
                 sized = os.get_terminal_size(self.stream.fileno()).columns > 0
             except (OSError, ValueError, AttributeError):
                 sized = False
+            from tqdm import tqdm  # only for a bar: a quiet run or a log does without it
+
             self.bar = tqdm(total=event["n_steps"], desc=self.label, unit="step", unit_scale=True,
                             file=self.stream, dynamic_ncols=sized, ncols=None if sized else 100,
                             leave=False)

@@ -35,24 +35,31 @@ def run(args) -> int:
     from ..run_progress import RunProgress
     from .outputs import file_destination, written
 
-    # The summary's analyses import scipy (~0.3 s): load them while the worker starts
-    # and runs, not before (a short single-part run lasts about as long).
+    # The result's check and the summary import h5py and postproc (~0.04 s): load them
+    # while the worker runs, not before it starts (an import thread would slow the start, GIL).
     deck = Deck.find(args.deck)
     params = parse_assignments(args.param)
     output = str(file_destination("-o", args.output or f"{deck.name}.h5", parents=True))
     check_output(deck, output, "-o" if args.output else "output")
     progress = RunProgress(deck.name, enabled=False if args.quiet else None)
-    warm = threading.Thread(target=importlib.import_module, args=("vibrofeed.run_summary",), daemon=True)
-    warm.start()
+    warm = threading.Thread(target=_import, args=("vibrofeed.results.check", "vibrofeed.run_summary"),
+                            daemon=True)
+
+    def on_event(event: dict) -> None:
+        if warm.ident is None:  # the worker's first word: it has started
+            warm.start()
+        progress(event)
+
     try:
-        result = run_deck(deck, params, output, ranks=args.ranks, on_event=progress,
+        result = run_deck(deck, params, output, ranks=args.ranks, on_event=on_event,
                           reuse=args.reuse, command=shlex.join(["vibrofeed"] + sys.argv[1:]),
                           target_error=args.target_error)
     finally:
         progress.close()
         # Joined on every way out: a run that fails at once would otherwise end the
         # interpreter mid-import in this thread, and Python can crash (SIGSEGV) doing so.
-        warm.join()
+        if warm.ident is not None:
+            warm.join()
     if result.reused:
         print(f"vibrofeed: kept {result.output}: a complete result of the same run "
               f"(run id {result.run_id[:12]}...)", file=sys.stderr)
@@ -61,3 +68,8 @@ def run(args) -> int:
 
     print(run_summary(result))
     return 0
+
+
+def _import(*modules: str) -> None:
+    for name in modules:
+        importlib.import_module(name)

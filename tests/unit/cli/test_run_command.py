@@ -16,7 +16,11 @@ from vibrofeed.engine import runner
 from vibrofeed.errors import RunError
 
 
-def test_the_warm_up_thread_is_joined_when_the_run_fails(tmp_path, monkeypatch):
+@pytest.mark.parametrize("said", [0, 1, 2])
+def test_the_warm_up_starts_with_the_worker_and_is_joined_when_the_run_fails(tmp_path, monkeypatch,
+                                                                             said):
+    """The imports for the check and summary start once the worker has spoken (not beside its
+    start), once, and a run that fails is left only after they end."""
     started, joined = [], []
 
     class Recorded(threading.Thread):
@@ -28,9 +32,11 @@ def test_the_warm_up_thread_is_joined_when_the_run_fails(tmp_path, monkeypatch):
             joined.append(self)
             super().join(timeout)
 
-    def fail(*_a, **_k):
-        assert started, "the run began before the warm-up"
-        assert not joined
+    def fail(*_a, on_event, **_k):
+        for _ in range(said):
+            on_event({"event": "deck"})
+            assert len(started) == 1 and not joined
+        assert len(started) == min(said, 1)
         raise RunError("the engine worker exited with status 1 during the deck phase")
 
     monkeypatch.setattr(run_cli.threading, "Thread", Recorded)
@@ -39,4 +45,4 @@ def test_the_warm_up_thread_is_joined_when_the_run_fails(tmp_path, monkeypatch):
                               quiet=True, ranks=1, reuse=False, target_error=None)
     with pytest.raises(RunError):
         run_cli.run(args)
-    assert joined == started and len(started) == 1
+    assert joined == started and len(started) == min(said, 1)

@@ -338,6 +338,13 @@ def test_the_worker_environment_preloads_the_shim_for_a_singleton_only(monkeypat
     assert worker_environment(2, shim)["LD_PRELOAD"] == "/lib/other.so"
 
 
+def test_a_singleton_starts_mpi_without_a_server_or_ucx_and_several_ranks_as_launched(monkeypatch):
+    monkeypatch.setenv("OMPI_MCA_pml", "ucx")  # a surrounding launch's: not the worker's
+    one, two = worker_environment(1, None), worker_environment(2, None)
+    assert one["OMPI_MCA_ess_singleton_isolated"] == "1" and one["OMPI_MCA_pml"] == "ob1"
+    assert not any(k.startswith("OMPI_MCA_") for k in two)  # mpirun picks for the ranks
+
+
 def test_clean_environment_reads_this_process_by_default(monkeypatch):
     monkeypatch.setenv("PMIX_RANK", "1")
     monkeypatch.setenv("VIBROFEED_TEST_KEPT", "yes")
