@@ -164,9 +164,28 @@ def fired_at(ids, times, sections, firings) -> np.ndarray:
     f_sec = np.asarray(firings["section"], dtype=np.int64)
     start, end = np.asarray(firings["start"], dtype=float), np.asarray(firings["end"], dtype=float)
     times, sections = np.asarray(times, dtype=float), np.asarray(sections, dtype=np.int64)
-    for i in range(len(ids)):
-        k = (f_id == ids[i]) & (f_sec == sections[i])
-        out[i] = bool(np.any(k & (start <= times[i]) & (times[i] <= end + JET_FALL)))
+    # Sorted lookups, not a loop over rejects (O((R + F) log F)): the firings by (part,
+    # section) and start; per reject the last firing of its pair that started by then, and the
+    # latest end of its pair's firings up to that one (a running maximum within each pair).
+    m = int(max(f_sec.max(), sections.max())) + 1  # (sections count from 1)
+    codes, f_pair = np.unique(f_id * m + f_sec, return_inverse=True)
+    n = len(start)
+    starts = np.sort(start)
+    f_rank = np.searchsorted(starts, start, side="right")  # starts <= each start, 1..n
+    order = np.lexsort((f_rank, f_pair))
+    f_pair, f_rank, end = f_pair[order], f_rank[order], end[order]
+    key = f_pair * (n + 1) + f_rank  # ascending: by pair, then start
+    by_end = np.argsort(end, kind="stable")
+    end_rank = np.empty(n, dtype=np.int64)
+    end_rank[by_end] = np.arange(n)
+    latest = end[by_end][np.maximum.accumulate(end_rank + f_pair * n) - f_pair * n]
+    r_code = ids * m + sections
+    r_pair = np.minimum(np.searchsorted(codes, r_code), len(codes) - 1)
+    at = np.searchsorted(key, r_pair * (n + 1) + np.searchsorted(starts, times, side="right"),
+                         side="right") - 1
+    ok = (codes[r_pair] == r_code) & (at >= 0)
+    ok[ok] &= f_pair[at[ok]] == r_pair[ok]
+    out[ok] = times[ok] <= latest[at[ok]] + JET_FALL
     return out
 
 

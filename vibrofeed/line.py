@@ -18,7 +18,9 @@ side. The wiper is a bar across the track whose underside follows the floor at
 hole in the floor, ``slot_width`` across, its centre ``slot_offset`` from the reference wall,
 from ``slot_from`` to ``slot_to``: the floor is split into strips along its edges and the
 strips over it are left out, so a part narrower than the slot where it rides falls through
-while one lying across it bridges it (docs/feeders.md).
+while one lying across it bridges it (docs/feeders.md). A gate brings the wall at +w/2 in at
+45 degrees to ``gate_width`` from the reference wall, from ``gate_at`` to the section's end
+(its file runs along the reference wall; the floor beyond the gate's wall is left out).
 
 Meshes are indexed triangle sets as in :mod:`vibrofeed.geometry`, with shared vertices
 along common edges (floor and walls form one surface, without seams).
@@ -73,6 +75,8 @@ class Section:
     slot_to: float = 0.0
     slot_width: float = 0.0
     slot_offset: float = 0.0  # its centre from the reference wall at y = -w/2
+    gate_width: float = 0.0  # the open side's wall comes in to this from the reference wall
+    gate_at: float = 0.7
 
     @property
     def x1(self) -> float:
@@ -85,6 +89,25 @@ class Section:
     @property
     def has_wiper(self) -> bool:
         return self.wiper_height > 0
+
+    @property
+    def has_gate(self) -> bool:
+        return 0 < self.gate_width < self.width
+
+    @property
+    def gate_x(self) -> tuple[float, float]:
+        """The gate's taper along x: the open side's wall comes in at 45 degrees from the first
+        to the second, by width - gate_width, and stays there to the section's end."""
+        a = self.x0 + self.gate_at * self.length
+        return a, a + self.width - self.gate_width
+
+    def open_wall_y(self, x) -> np.ndarray:
+        """Where the wall on the open side (+y) stands at ``x`` [m] (the gate's taper)."""
+        hi = self.width / 2
+        if not self.has_gate:
+            return hi + 0.0 * np.asarray(x, dtype=float)
+        a, b = self.gate_x
+        return np.interp(x, [a, b], [hi, -hi + self.gate_width])
 
     @property
     def has_slot(self) -> bool:
@@ -132,6 +155,8 @@ def _stations(s: Section, spacing: float | None) -> np.ndarray:
         xs.append(np.array(s.wiper_x))
     if s.has_slot:
         xs.append(np.array(s.slot_x))
+    if s.has_gate:
+        xs.append(np.array(s.gate_x))
     return np.unique(np.round(np.concatenate(xs), 12))
 
 
@@ -146,6 +171,8 @@ def section_mesh(s: Section, spacing: float | None = None) -> tuple[np.ndarray, 
                              "drop_to <= 1")
     if s.has_wiper and not s.x0 <= s.wiper_x[0] < s.wiper_x[1] <= s.x1:
         raise ParameterError("the wiper does not fit on its section: lower its wiper_at")
+    if s.has_gate and not s.x0 <= s.gate_x[0] < s.gate_x[1] <= s.x1:
+        raise ParameterError("the gate's taper does not fit on its section: lower its gate_at")
     if s.has_slot:
         if not s.x0 <= s.slot_x[0] < s.slot_x[1] <= s.x1:
             raise ParameterError("the slot does not fit on its section: 0 <= slot_from < slot_to <= 1")
@@ -160,19 +187,24 @@ def section_mesh(s: Section, spacing: float | None = None) -> tuple[np.ndarray, 
     sa, sb = s.slot_x if s.has_slot else (math.inf, math.inf)
     ya, yb = s.slot_y if s.has_slot else (math.inf, math.inf)
     # every edge across, on every stretch (the vertices along them are shared)
-    ys = sorted({lo, hi} | ({inner} if s.has_drop else set()) | ({ya, yb} if s.has_slot else set()))
+    narrow = lo + s.gate_width  # the gate's wall, past its taper
+    ga = s.gate_x[1] if s.has_gate else math.inf
+    ys = sorted({lo, hi} | ({inner} if s.has_drop else set()) | ({ya, yb} if s.has_slot else set())
+                | ({narrow} if s.has_gate else set()))
     b_ = MeshBuilder()
     z = s.floor_z
     for x0, x1 in zip(xs[:-1], xs[1:]):
         dropping = s.has_drop and a <= x0 and x1 <= b
         slotted = s.has_slot and sa <= x0 and x1 <= sb
         for y0, y1 in zip(ys[:-1], ys[1:]):  # floor, normal +z
-            if (dropping and y0 >= inner) or (slotted and ya <= y0 and y1 <= yb):
+            if (dropping and y0 >= inner) or (slotted and ya <= y0 and y1 <= yb) or \
+                    (ga <= x0 and y0 >= narrow):  # (no floor beyond the gate's wall)
                 continue
             b_.quad((x0, y0, z(y0)), (x1, y0, z(y0)), (x1, y1, z(y1)), (x0, y1, z(y1)))
         b_.quad((x1, lo, z(lo)), (x0, lo, z(lo)), (x0, lo, top), (x1, lo, top))  # reference wall
-        if not dropping:
-            b_.quad((x0, hi, z(hi)), (x1, hi, z(hi)), (x1, hi, top), (x0, hi, top))
+        if not dropping:  # the open side's wall, where the gate brings it in
+            y0, y1 = s.open_wall_y(x0), s.open_wall_y(x1)
+            b_.quad((x0, y0, z(y0)), (x1, y1, z(y1)), (x1, y1, top), (x0, y0, top))
     if s.has_wiper:
         w0, w1 = s.wiper_x
         ys = np.linspace(lo, hi, 2)

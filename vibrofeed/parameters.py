@@ -189,7 +189,8 @@ RULES: dict[str, Callable[[float], str | None]] = {
 SECTION_2_TWINS = {"s2_length": "track_length", "s2_width": "track_width",
                    "s2_wall_height": "wall_height", "s2_freq": "freq", "s2_amp_t": "amp_t",
                    "s2_amp_n": "amp_n", "s2_phase": "phase", "s2_cross_tilt": "cross_tilt",
-                   "s2_amp_c": "amp_n", "s2_phase_c": "phase"}
+                   "s2_amp_c": "amp_n", "s2_phase_c": "phase", "s2_gate_width": "gate_width",
+                   "s2_gate_at": "gate_at"}
 RULES.update({twin: RULES[name] for twin, name in SECTION_2_TWINS.items()})
 # A line's section k >= 3 (a feeder description's, docs/feeders.md) has section 2's names
 # with its own number: s3_amp_n takes s2_amp_n's rule.

@@ -45,7 +45,7 @@ PART_LENGTHS = ("radius", "part_size", "part_thickness", "part_width", "face_rad
 TRACK_LENGTHS = {
     "track_length": TRACK_PLAUSIBLE, "s2_length": TRACK_PLAUSIBLE,
     "track_width": ACROSS_PLAUSIBLE, "gate_width": ACROSS_PLAUSIBLE, "s2_width": ACROSS_PLAUSIBLE,
-    "s2_drop_width": ACROSS_PLAUSIBLE,
+    "s2_drop_width": ACROSS_PLAUSIBLE, "s2_gate_width": ACROSS_PLAUSIBLE,
     "wall_height": HEIGHT_PLAUSIBLE, "s2_wall_height": HEIGHT_PLAUSIBLE,
     "s2_step": TOOLING_PLAUSIBLE, "s2_wiper_height": TOOLING_PLAUSIBLE,
 }
@@ -157,8 +157,9 @@ def _without_effect(p: Mapping[str, float], given: Collection[str]) -> list[str]
     if "part_size" in p and int(p.get("shape", 0)) == 3 and p.get("bump_height", 0.0) == 0:
         for name in ("bump_diameter", "bump_at"):
             idle[name] = "shapes the bump: bump_height=0 has none"
-    if "gate_at" in p and p.get("gate_width", 0.0) == 0:
-        idle["gate_at"] = "places the gate: gate_width=0 has none"
+    for s in ("", *(f"s{k}_" for k in sorted(set(sections)))):
+        if f"{s}gate_at" in p and p.get(f"{s}gate_width", 0.0) == 0:
+            idle[f"{s}gate_at"] = f"places the gate: {s}gate_width=0 has none"
     if p.get("inlet_rate", 1.0) == 0:
         idle["inlet_batch"] = "groups the inlet's parts: inlet_rate=0 has no inlet"
     if p.get("n_parts", 1.0) == 0:

@@ -317,8 +317,6 @@ def _given(element: dict):
 def _not_here(k: int, key: tuple[str, ...]) -> str:
     if key[0] == "step":
         return "the first section has no joint before it to step down at"
-    if key[0] == "gate":
-        return "a gate is built on the first section only in this version"
     if key[0] == "jet":
         return "a jet is built on the second section on in this version"
     if key[0] in ("side_drop", "wiper", "slot"):

@@ -7,9 +7,10 @@ edge (y = +w/2); every later one lies ``step`` below the one before it at its hi
 (``level``: the steps summed) and, with a cross tilt, descends towards the reference wall
 at y = -w/2: ``z(y) = -level - (w/2 - y) tan(cross_tilt)``.
 
-The first section has a back wall, and may have a singulation gate; a later one has
-no wall at its joint and may carry a side drop, a slot trap and a wiper (vibrofeed.line builds
-them).
+The first section has a back wall; a later one has no wall at its joint and may carry a side
+drop, a slot trap and a wiper (vibrofeed.line builds them). Any section may have a singulation
+gate: section 1's walls both narrow to it, a later section's open side (+y) comes in to it from
+the reference wall, along which its file runs.
 
 Its numbers in the deck's vocabulary: section 1 takes the bulk feeder's own names
 (``track_length``, ``freq``, ``gate_width`` ...), section k >= 2 the same quantities as
@@ -31,8 +32,8 @@ from ..orientation import STATES, correct_word, parse_correct, run_correct
 from .records import JET_MODES, Drive, Gate, Jet, Part, SideDrop, Slot, Wiper, number
 
 # description key (table, key) -> (section 1's deck name, later sections' suffix); None:
-# that section has no such number (a gate on section 1 only, a step, side drop, slot and wiper
-# on later ones: the meshes of this version build them there).
+# that section has no such number (a step, side drop, slot and wiper on later sections only:
+# the meshes of this version build them there).
 KEYS: dict[tuple[str, ...], tuple[str | None, str | None]] = {
     ("length",): ("track_length", "length"),
     ("width",): ("track_width", "width"),
@@ -47,8 +48,8 @@ KEYS: dict[tuple[str, ...], tuple[str | None, str | None]] = {
     ("drive", "phase_c"): (None, "phase_c"),
     ("drive", "waveform"): ("waveform", None),
     ("drive", "duty"): ("duty", None),
-    ("gate", "width"): ("gate_width", None),
-    ("gate", "at"): ("gate_at", None),
+    ("gate", "width"): ("gate_width", "gate_width"),
+    ("gate", "at"): ("gate_at", "gate_at"),
     ("side_drop", "from"): (None, "drop_from"),
     ("side_drop", "to"): (None, "drop_to"),
     ("side_drop", "width"): (None, "drop_width"),
@@ -131,7 +132,7 @@ class LinearSection:
                       amp_c=get(("drive", "amp_c"), 0.0), phase_c=get(("drive", "phase_c"), 0.0))
         step = 0.0 if first else get(("step",))
         gate = side_drop = wiper = jet = slot = None
-        if first and get(("gate", "width"), 0.0) > 0:
+        if get(("gate", "width"), 0.0) > 0:
             gate = Gate(width=get(("gate", "width")), at=get(("gate", "at"), 0.7))
         if not first:
             start, end = get(("side_drop", "from"), 0.0), get(("side_drop", "to"), 0.0)
@@ -162,6 +163,15 @@ class LinearSection:
     def exit_width(self) -> float:
         """The width parts leave the section through (the gate's, if it has one)."""
         return self.gate.width if self.gate else self.width
+
+    @property
+    def exit_span(self) -> tuple[float, float]:
+        """Where across parts leave the section [m]: between its walls, or past its gate (section
+        1's narrows both walls, a later one's the wall at +y only)."""
+        w = self.exit_width
+        if self.gate is None or self.number == 1:
+            return -w / 2, w / 2
+        return -self.width / 2, -self.width / 2 + w
 
     def floor_z(self, y):
         """Height of the floor at rest at ``y`` [m] (module docstring)."""
@@ -239,12 +249,13 @@ class LinearSection:
         drop, wiper, slot = self.side_drop, self.wiper, self.slot
         slotted = {} if slot is None else {"slot_from": slot.start, "slot_to": slot.end,
                                            "slot_width": slot.width, "slot_offset": slot.offset}
+        gated = {} if self.gate is None else {"gate_width": self.gate.width, "gate_at": self.gate.at}
         return Section(
             x0=self.x0, length=self.length, width=self.width, wall_height=self.wall_height,
             step=self.level, cross_tilt=self.cross_tilt, drop_from=drop.start if drop else 0.0,
             drop_to=drop.end if drop else 0.0, drop_width=drop.width if drop else 0.0,
             wiper_height=wiper.height if wiper else 0.0, wiper_at=wiper.at if wiper else 0.5,
-            wiper_length=wiper.length if wiper else 0.0, **slotted)
+            wiper_length=wiper.length if wiper else 0.0, **slotted, **gated)
 
     def mesh(self):
         """The mesh at rest of a further section (vertices (V, 3) [m], triangles (T, 3))."""
@@ -310,6 +321,8 @@ class LinearSection:
         if self.width < need:
             raise ParameterError(f"{n(('width',))}={self.width:g} m is narrower than a part "
                                  f"({need:g} m across{' riding lengthwise' if need < part.widest else ''})")
+        if self.gate is not None and self.number > 1:  # (section 1's: vibrofeed.parameters)
+            self._check_gate(part, end)
         radius = part.tallest / 2
         if self.wall_height <= radius:
             raise ParameterError(f"{n(('wall_height',))}={self.wall_height:g} m is no higher than a "
@@ -344,6 +357,32 @@ class LinearSection:
             self._check_slot(part)
         if self.jet is not None:
             self.check_jet(part)
+
+    def _check_gate(self, part: Part, end: str) -> None:
+        """A later section's gate: a part passes it riding lengthwise, its taper lies on the
+        section, and the side drop and slot past it fit in the narrowed channel."""
+        g, n = self.gate, self.name
+        wide, at = n(("gate", "width")), n(("gate", "at"))
+        if g.width < part.abreast:
+            raise ParameterError(f"{wide}={g.width:g} m is narrower than a part ({part.abreast:g} m "
+                                 "across riding lengthwise)")
+        if g.width >= self.width:
+            raise ParameterError(f"{wide}={g.width:g} m must be narrower than {n(('width',))}="
+                                 f"{self.width:g} m ({wide}=0: no gate)")
+        start = g.at * self.length
+        if not 0 <= g.at or start + self.width - g.width > self.length:
+            raise ParameterError(f"{at}={g.at:g}: the gate's 45 degree taper ({self.width - g.width:g} m "
+                                 f"long) runs past {end}; lower {at}")
+        past = start + self.width - g.width  # where the channel is narrow, from x0
+        d = self.side_drop
+        if d is not None and d.end * self.length > start and d.width >= g.width:
+            raise ParameterError(f"{n(('side_drop', 'width'))}={d.width:g} m is no narrower than the "
+                                 f"gate before it ({wide}={g.width:g} m): the side drop would drop nothing")
+        s = self.slot
+        if s is not None and s.end * self.length > past and s.offset + s.width / 2 > g.width + 1e-12:
+            raise ParameterError(f"{n(('slot', 'offset'))}={s.offset:g} m: the slot ({s.width:g} m "
+                                 f"across) runs under the gate's wall ({wide}={g.width:g} m from the "
+                                 "reference wall)")
 
     def _check_slot(self, part: Part) -> None:
         """The slot lies on the section and its floor, apart from the side drop and the wiper

@@ -537,3 +537,70 @@ def test_a_narrower_section_two_tilted_alike_says_the_step_its_floor_leaves():
                          s2_cross_tilt=15, s2_step=1e-4, s2_amp_n=1e-5, n_parts=0, inlet_rate=30)
     with pytest.raises(ParameterError, match=r"s2_step=0.0001 m: .*leave a step of 4.64e-05 m at its least"):
         resolve(deck, values)
+
+
+# ------------------------------------------------------------- a later section's gate
+def test_a_later_gate_brings_the_open_wall_in_at_45_degrees_and_leaves_no_floor_beyond():
+    """Section of 1.2 mm, gate 0.9 mm at 0.25 of 8 mm: the wall at +y stands at +0.6 mm up to
+    x0 + 2 mm, at -0.6 + 0.9 = +0.3 mm from x0 + 2.3 mm on (45 degrees: as far along as in), and
+    on the line between; no floor lies beyond it there, the reference wall is untouched."""
+    s = section(width=1.2e-3, gate_width=9e-4, gate_at=0.25)
+    assert s.has_gate and s.gate_x == pytest.approx((L1 + 2e-3, L1 + 2.3e-3), abs=TOL)
+    v, t = section_mesh(s)
+    top = -s.step + s.wall_height
+    wall = v[same(v[:, 2], top)]  # the walls' top edges
+    open_side = wall[wall[:, 1] > -6e-4 + TOL]
+    want = np.interp(open_side[:, 0], [L1 + 2e-3, L1 + 2.3e-3], [6e-4, 3e-4])
+    assert np.allclose(open_side[:, 1], want, rtol=0, atol=TOL)
+    assert same(open_side[:, 1], 3e-4).any() and same(open_side[:, 1], 6e-4).any()
+    tri = v[t]
+    floor = np.all(tri[:, :, 2] < top - TOL, axis=1) & (np.ptp(tri[:, :, 1], axis=1) > 0)
+    past = floor & np.all(tri[:, :, 0] >= L1 + 2.3e-3 - TOL, axis=1)
+    assert past.any() and tri[past][:, :, 1].max() == pytest.approx(3e-4, abs=TOL)
+    before = floor & np.all(tri[:, :, 0] <= L1 + 2e-3 + TOL, axis=1)
+    assert tri[before][:, :, 1].max() == pytest.approx(6e-4, abs=TOL)  # the whole width before it
+    counts = edges(t)
+    assert set(counts.values()) <= {1, 2}
+
+
+def test_a_later_gate_that_does_not_fit_is_refused():
+    with pytest.raises(ParameterError, match="taper does not fit"):
+        section_mesh(section(width=1.2e-3, gate_width=9e-4, gate_at=0.99))
+
+
+def test_a_later_gate_s_exit_runs_along_the_reference_wall_at_the_joint():
+    """Section 2 gated to 0.9 mm of 1.2 mm: its exit spans y = -0.6 .. +0.3 mm, so a section 3
+    needs 1.2 mm (centred on y = 0) to take it; the step is measured at those two ends."""
+    t = math.tan(math.radians(10.0))
+    p = {"sections": 3, "part_size": 3e-4, "track_width": 1.2e-3, "track_length": 4e-3,
+         "s2_length": 5e-3, "s2_width": 1.2e-3, "s2_wall_height": 6e-4, "s2_step": 5e-5,
+         "s2_gate_width": 9e-4, "s2_gate_at": 0.5, "s3_length": 5e-3, "s3_width": 1.2e-3,
+         "s3_wall_height": 6e-4, "s3_step": 5e-5, "s3_cross_tilt": 10.0}
+    feeder = Feeder.from_values(p)
+    assert feeder.elements[1].exit_span == pytest.approx((-6e-4, 3e-4), abs=TOL)
+    lo, hi = feeder.joints[1].steps  # a level section 2 into a tilted section 3
+    assert lo == pytest.approx(5e-5 + (6e-4 - 3e-4) * t, rel=1e-9)
+    assert hi == pytest.approx(5e-5 + 1.2e-3 * t, rel=1e-9)
+    feeder.check()
+    with pytest.raises(ParameterError) as err:
+        Feeder.from_values({**p, "s3_width": 1.1e-3}).check()
+    assert "s3_width=0.0011 m is narrower than section 2's exit (0.0009 m from y = -0.0006 to " \
+           "0.0003 m past its gate)" in str(err.value)
+
+
+@pytest.mark.parametrize("given, words", [
+    ({"s2_gate_width": 2.9e-4}, "s2_gate_width=0.00029 m is narrower than a part (0.0003 m"),
+    ({"s2_gate_width": 1.2e-3}, "s2_gate_width=0.0012 m must be narrower than s2_width=0.0012 m"),
+    ({"s2_gate_at": 0.99}, "s2_gate_at=0.99: the gate's 45 degree taper (0.0006 m long) runs past"),
+    ({"s2_drop_from": 0.6, "s2_drop_to": 0.8, "s2_drop_width": 6e-4},
+     "s2_drop_width=0.0006 m is no narrower than the gate before it (s2_gate_width=0.0006 m)"),
+    ({"s2_slot_from": 0.6, "s2_slot_to": 0.8, "s2_slot_width": 2e-4, "s2_slot_offset": 5.5e-4},
+     "s2_slot_offset=0.00055 m: the slot (0.0002 m across) runs under the gate's wall"),
+])
+def test_a_later_gate_s_refusals_name_its_parameter(given, words):
+    p = {"sections": 2, "part_size": 3e-4, "track_width": 6e-4, "track_length": 4e-3,
+         "s2_length": 5e-3, "s2_width": 1.2e-3, "s2_wall_height": 6e-4, "s2_step": 5e-5,
+         "s2_gate_width": 6e-4, "s2_gate_at": 0.2, **given}
+    with pytest.raises(ParameterError) as err:
+        Feeder.from_values(p).check()
+    assert words in str(err.value) and "\n" not in str(err.value)

@@ -141,10 +141,17 @@ def test_a_slip_in_a_description_is_one_line_naming_where(tmp_path, change, word
     assert words in str(err.value) and "\n" not in str(err.value)
 
 
-def test_a_gate_on_a_later_section_is_refused_until_the_meshes_build_it(tmp_path):
-    path = described(tmp_path, TWO + "gate = { width = 6e-4, at = 0.5 }\n")
-    with pytest.raises(ParameterError, match="element 2: gate.width: a gate is built on the first section"):
-        read(path)
+def test_a_gate_on_a_later_section_is_its_section_s_numbers(tmp_path):
+    """A later section's gate is s<k>_gate_width/at (section 2's declared by the project deck),
+    built on that section; its taper past the section's end is refused naming the key."""
+    deck = Deck.find(described(tmp_path, TWO + "gate = { width = 6e-4, at = 0.5 }\n"))
+    values = resolve(deck, {"n_parts": "0", "inlet_rate": "50"})
+    assert float(values["s2_gate_width"]) == 6e-4 and float(values["s2_gate_at"]) == 0.5
+    gate = Feeder.from_values(values).elements[1].gate
+    assert (gate.width, gate.at) == (6e-4, 0.5)
+    path = described(tmp_path, TWO + "gate = { width = 6e-4, at = 0.9 }\n", "late.toml")
+    with pytest.raises(ParameterError, match="gate.at=0.9: the gate's 45 degree taper"):
+        resolve(Deck.find(path), {"n_parts": "0", "inlet_rate": "50"})
 
 
 def test_line_files_of_one_section_hold_no_command_but_the_wall_contact():
