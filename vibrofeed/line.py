@@ -18,9 +18,9 @@ side. The wiper is a bar across the track whose underside follows the floor at
 hole in the floor, ``slot_width`` across, its centre ``slot_offset`` from the reference wall,
 from ``slot_from`` to ``slot_to``: the floor is split into strips along its edges and the
 strips over it are left out, so a part narrower than the slot where it rides falls through
-while one lying across it bridges it (docs/feeders.md). A gate brings the wall at +w/2 in at
-45 degrees to ``gate_width`` from the reference wall, from ``gate_at`` to the section's end
-(its file runs along the reference wall; the floor beyond the gate's wall is left out).
+while one lying across it bridges it (docs/feeders.md). A gate brings both walls in at 45
+degrees to ``gate_width``, centred, from ``gate_at`` to the section's end, as on section 1 (the
+floor beyond its walls is left out; the tools placed from the reference wall lie before it).
 
 Meshes are indexed triangle sets as in :mod:`vibrofeed.geometry`, with shared vertices
 along common edges (floor and walls form one surface, without seams).
@@ -75,7 +75,7 @@ class Section:
     slot_to: float = 0.0
     slot_width: float = 0.0
     slot_offset: float = 0.0  # its centre from the reference wall at y = -w/2
-    gate_width: float = 0.0  # the open side's wall comes in to this from the reference wall
+    gate_width: float = 0.0  # both walls come in to this, centred
     gate_at: float = 0.7
 
     @property
@@ -96,18 +96,16 @@ class Section:
 
     @property
     def gate_x(self) -> tuple[float, float]:
-        """The gate's taper along x: the open side's wall comes in at 45 degrees from the first
-        to the second, by width - gate_width, and stays there to the section's end."""
+        """The gate's taper along x: both walls come in at 45 degrees from the first to the
+        second, by (width - gate_width)/2 each, and stay there to the section's end."""
         a = self.x0 + self.gate_at * self.length
-        return a, a + self.width - self.gate_width
+        return a, a + (self.width - self.gate_width) / 2
 
-    def open_wall_y(self, x) -> np.ndarray:
-        """Where the wall on the open side (+y) stands at ``x`` [m] (the gate's taper)."""
-        hi = self.width / 2
+    def half_width(self, x) -> np.ndarray:
+        """How far either wall stands from the centre line at ``x`` [m] (the gate's taper)."""
         if not self.has_gate:
-            return hi + 0.0 * np.asarray(x, dtype=float)
-        a, b = self.gate_x
-        return np.interp(x, [a, b], [hi, -hi + self.gate_width])
+            return self.width / 2 + 0.0 * np.asarray(x, dtype=float)
+        return np.interp(x, self.gate_x, [self.width / 2, self.gate_width / 2])
 
     @property
     def has_slot(self) -> bool:
@@ -187,10 +185,10 @@ def section_mesh(s: Section, spacing: float | None = None) -> tuple[np.ndarray, 
     sa, sb = s.slot_x if s.has_slot else (math.inf, math.inf)
     ya, yb = s.slot_y if s.has_slot else (math.inf, math.inf)
     # every edge across, on every stretch (the vertices along them are shared)
-    narrow = lo + s.gate_width  # the gate's wall, past its taper
+    narrow = s.gate_width / 2  # the gate's walls, past its taper
     ga = s.gate_x[1] if s.has_gate else math.inf
     ys = sorted({lo, hi} | ({inner} if s.has_drop else set()) | ({ya, yb} if s.has_slot else set())
-                | ({narrow} if s.has_gate else set()))
+                | ({-narrow, narrow} if s.has_gate else set()))
     b_ = MeshBuilder()
     z = s.floor_z
     for x0, x1 in zip(xs[:-1], xs[1:]):
@@ -198,13 +196,13 @@ def section_mesh(s: Section, spacing: float | None = None) -> tuple[np.ndarray, 
         slotted = s.has_slot and sa <= x0 and x1 <= sb
         for y0, y1 in zip(ys[:-1], ys[1:]):  # floor, normal +z
             if (dropping and y0 >= inner) or (slotted and ya <= y0 and y1 <= yb) or \
-                    (ga <= x0 and y0 >= narrow):  # (no floor beyond the gate's wall)
+                    (ga <= x0 + 1e-12 and (y0 >= narrow or y1 <= -narrow)):  # (none beyond the walls)
                 continue
             b_.quad((x0, y0, z(y0)), (x1, y0, z(y0)), (x1, y1, z(y1)), (x0, y1, z(y1)))
-        b_.quad((x1, lo, z(lo)), (x0, lo, z(lo)), (x0, lo, top), (x1, lo, top))  # reference wall
-        if not dropping:  # the open side's wall, where the gate brings it in
-            y0, y1 = s.open_wall_y(x0), s.open_wall_y(x1)
-            b_.quad((x0, y0, z(y0)), (x1, y1, z(y1)), (x1, y1, top), (x0, y0, top))
+        h0, h1 = s.half_width(x0), s.half_width(x1)  # (the walls, where a gate brings them in)
+        b_.quad((x1, -h1, z(-h1)), (x0, -h0, z(-h0)), (x0, -h0, top), (x1, -h1, top))  # reference wall
+        if not dropping:
+            b_.quad((x0, h0, z(h0)), (x1, h1, z(h1)), (x1, h1, top), (x0, h0, top))
     if s.has_wiper:
         w0, w1 = s.wiper_x
         ys = np.linspace(lo, hi, 2)

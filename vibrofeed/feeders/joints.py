@@ -34,7 +34,8 @@ class Joint:
         """The step down from a's floor to b's at rest, least and most across a's exit: both
         floors are planes tilted down towards -y, so the step is linear in y and its extremes
         lie at the exit's two ends."""
-        steps = [float(self.a.exit_z(y) - self.b.entry_z(y)) for y in exit_span(self.a)]
+        e = self.a.exit_width / 2
+        steps = [float(self.a.exit_z(y) - self.b.entry_z(y)) for y in (-e, e)]
         return min(steps), max(steps)
 
     @property
@@ -49,15 +50,11 @@ class Joint:
         chute = getattr(a, "sway", 0.0)  # (a bowl's chute end also moves across)
         cross = a.drive.sway_from(b.drive)  # (and so do cross strokes)
         sway = chute + cross
-        lo, hi = exit_span(a)
-        reach = max(-lo, hi)  # (b is centred on y = 0 as a is; a later gate's exit is not)
-        if b.width < 2 * (reach + sway) - 1e-15:
+        if b.width < a.exit_width + 2 * sway:
             moves = (f"swaying {sway:.3g} m either way with the torsion" if chute and not cross
                      else f"the two moving {sway:.3g} m apart across" if sway else "")
             exit_ = (f"the bowl's chute ({a.exit_width:g} m, {moves})" if chute
-                     else f"section {a.number}'s exit ({a.exit_width:g} m"
-                     + (f" from y = {lo:.3g} to {hi:.3g} m past its gate" if not math.isclose(-lo, hi)
-                        else "") + f"{', ' + moves if moves else ''})")
+                     else f"section {a.number}'s exit ({a.exit_width:g} m{', ' + moves if moves else ''})")
             hint = ("widen it or shorten chute_length" if chute
                     else f"narrow section {a.number} with its gate"
                     + (" or lessen the cross strokes ("
@@ -88,13 +85,3 @@ class Joint:
                                  f"{dx:.3g} m along the track ({a.name(('drive', 'amp_t'))}, "
                                  f"{b.name(('drive', 'amp_t'))}), more than half a part "
                                  f"({part.size / 2:g} m): parts would fall into it")
-
-
-def exit_span(element) -> tuple[float, float]:
-    """Where across (y, [m]) parts leave ``element``: its exit, centred on y = 0 unless the
-    element says otherwise (a later section's gate keeps the file along its wall at -y)."""
-    span = getattr(element, "exit_span", None)
-    if span is not None:
-        return span
-    e = element.exit_width / 2
-    return -e, e

@@ -9,8 +9,7 @@ at y = -w/2: ``z(y) = -level - (w/2 - y) tan(cross_tilt)``.
 
 The first section has a back wall; a later one has no wall at its joint and may carry a side
 drop, a slot trap and a wiper (vibrofeed.line builds them). Any section may have a singulation
-gate: section 1's walls both narrow to it, a later section's open side (+y) comes in to it from
-the reference wall, along which its file runs.
+gate: both walls narrow at 45 degrees to its width, centred, as on the first section.
 
 Its numbers in the deck's vocabulary: section 1 takes the bulk feeder's own names
 (``track_length``, ``freq``, ``gate_width`` ...), section k >= 2 the same quantities as
@@ -163,15 +162,6 @@ class LinearSection:
     def exit_width(self) -> float:
         """The width parts leave the section through (the gate's, if it has one)."""
         return self.gate.width if self.gate else self.width
-
-    @property
-    def exit_span(self) -> tuple[float, float]:
-        """Where across parts leave the section [m]: between its walls, or past its gate (section
-        1's narrows both walls, a later one's the wall at +y only)."""
-        w = self.exit_width
-        if self.gate is None or self.number == 1:
-            return -w / 2, w / 2
-        return -self.width / 2, -self.width / 2 + w
 
     def floor_z(self, y):
         """Height of the floor at rest at ``y`` [m] (module docstring)."""
@@ -360,7 +350,7 @@ class LinearSection:
 
     def _check_gate(self, part: Part, end: str) -> None:
         """A later section's gate: a part passes it riding lengthwise, its taper lies on the
-        section, and the side drop and slot past it fit in the narrowed channel."""
+        section, and the tools placed from the reference wall end before it."""
         g, n = self.gate, self.name
         wide, at = n(("gate", "width")), n(("gate", "at"))
         if g.width < part.abreast:
@@ -369,20 +359,19 @@ class LinearSection:
         if g.width >= self.width:
             raise ParameterError(f"{wide}={g.width:g} m must be narrower than {n(('width',))}="
                                  f"{self.width:g} m ({wide}=0: no gate)")
-        start = g.at * self.length
-        if not 0 <= g.at or start + self.width - g.width > self.length:
-            raise ParameterError(f"{at}={g.at:g}: the gate's 45 degree taper ({self.width - g.width:g} m "
+        taper = (self.width - g.width) / 2
+        if not 0 <= g.at or g.at * self.length + taper > self.length:
+            raise ParameterError(f"{at}={g.at:g}: the gate's 45 degree taper ({taper:g} m "
                                  f"long) runs past {end}; lower {at}")
-        past = start + self.width - g.width  # where the channel is narrow, from x0
-        d = self.side_drop
-        if d is not None and d.end * self.length > start and d.width >= g.width:
-            raise ParameterError(f"{n(('side_drop', 'width'))}={d.width:g} m is no narrower than the "
-                                 f"gate before it ({wide}={g.width:g} m): the side drop would drop nothing")
-        s = self.slot
-        if s is not None and s.end * self.length > past and s.offset + s.width / 2 > g.width + 1e-12:
-            raise ParameterError(f"{n(('slot', 'offset'))}={s.offset:g} m: the slot ({s.width:g} m "
-                                 f"across) runs under the gate's wall ({wide}={g.width:g} m from the "
-                                 "reference wall)")
+        # the side drop and the slot are placed from the reference wall, which the gate moves in
+        w = self.wiper
+        tools = [(n(("side_drop", "to")), "side drop", self.side_drop and self.side_drop.end),
+                 (n(("slot", "to")), "slot", self.slot and self.slot.end),
+                 (n(("wiper", "at")), "wiper", w and w.at + w.length / self.length)]
+        for name, tool, stop in tools:
+            if stop and stop > g.at + 1e-12:
+                raise ParameterError(f"{name}: the {tool} reaches past the gate ({at}={g.at:g}), whose "
+                                     f"walls narrow the section: end it before, or put the gate after it")
 
     def _check_slot(self, part: Part) -> None:
         """The slot lies on the section and its floor, apart from the side drop and the wiper

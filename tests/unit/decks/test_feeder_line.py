@@ -540,27 +540,30 @@ def test_a_narrower_section_two_tilted_alike_says_the_step_its_floor_leaves():
 
 
 # ------------------------------------------------------------- a later section's gate
-def test_a_later_gate_brings_the_open_wall_in_at_45_degrees_and_leaves_no_floor_beyond():
-    """Section of 1.2 mm, gate 0.9 mm at 0.25 of 8 mm: the wall at +y stands at +0.6 mm up to
-    x0 + 2 mm, at -0.6 + 0.9 = +0.3 mm from x0 + 2.3 mm on (45 degrees: as far along as in), and
-    on the line between; no floor lies beyond it there, the reference wall is untouched."""
+def test_a_later_gate_brings_both_walls_in_at_45_degrees_and_leaves_no_floor_beyond():
+    """Section of 1.2 mm, gate 0.9 mm at 0.25 of 8 mm: both walls stand at +-0.6 mm up to
+    x0 + 2 mm, at +-0.45 mm from x0 + 2.15 mm on (45 degrees: as far along as in), and on the
+    lines between; no floor lies beyond them there, the whole width before."""
     s = section(width=1.2e-3, gate_width=9e-4, gate_at=0.25)
-    assert s.has_gate and s.gate_x == pytest.approx((L1 + 2e-3, L1 + 2.3e-3), abs=TOL)
+    assert s.has_gate and s.gate_x == pytest.approx((L1 + 2e-3, L1 + 2.15e-3), abs=TOL)
     v, t = section_mesh(s)
     top = -s.step + s.wall_height
     wall = v[same(v[:, 2], top)]  # the walls' top edges
-    open_side = wall[wall[:, 1] > -6e-4 + TOL]
-    want = np.interp(open_side[:, 0], [L1 + 2e-3, L1 + 2.3e-3], [6e-4, 3e-4])
-    assert np.allclose(open_side[:, 1], want, rtol=0, atol=TOL)
-    assert same(open_side[:, 1], 3e-4).any() and same(open_side[:, 1], 6e-4).any()
+    want = np.interp(wall[:, 0], [L1 + 2e-3, L1 + 2.15e-3], [6e-4, 4.5e-4])
+    assert np.allclose(np.abs(wall[:, 1]), want, rtol=0, atol=TOL)
+    for y in (6e-4, 4.5e-4, -6e-4, -4.5e-4):
+        assert same(wall[:, 1], y).any()
     tri = v[t]
     floor = np.all(tri[:, :, 2] < top - TOL, axis=1) & (np.ptp(tri[:, :, 1], axis=1) > 0)
-    past = floor & np.all(tri[:, :, 0] >= L1 + 2.3e-3 - TOL, axis=1)
-    assert past.any() and tri[past][:, :, 1].max() == pytest.approx(3e-4, abs=TOL)
+    past = floor & np.all(tri[:, :, 0] >= L1 + 2.15e-3 - TOL, axis=1)
+    assert past.any() and np.abs(tri[past][:, :, 1]).max() == pytest.approx(4.5e-4, abs=TOL)
     before = floor & np.all(tri[:, :, 0] <= L1 + 2e-3 + TOL, axis=1)
-    assert tri[before][:, :, 1].max() == pytest.approx(6e-4, abs=TOL)  # the whole width before it
-    counts = edges(t)
-    assert set(counts.values()) <= {1, 2}
+    assert np.abs(tri[before][:, :, 1]).max() == pytest.approx(6e-4, abs=TOL)
+    for e, k in edges(t).items():  # a floor quad's diagonal under a taper's foot: three faces
+        if k > 2:
+            (x0, y0, _), (x1, y1, _) = v[list(e)]
+            assert k == 3 and abs(y1 - y0) == pytest.approx(abs(x1 - x0), abs=TOL)
+            assert min(abs(y0), abs(y1)) == pytest.approx(4.5e-4, abs=TOL)
 
 
 def test_a_later_gate_that_does_not_fit_is_refused():
@@ -568,39 +571,41 @@ def test_a_later_gate_that_does_not_fit_is_refused():
         section_mesh(section(width=1.2e-3, gate_width=9e-4, gate_at=0.99))
 
 
-def test_a_later_gate_s_exit_runs_along_the_reference_wall_at_the_joint():
-    """Section 2 gated to 0.9 mm of 1.2 mm: its exit spans y = -0.6 .. +0.3 mm, so a section 3
-    needs 1.2 mm (centred on y = 0) to take it; the step is measured at those two ends."""
+def later_gate(**given):
+    return {"sections": 3, "part_size": 3e-4, "track_width": 1.2e-3, "track_length": 4e-3,
+            "s2_length": 5e-3, "s2_width": 1.2e-3, "s2_wall_height": 6e-4, "s2_step": 5e-5,
+            "s2_gate_width": 6e-4, "s2_gate_at": 0.5, "s3_length": 5e-3, "s3_width": 6e-4,
+            "s3_wall_height": 6e-4, "s3_step": 5e-5, **given}
+
+
+def test_a_later_gate_s_exit_is_the_next_section_s_least_width():
+    """Section 2 gated to 0.6 mm of 1.2 mm: a section 3 of 0.6 mm takes its exit, one narrower
+    does not (the joint names the gate's width); the step is measured across that exit."""
     t = math.tan(math.radians(10.0))
-    p = {"sections": 3, "part_size": 3e-4, "track_width": 1.2e-3, "track_length": 4e-3,
-         "s2_length": 5e-3, "s2_width": 1.2e-3, "s2_wall_height": 6e-4, "s2_step": 5e-5,
-         "s2_gate_width": 9e-4, "s2_gate_at": 0.5, "s3_length": 5e-3, "s3_width": 1.2e-3,
-         "s3_wall_height": 6e-4, "s3_step": 5e-5, "s3_cross_tilt": 10.0}
-    feeder = Feeder.from_values(p)
-    assert feeder.elements[1].exit_span == pytest.approx((-6e-4, 3e-4), abs=TOL)
-    lo, hi = feeder.joints[1].steps  # a level section 2 into a tilted section 3
-    assert lo == pytest.approx(5e-5 + (6e-4 - 3e-4) * t, rel=1e-9)
-    assert hi == pytest.approx(5e-5 + 1.2e-3 * t, rel=1e-9)
+    feeder = Feeder.from_values(later_gate(s3_cross_tilt=10.0))
     feeder.check()
+    lo, hi = feeder.joints[1].steps  # a level section 2 into a tilted section 3 of the same width
+    assert lo == pytest.approx(5e-5, rel=1e-9) and hi == pytest.approx(5e-5 + 6e-4 * t, rel=1e-9)
     with pytest.raises(ParameterError) as err:
-        Feeder.from_values({**p, "s3_width": 1.1e-3}).check()
-    assert "s3_width=0.0011 m is narrower than section 2's exit (0.0009 m from y = -0.0006 to " \
-           "0.0003 m past its gate)" in str(err.value)
+        Feeder.from_values(later_gate(s3_width=5.9e-4)).check()
+    assert "s3_width=0.00059 m is narrower than section 2's exit (0.0006 m)" in str(err.value)
 
 
 @pytest.mark.parametrize("given, words", [
     ({"s2_gate_width": 2.9e-4}, "s2_gate_width=0.00029 m is narrower than a part (0.0003 m"),
     ({"s2_gate_width": 1.2e-3}, "s2_gate_width=0.0012 m must be narrower than s2_width=0.0012 m"),
-    ({"s2_gate_at": 0.99}, "s2_gate_at=0.99: the gate's 45 degree taper (0.0006 m long) runs past"),
-    ({"s2_drop_from": 0.6, "s2_drop_to": 0.8, "s2_drop_width": 6e-4},
-     "s2_drop_width=0.0006 m is no narrower than the gate before it (s2_gate_width=0.0006 m)"),
-    ({"s2_slot_from": 0.6, "s2_slot_to": 0.8, "s2_slot_width": 2e-4, "s2_slot_offset": 5.5e-4},
-     "s2_slot_offset=0.00055 m: the slot (0.0002 m across) runs under the gate's wall"),
+    ({"s2_gate_at": 0.95}, "s2_gate_at=0.95: the gate's 45 degree taper (0.0003 m long) runs past"),
+    ({"s2_drop_from": 0.2, "s2_drop_to": 0.6, "s2_drop_width": 4e-4},
+     "s2_drop_to: the side drop reaches past the gate (s2_gate_at=0.5)"),
+    ({"s2_slot_from": 0.45, "s2_slot_to": 0.55, "s2_slot_width": 2e-4},
+     "s2_slot_to: the slot reaches past the gate (s2_gate_at=0.5)"),
+    ({"s2_wiper_height": 4e-4, "s2_wiper_at": 0.45}, "s2_wiper_at: the wiper reaches past the gate"),
 ])
 def test_a_later_gate_s_refusals_name_its_parameter(given, words):
-    p = {"sections": 2, "part_size": 3e-4, "track_width": 6e-4, "track_length": 4e-3,
-         "s2_length": 5e-3, "s2_width": 1.2e-3, "s2_wall_height": 6e-4, "s2_step": 5e-5,
-         "s2_gate_width": 6e-4, "s2_gate_at": 0.2, **given}
     with pytest.raises(ParameterError) as err:
-        Feeder.from_values(p).check()
+        Feeder.from_values(later_gate(**given)).check()
     assert words in str(err.value) and "\n" not in str(err.value)
+
+
+def test_tools_before_a_later_gate_pass():
+    Feeder.from_values(later_gate(s2_drop_from=0.1, s2_drop_to=0.5, s2_drop_width=4e-4)).check()

@@ -149,8 +149,8 @@ def test_a_gate_on_a_later_section_is_its_section_s_numbers(tmp_path):
     assert float(values["s2_gate_width"]) == 6e-4 and float(values["s2_gate_at"]) == 0.5
     gate = Feeder.from_values(values).elements[1].gate
     assert (gate.width, gate.at) == (6e-4, 0.5)
-    path = described(tmp_path, TWO + "gate = { width = 6e-4, at = 0.9 }\n", "late.toml")
-    with pytest.raises(ParameterError, match="gate.at=0.9: the gate's 45 degree taper"):
+    path = described(tmp_path, TWO + "gate = { width = 6e-4, at = 0.95 }\n", "late.toml")
+    with pytest.raises(ParameterError, match="gate.at=0.95: the gate's 45 degree taper"):
         resolve(Deck.find(path), {"n_parts": "0", "inlet_rate": "50"})
 
 
