@@ -43,6 +43,8 @@ def said(deck, given) -> list[str]:
     (SINGLE, {"phase": "30", "amp_t": "0"}, "phase has no effect"),
     (BULK, {"part_thickness": "1e-4"}, "part_thickness has no effect: it applies to chips, discs and boxes"),
     (BULK, {"gate_at": "0.5"}, "gate_at has no effect: it places the gate: gate_width=0 has none"),
+    (BULK, {"sections": "2", "s2_width": "1.2e-3", "track_width": "1.2e-3", "s2_gate_at": "0.5"},
+     "s2_gate_at has no effect: it places the gate: s2_gate_width=0 has none"),
     (BULK, {"fill_to": "0.8", "n_parts": "0", "inlet_rate": "100"}, "fill_to has no effect"),
     (SINGLE, {"roughness": "1e-8"}, "roughness has no effect"),
     (SINGLE, {"face_radius": "1e-4"}, "face_radius has no effect"),
