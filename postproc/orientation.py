@@ -34,7 +34,8 @@ What is measured (over the steady window of :mod:`.feedrate`, detected the same 
   a part size past it) in the window, each by its state where it crossed: the first frame
   pair between which its path coordinate passes the station's, the time interpolated
   linearly, the state read at the later frame. A station whose ``x_out`` is at or past the
-  outlet edge counts out the parts delivered (the outlet's census). Its **orienting
+  outlet edge counts out the parts delivered (the outlet's census). A part already past a
+  station's way in at the run's first frame (pre-filled there) counts at neither. Its **orienting
   efficiency** is the correct fraction out over the correct fraction in; the share of the
   flow it takes off, (in - out) / in (steady flows: the two counts are over the same window);
   and the rejects per second the feed rate's reject table attributes to its kind of tool
@@ -328,21 +329,37 @@ class Orientation(AnalysisBase):
             r.census_correct = np.where(total > 0, right / total, np.nan)
         r.census_edges, r.census_x = edges, 0.5 * (edges[1:] + edges[:-1])
         r.census_count = total.astype(np.int64)
-        first_crossings = [self._first(times, who, what, t_a, t_b) for times, who, what in seen]
+        # A part that starts past a station's way in (pre-filled there) never crosses it: counted
+        # neither in nor out, or the station would seem to add parts to the flow.
+        start_ids, start_s = self._at_start()
+        past = [start_ids[start_s >= st.x_in] for st in stations]
+        first_crossings = [self._first(times, who, what, t_a, t_b, past[j // 2])
+                           for j, (times, who, what) in enumerate(seen)]
         tooling = fr.get("rejects_by_tooling") or {}
         r.stations = [self._station(st, first_crossings[2 * k], first_crossings[2 * k + 1], edge, tooling)
                       for k, st in enumerate(stations)]
 
+    def _at_start(self) -> tuple[np.ndarray, np.ndarray]:
+        """The ids and path coordinates of the parts on the track at the run's first frame
+        (the file's, whatever frames the analysis reads)."""
+        result = self.result
+        block = np.zeros(1, dtype=np.int64)
+        ids = result.read("id", frames=block)[0]
+        s = along(result, block, self.axis, result.read("position", frames=block))[0][0]
+        here = (ids != L.ID_FILL) & np.isfinite(s)
+        return ids[here].astype(np.int64), s[here]
+
     @staticmethod
-    def _first(times, who, what, t_a: float, t_b: float) -> np.ndarray:
-        """(state, correct) rows of each part's first crossing, kept when it falls in the window."""
+    def _first(times, who, what, t_a: float, t_b: float, skip=()) -> np.ndarray:
+        """(state, correct) rows of each part's first crossing, kept when it falls in the window
+        and the part is not one of ``skip``."""
         if not times:
             return np.empty((0, 2), dtype=np.int64)
         times, who, what = np.concatenate(times), np.concatenate(who), np.concatenate(what)
         order = np.lexsort((times, who))
         times, who, what = times[order], who[order], what[order]
         first = np.r_[True, who[1:] != who[:-1]]
-        keep = first & (times >= t_a) & (times < t_b)
+        keep = first & (times >= t_a) & (times < t_b) & ~np.isin(who, np.asarray(skip, dtype=np.int64))
         return what[keep].astype(np.int64)
 
     def _station(self, st, rows_in, rows_out, edge: float, tooling: dict) -> dict:

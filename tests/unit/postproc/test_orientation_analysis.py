@@ -204,6 +204,19 @@ def test_a_station_crossed_in_the_window_only_counts_there(tmp_path):
     assert (gate["n_in"], gate["n_out"]) == (6, 6)
 
 
+def test_a_part_already_past_a_station_s_way_in_at_the_start_counts_at_neither(tmp_path):
+    # part 0 exits at 0.195 s: at t = 0 it is past the gate's in (9.7 mm, crossed at exit -
+    # 0.206 s) and before its out (10.6 mm, at exit - 0.188 s = 0.007 s), as a part pre-filled
+    # there: it crosses out without having crossed in, and would make the gate add a part
+    exits = np.r_[0.195, 0.503 + 0.04 * np.arange(5)]
+    path = feeder(tmp_path / "gate.h5", FRAMES, exits, speed=0.05, orientations=np.array([yaw(0)] * 6),
+                  body_template=BOX, lanes=np.arange(6) * 1e-3, variables=GATE)
+    with Result(path) as r:
+        o = Orientation(r, start=0.0, end=1.0).run().results
+    (gate,) = o.stations
+    assert (gate["n_in"], gate["n_out"]) == (5, 5) and gate["rejected_share"] == 0.0
+
+
 # -- the body frame from the template ------------------------------------------------------
 def test_a_template_laid_along_y_is_measured_along_its_own_length(tmp_path):
     along_y = BOX[:, [1, 0, 2, 3]]                  # the same box, long along the body's y
