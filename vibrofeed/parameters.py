@@ -96,6 +96,8 @@ RULES: dict[str, Callable[[float], str | None]] = {
     "amp_t": _amplitude,
     "amp_n": _amplitude,
     "phase": _finite,
+    "amp_c": _amplitude,
+    "phase_c": _finite,
     "incline": _between(-90, 90, lo_open=False, hi_open=False),
     "radius": _positive_up_to(PART_MAX, NO_MICRO_PART),
     "density": _positive_up_to(DENSITY_MAX, "no material is denser (osmium: 22590 kg/m³); densities "
@@ -386,7 +388,7 @@ MAX_FRAMES = 1_000_000
 
 def _check_relations(p: Mapping[str, float]) -> None:
     """Limits that involve several parameters."""
-    drives = (("amp_n", "freq"), ("amp_t", "freq"),
+    drives = (("amp_n", "freq"), ("amp_t", "freq"), ("amp_c", "freq"),
               *((f"s{k}_amp_{a}", f"s{k}_freq") for k in range(2, MAX_SECTIONS + 1) for a in "ntc"))
     for amp, freq in drives:
         if amp in p and freq in p:
@@ -405,6 +407,9 @@ def _check_relations(p: Mapping[str, float]) -> None:
             raise ParameterError(
                 f"t_end={p['t_end']:g} s with output_dt={p['output_dt']:g} s would write "
                 f"{frames:.3g} frames (limit {MAX_FRAMES:.0e}); raise output_dt or shorten t_end")
+    if p.get("amp_c", 0.0) != 0 and p.get("waveform", 0) != 0:
+        raise ParameterError(f"amp_c={p['amp_c']:g} m: a cross stroke is a sine, and waveform="
+                             f"{int(p['waveform'])} is not (waveform=0, or amp_c=0)")
     _check_bulk_feeder(p)
     _check_feeder(p)
     check_bowl(p)
@@ -824,7 +829,8 @@ def run_steps(p: Mapping[str, float]) -> tuple[float, float] | None:
         return None
     dt = p.get("dt", 0.0)
     if dt <= 0:
-        drives = [(p.get("freq", 0.0), p.get("amp_t", 0.0), p.get("amp_n", 0.0))]
+        drives = [(p.get("freq", 0.0), math.hypot(p.get("amp_t", 0.0), p.get("amp_c", 0.0)),
+                   p.get("amp_n", 0.0))]
         # (a cross stroke adds to the along one: the decks' peak speed is the amplitudes' norm)
         drives += [(p.get(f"s{k}_freq", 0.0),
                     math.hypot(p.get(f"s{k}_amp_t", 0.0), p.get(f"s{k}_amp_c", 0.0)),

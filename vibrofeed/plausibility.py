@@ -144,7 +144,7 @@ def _without_effect(p: Mapping[str, float], given: Collection[str]) -> list[str]
         phase, amp_t, amp_n = f"{s}phase", f"{s}amp_t", f"{s}amp_n"
         if phase in p and waveform in (0, 1) and (p.get(amp_t, 1.0) == 0 or p.get(amp_n, 1.0) == 0):
             idle[phase] = "shifts the normal motion against the tangential one: one of them is 0"
-        if s and f"{s}phase_c" in p and p.get(f"{s}amp_c", 0.0) == 0:
+        if f"{s}phase_c" in p and p.get(f"{s}amp_c", 0.0) == 0:
             idle[f"{s}phase_c"] = f"shifts the cross stroke: {s}amp_c=0 has none"
     if "part_size" in p and int(p.get("shape", 0)) == 0:
         idle["part_thickness"] = "applies to chips, discs and boxes (shape 1, 2, 3), not to spheres"

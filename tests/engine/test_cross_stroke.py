@@ -135,3 +135,39 @@ def test_a_circling_floor_spins_the_box_instead(runs):
     assert found["states"] == {"side"} and found["angle"].max() > 45.0
     # (the stroke in phase keeps it lengthwise)
     assert runs["side"]["angle"].max() < 45.0
+
+
+def test_section_one_moves_across_as_its_sine_and_check_holds_it_to_it(tmp_path):
+    """Section 1's own cross stroke (``amp_c`` 8e-5 m leading by ``phase_c`` 30 deg, a bulk
+    feeder of three spheres): the recorded surface's y is amp_c sin(w t + phi_c), to within the
+    movers' Riemann sum's departure amp_c w dt (1 + w dt / 24) (check.sine_drive), x as without
+    it; `check` passes the result and fails a copy whose recorded amp_c is not its motion."""
+    import shutil
+
+    import h5py
+
+    amp, lead, freq = 8e-5, 30.0, 100.0
+    params = {"n_parts": 3, "inlet_rate": 0, "amp_c": amp, "phase_c": lead, "freq": freq,
+              "t_end": 0.02, "output_dt": 1e-3}
+    path = tmp_path / "c1.h5"
+    run_deck(Deck.find("bulk_feeder"), values(params), path)
+    assert [p for p in check_file(path).problems if p.level == "error"] == []
+    with Result(path) as r:
+        pos = r.file["observables/surface/position/value"][()]
+        t = r.file["observables/surface/position/time"][()]
+        dt = float(r.file["parameters/derived/dt_used"][()])
+    w = 2 * math.pi * freq
+    bound = amp * w * dt * (1 + w * dt / 24)
+    assert np.abs(pos[:, 1] - amp * np.sin(w * t + math.radians(lead))).max() <= bound
+    assert np.abs(pos[:, 1]).max() > 0.5 * amp  # it moved across
+    bad = tmp_path / "bad.h5"
+    shutil.copy(path, bad)
+    with h5py.File(bad, "r+") as f:
+        kept = f["parameters/variables/amp_c"]
+        new = np.array(b"1.6e-4" if kept.dtype.kind in "SO" else 1.6e-4, dtype=kept.dtype)
+        attrs = dict(kept.attrs)
+        del f["parameters/variables/amp_c"]
+        f["parameters/variables/amp_c"] = new
+        f["parameters/variables/amp_c"].attrs.update(attrs)
+    errors = [str(p) for p in check_file(bad).problems if p.level == "error"]
+    assert any("section 1's cross-track position" in e for e in errors), errors

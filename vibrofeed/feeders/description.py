@@ -321,9 +321,6 @@ def _not_here(k: int, key: tuple[str, ...]) -> str:
         return "a jet is built on the second section on in this version"
     if key[0] in ("side_drop", "wiper", "slot"):
         return f"a {key[0].replace('_', ' ')} is built on the second section on in this version"
-    if key[-1] in ("amp_c", "phase_c"):
-        return ("a cross stroke moves a later section in this version (the first one's drive is "
-                "decks/include/move_mesh.liggghts', along and normal to the track)")
     return "only the first section's drive takes a waveform other than a sine in this version"
 
 

@@ -587,6 +587,7 @@ class _Physics:
         step, time = step[()], time[()]
         dt = self.time_step(step, time)
         feeder = self.c.feeder  # (None, not a feeder's vocabulary: every section is taken as driven)
+        self.first_cross_stroke(step, time, dt)
         for k in self.c.further_sections:
             motion = [self.f.get(f"{L.surface_path(k)}/{e}/value") for e in ("position", "velocity")]
             if any(not isinstance(m, h5py.Dataset) or m.shape != (len(step), 3) for m in motion):
@@ -620,6 +621,25 @@ class _Physics:
                     ("velocity", motion[1][()], expected[1], amp * omega, "m/s")):
                 self.against_drive(f"{where}/{element}/value", f"section {k}'s {element}", got, want,
                                    DRIVE_RTOL * scale + DRIVE_ATOL[element], unit, time)
+
+    def first_cross_stroke(self, step, time, dt: float | None) -> None:
+        """Section 1's cross stroke (``amp_c``, a third viblin mover along y): its y motion as
+        :func:`sine_drive` gives it (x and z follow the waveform's own contract)."""
+        amp_c = self.p.get("amp_c", 0.0)
+        motion = [self.f.get(f"{L.SURFACE}/{e}/value") for e in ("position", "velocity")]
+        if not amp_c or dt is None or "freq" not in self.p or \
+                any(not isinstance(m, h5py.Dataset) or m.shape != (len(step), 3) for m in motion):
+            return
+        want = sine_drive(self.p["freq"], 0.0, 0.0, 0.0, dt, step, time, amp_c, self.p.get("phase_c", 0.0))
+        omega = 2 * math.pi * self.p["freq"]
+        for element, got, expected, scale, unit in (
+                ("position", motion[0][()], want[0], abs(amp_c), "m"),
+                ("velocity", motion[1][()], want[1], abs(amp_c) * omega, "m/s")):
+            only_y = np.zeros_like(got)
+            only_y[:, 1] = got[:, 1]
+            self.against_drive(f"{L.SURFACE}/{element}/value", f"section 1's cross-track {element}",
+                               only_y, expected * [0.0, 1.0, 0.0],
+                               DRIVE_RTOL * scale + DRIVE_ATOL[element], unit, time)
 
     def against_drive(self, path: str, what: str, got, want, tol: float, unit: str, time) -> None:
         """An error at the first frame where recorded motion ``got`` departs from its drive's

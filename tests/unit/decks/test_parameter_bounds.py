@@ -105,6 +105,10 @@ BULK = {
     "s2_phase": (-INF, False, INF, False, None),
     "s2_amp_c": (0, True, 0.01, True, None),
     "s2_phase_c": (-INF, False, INF, False, None),
+    "amp_c": (0, True, 0.01, True, None),
+    "phase_c": (-INF, False, INF, False, None),
+    "s2_gate_width": (0, True, INF, False, None),
+    "s2_gate_at": (0, True, 1, False, None),
     "s2_drop_from": (0, True, 1, True, None),
     "s2_drop_to": (0, True, 1, True, None),
     "s2_drop_width": (0, True, INF, False, None),
@@ -131,7 +135,7 @@ def context(name: str, x: float) -> dict[str, str]:
     """Other parameters chosen so that no relation between parameters binds at ``x``."""
     if name == "freq":
         return {"amp_t": "0", "amp_n": "0"}
-    if name in ("amp_t", "amp_n"):
+    if name in ("amp_t", "amp_n", "amp_c"):
         return {"freq": "1"}  # 2 pi * 1 Hz * 0.01 m is far below the surface-speed limit
     if name in ("t_end", "output_dt"):
         other = "output_dt" if name == "t_end" else "t_end"

@@ -186,6 +186,7 @@ def test_a_parameter_the_deck_does_not_declare_takes_its_neutral_value(p, name, 
     ({"sections": 2.0, "s2_phase_c": 90.0, "s2_amp_c": 0.0}, "s2_phase_c",
      "shifts the cross stroke: s2_amp_c=0 has none"),
     ({"sections": 3.0, "s3_phase_c": 90.0}, "s3_phase_c", "shifts the cross stroke: s3_amp_c=0 has none"),
+    ({"phase_c": 90.0}, "phase_c", "shifts the cross stroke: amp_c=0 has none"),
 ])
 def test_a_further_sections_idle_parameters_are_named_as_section_2s(p, name, why):
     assert advice(p, {name}) == [f"parameter {name} has no effect: it {why}"]

@@ -219,9 +219,19 @@ def test_a_cross_stroke_adds_a_third_mover_and_its_recorded_sway_to_that_section
     assert "variable s2_surface_y equal 0" in plain["line_motion.in"]
 
 
-def test_the_first_section_has_no_cross_stroke(tmp_path):
+def test_the_first_section_s_cross_stroke_is_the_bulk_deck_s_amp_c(tmp_path):
+    """element 1's drive.amp_c/phase_c are the project deck's amp_c/phase_c (its own third
+    mover); a cross stroke with another waveform is refused naming both."""
     first = "[[element]]\nkind = \"linear\"\nlength = 0.004"
-    text = TWO.replace(first, first + "\ndrive = { freq = 100, amp_c = 1e-5 }", 1)
-    with pytest.raises(ParameterError, match=r"element 1: drive.amp_c: a cross stroke moves a later "
-                                             r"section in this version"):
-        read(described(tmp_path, text))
+    text = TWO.replace(first, first + "\ndrive = { freq = 100, amp_c = 1e-5, phase_c = 20 }", 1)
+    values = read(described(tmp_path, text)).values
+    assert (float(values["amp_c"]), float(values["phase_c"])) == (1e-5, 20.0)
+    assert Feeder.from_values(values).elements[0].drive.amp_c == 1e-5
+    deck = (DECKS / "bulk_feeder.liggghts").read_text()
+    assert re.search(r"fix shake_c all move/mesh mesh track viblin axis 0 1 0 order 1 amplitude "
+                     r"\$\{amp_c\} &\n     phase \$\(v_phic-PI/2\)", deck)
+    square = text.replace("amp_c = 1e-5", "waveform = 1, amp_c = 1e-5")
+    with pytest.raises(ParameterError, match=r"amp_c=1e-05 m: a cross stroke is a sine, and waveform=1"):
+        resolve(Deck.find(described(tmp_path, square, "square.toml")), {"n_parts": "0", "inlet_rate": "50"})
+
+
