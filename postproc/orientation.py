@@ -34,8 +34,10 @@ What is measured (over the steady window of :mod:`.feedrate`, detected the same 
   a part size past it) in the window, each by its state where it crossed: the first frame
   pair between which its path coordinate passes the station's, the time interpolated
   linearly, the state read at the later frame. A station whose ``x_out`` is at or past the
-  outlet edge counts out the parts delivered (the outlet's census). A part already past a
-  station's way in at the run's first frame (pre-filled there) counts at neither. Its **orienting
+  outlet edge counts out the parts delivered (the outlet's census). A part that appears past a
+  station's crossing (inserted there: the inlet's block may reach past it) passes it at its
+  first frame; one already past a station's way in at the run's first frame (pre-filled there)
+  counts at neither. Its **orienting
   efficiency** is the correct fraction out over the correct fraction in; the share of the
   flow it takes off, (in - out) / in (steady flows: the two counts are over the same window);
   and the rejects per second the feed rate's reject table attributes to its kind of tool
@@ -309,18 +311,23 @@ class Orientation(AnalysisBase):
                 which = np.clip(np.searchsorted(edges, s[k, slot], side="right") - 1, 0, self.bins - 1)
                 np.add.at(counts, (which, st.state), 1)
                 np.add.at(right, which, self.correct.of(st).astype(float))
-            # the stations' crossings
+            # the stations' crossings, and the parts that appear past one (the inlet's block
+            # may reach past a station's way in): their first frame is their passage
             same = (ids[:-1] == ids[1:]) & live[:-1] & live[1:]
+            appear = live[1:] & ~same & ~((ids[:-1] == ids[1:]) & live[:-1])
             s0, s1 = s[:-1], s[1:]
             for j, c in enumerate(coords):
-                k, slot = np.nonzero(same & (s0 < c) & (s1 >= c))
+                passed = same & (s0 < c) & (s1 >= c)
+                k, slot = np.nonzero(passed | (appear & (s1 >= c)))
                 if not len(k):
                     continue
-                frac = (c - s0[k, slot]) / (s1[k, slot] - s0[k, slot])
+                new = ~passed[k, slot]
+                step = np.where(new, 1.0, s1[k, slot] - s0[k, slot])
+                frac = np.where(new, 1.0, (c - s0[k, slot]) / step)
                 tangent, up = path_directions(feeder, s1[k, slot])
                 st = turned_states(quats[k + 1, slot], self._axes_q, tangent, up)
                 seen[j][0].append(t[k] + frac * (t[k + 1] - t[k]))
-                seen[j][1].append(ids[k, slot])
+                seen[j][1].append(ids[k + 1, slot])  # (an appearing part: the later frame's)
                 seen[j][2].append(np.c_[st.state, self.correct.of(st)])
         total = counts.sum(axis=1)
         with np.errstate(invalid="ignore", divide="ignore"):

@@ -217,6 +217,19 @@ def test_a_part_already_past_a_station_s_way_in_at_the_start_counts_at_neither(t
     assert (gate["n_in"], gate["n_out"]) == (5, 5) and gate["rejected_share"] == 0.0
 
 
+def test_a_part_that_appears_between_a_station_s_in_and_out_passes_in_where_it_appears(tmp_path):
+    # part 0 is put on the track at 10.0 mm (the inlet's block may reach past a gate's way in,
+    # 9.7 mm): it never crosses in, yet passes the gate; its first frame is its way in
+    exits = 0.503 + 0.04 * np.arange(6)
+    insert = np.r_[10e-3, np.zeros(5)]
+    path = feeder(tmp_path / "gate.h5", FRAMES, exits, speed=0.05, orientations=np.array([yaw(0)] * 6),
+                  body_template=BOX, lanes=np.arange(6) * 1e-3, variables=GATE, insert_x=insert)
+    with Result(path) as r:
+        o = Orientation(r, start=0.0, end=1.0).run().results
+    (gate,) = o.stations
+    assert (gate["n_in"], gate["n_out"]) == (6, 6)
+
+
 # -- the body frame from the template ------------------------------------------------------
 def test_a_template_laid_along_y_is_measured_along_its_own_length(tmp_path):
     along_y = BOX[:, [1, 0, 2, 3]]                  # the same box, long along the body's y
