@@ -314,7 +314,7 @@ class Orientation(AnalysisBase):
             # the stations' crossings, and the parts that appear past one (the inlet's block
             # may reach past a station's way in): their first frame is their passage
             same = (ids[:-1] == ids[1:]) & live[:-1] & live[1:]
-            appear = live[1:] & ~same & ~((ids[:-1] == ids[1:]) & live[:-1])
+            appear = live[1:] & ~((ids[:-1] == ids[1:]) & live[:-1])  # not there a frame before
             s0, s1 = s[:-1], s[1:]
             for j, c in enumerate(coords):
                 passed = same & (s0 < c) & (s1 >= c)
