@@ -98,7 +98,8 @@ class CrossCheck:
             if self.case.kind == "vertical":
                 check_vertical_case(params)
             output = self.dir / f"{point}.h5"
-            request = RunRequest(deck, params, output, label=point, ranks=self.ranks,
+            # (the run gets what the case gives; the deck's defaults are its own)
+            request = RunRequest(deck, given, output, label=point, ranks=self.ranks,
                                  reuse=self.reuse)
             runs.append(Run(point, values, params, output, request))
         return runs

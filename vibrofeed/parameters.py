@@ -309,7 +309,10 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
     # are words its checks read beside the numbers
     words = {name: value for name, value in values.items()
              if re.match(r"^(?:s\d+_(?:file|path|jet_keep|jet_mode)|part_file|correct)$", name)}
-    if "correct" in given and numbers.get("shape", 0) == 0:
+    # (the deck's own default is no choice: values resolved once resolve again, as a
+    # validation case's runs do)
+    chosen = "correct" in given and given["correct"] != getattr(tunables.get("correct"), "default", None)
+    if chosen and numbers.get("shape", 0) == 0:
         raise ParameterError(f"parameter correct={given['correct']}: spheres (shape 0) have no "
                              "orientation; correct is for chips, discs, boxes and stl parts")
     if numbers.get("shape") == 4:

@@ -132,3 +132,15 @@ def test_correct_in_words_reads_back_as_itself():
                  "side, any-direction, lead +x"):
         c = parse_correct(text)
         assert parse_correct(str(c)) == c, text
+
+
+def test_values_resolved_once_resolve_again_for_spheres():
+    """A validation case's runs resolve the values the case resolved: the deck's default correct
+    is then among them, for spheres too, and is no choice to refuse."""
+    from helpers import DECKS
+    from vibrofeed.decks import Deck
+    from vibrofeed.parameters import resolve
+
+    deck = Deck(DECKS / "bulk_feeder.liggghts")
+    once = resolve(deck, {})
+    assert once["shape"] == "0" and resolve(deck, once) == once
