@@ -20,7 +20,8 @@ from ``slot_from`` to ``slot_to``: the floor is split into strips along its edge
 strips over it are left out, so a part narrower than the slot where it rides falls through
 while one lying across it bridges it (docs/feeders.md). A gate brings both walls in at 45
 degrees to ``gate_width``, centred, from ``gate_at`` to the section's end, as on section 1 (the
-floor beyond its walls is left out; the tools placed from the reference wall lie before it).
+floor beyond its walls is left out; the side drop and slot, placed from the reference wall, lie
+before it; a wiper's bar spans the walls where it stands).
 
 Meshes are indexed triangle sets as in :mod:`vibrofeed.geometry`, with shared vertices
 along common edges (floor and walls form one surface, without seams).
@@ -205,7 +206,8 @@ def section_mesh(s: Section, spacing: float | None = None) -> tuple[np.ndarray, 
             b_.quad((x0, h0, z(h0)), (x1, h1, z(h1)), (x1, h1, top), (x0, h0, top))
     if s.has_wiper:
         w0, w1 = s.wiper_x
-        ys = np.linspace(lo, hi, 2)
+        half = float(s.half_width(w1))  # between the walls (a gate narrows them along x)
+        ys = np.linspace(-half, half, 2)
         h = s.wiper_height
         for y0, y1 in zip(ys[:-1], ys[1:]):
             # underside (normal -z), parallel to the floor at height h

@@ -350,7 +350,7 @@ class LinearSection:
 
     def _check_gate(self, part: Part, end: str) -> None:
         """A later section's gate: a part passes it riding lengthwise, its taper lies on the
-        section, and the tools placed from the reference wall end before it."""
+        section, and the side drop and slot (placed from the reference wall) end before it."""
         g, n = self.gate, self.name
         wide, at = n(("gate", "width")), n(("gate", "at"))
         if g.width < part.abreast:
@@ -364,10 +364,9 @@ class LinearSection:
             raise ParameterError(f"{at}={g.at:g}: the gate's 45 degree taper ({taper:g} m "
                                  f"long) runs past {end}; lower {at}")
         # the side drop and the slot are placed from the reference wall, which the gate moves in
-        w = self.wiper
+        # (a wiper's bar spans the walls where it stands)
         tools = [(n(("side_drop", "to")), "side drop", self.side_drop and self.side_drop.end),
-                 (n(("slot", "to")), "slot", self.slot and self.slot.end),
-                 (n(("wiper", "at")), "wiper", w and w.at + w.length / self.length)]
+                 (n(("slot", "to")), "slot", self.slot and self.slot.end)]
         for name, tool, stop in tools:
             if stop and stop > g.at + 1e-12:
                 raise ParameterError(f"{name}: the {tool} reaches past the gate ({at}={g.at:g}), whose "

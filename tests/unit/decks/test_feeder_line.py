@@ -599,7 +599,6 @@ def test_a_later_gate_s_exit_is_the_next_section_s_least_width():
      "s2_drop_to: the side drop reaches past the gate (s2_gate_at=0.5)"),
     ({"s2_slot_from": 0.45, "s2_slot_to": 0.55, "s2_slot_width": 2e-4},
      "s2_slot_to: the slot reaches past the gate (s2_gate_at=0.5)"),
-    ({"s2_wiper_height": 4e-4, "s2_wiper_at": 0.45}, "s2_wiper_at: the wiper reaches past the gate"),
 ])
 def test_a_later_gate_s_refusals_name_its_parameter(given, words):
     with pytest.raises(ParameterError) as err:
@@ -609,3 +608,17 @@ def test_a_later_gate_s_refusals_name_its_parameter(given, words):
 
 def test_tools_before_a_later_gate_pass():
     Feeder.from_values(later_gate(s2_drop_from=0.1, s2_drop_to=0.5, s2_drop_width=4e-4)).check()
+
+
+def test_a_wiper_past_a_later_gate_spans_its_narrowed_walls():
+    """A wiper's bar stands between the walls where it is: past a 0.9 mm gate on a 1.2 mm
+    section, +-0.45 mm; before it, +-0.6 mm (its underside's four corners)."""
+    for at, half in ((0.5, 4.5e-4), (0.1, 6e-4)):
+        s = section(width=1.2e-3, gate_width=9e-4, gate_at=0.25, wiper_height=3.5e-4, wiper_at=at,
+                    wiper_length=3e-4)
+        v, _ = section_mesh(s)
+        w0, w1 = s.wiper_x
+        bar = v[(v[:, 0] >= w0 - TOL) & (v[:, 0] <= w1 + TOL)]
+        under = bar[same(bar[:, 2], s.floor_z(bar[:, 1]) + 3.5e-4)]
+        assert len(under) == 4 and np.allclose(np.abs(under[:, 1]), half, rtol=0, atol=TOL)
+    Feeder.from_values(later_gate(s2_wiper_height=4e-4, s2_wiper_at=0.6)).check()
