@@ -63,6 +63,19 @@ class Station:
 TOOLS = ("gate", "side_drop", "slot", "wiper", "jet")
 
 
+def element_count(values: Mapping) -> int:
+    """How many elements a feeder of these parameters has, and so how many surface motions its
+    result records (FORMAT.md, "Feeder lines"): its ``sections`` (a bowl is the first), at least
+    1; 1 where it is absent or no number. Read from the parameters alone, without building the
+    feeder: a result stays readable whatever its geometry, and :attr:`Feeder.n_elements` of a
+    feeder that builds is the same number."""
+    try:
+        n = float(values.get("sections", 1))
+    except (TypeError, ValueError):
+        return 1
+    return max(1, int(round(n))) if math.isfinite(n) else 1
+
+
 @dataclass(frozen=True)
 class Feeder:
     """A feeder (module docstring): ``part``, ``elements`` in conveying order,

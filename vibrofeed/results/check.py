@@ -11,7 +11,7 @@ import numpy as np
 
 from ..errors import ParameterError, said
 from ..feeders.bowl import TURN_NAMES, Turn
-from ..feeders.feeder import Feeder
+from ..feeders.feeder import Feeder, element_count
 from ..models.constants import G
 from . import layout as L
 from .reader import DAMAGED, _reason, _text, damaged_object
@@ -79,9 +79,8 @@ class _Checker:
         # the feeder its parameters describe, read once (None: not a feeder's vocabulary)
         self.feeder = feeder_of_numbers(params)
         # the sections whose motion the file records (format 1.4 on): one per element of its
-        # feeder, else as many as its parameter `sections` says (FORMAT.md, "Feeder lines")
-        sections = float(self.feeder.n_elements) if self.feeder is not None else params.get("sections", 1.0)
-        self.sections = max(1, int(round(sections))) if math.isfinite(sections) else 1
+        # feeder (FORMAT.md, "Feeder lines")
+        self.sections = element_count(params)
         self.records_sections = format_version(f) >= L.SECTIONS_SINCE
 
     @property

@@ -36,6 +36,7 @@ import h5py
 import numpy as np
 
 from ..errors import IncompleteResult, ResultError  # noqa: F401  (importable from here too)
+from ..feeders.feeder import element_count
 from . import layout as L
 
 # Frames read at once when scanning ids or iterating: blocks of at most this
@@ -322,11 +323,8 @@ class Result:
     # -- sections of a feeder line --------------------------------------------------
     @cached_property
     def n_sections(self) -> int:
-        """The track's sections: a feeder line's ``sections`` parameter, else 1."""
-        try:
-            return max(1, int(round(float(self.parameters.get("sections", 1)))))
-        except (TypeError, ValueError):
-            return 1
+        """The track's sections: one per element of its feeder (a line's ``sections``), else 1."""
+        return element_count(self.parameters)
 
     def section_surface(self, section: int, frames=None) -> tuple[np.ndarray, np.ndarray]:
         """(position, velocity) of section ``section``'s motion (1-based) at a frame

@@ -99,3 +99,13 @@ def test_a_bowls_turn_is_its_stroke_over_its_centre_lines_radius():
     assert math.isclose(2e-4 / Feeder.from_values(BOWL).bowl.r_mid, turn.angle, rel_tol=1e-12)
     with pytest.raises(ParameterError, match="track_width"):
         Turn.from_values({k: v for k, v in BOWL.items() if k != "track_width"})
+
+
+def test_the_element_count_is_read_from_the_parameters_alone():
+    """A result's recorded surface motions: its sections, at least 1; 1 where the parameter is
+    absent or no number (a result stays readable), and the built feeder's own count."""
+    from vibrofeed.feeders.feeder import element_count
+
+    for values, n in (({}, 1), ({"sections": "3"}, 3), ({"sections": 2.0}, 2), ({"sections": "abc"}, 1),
+                      ({"sections": float("nan")}, 1), ({"sections": "0"}, 1)):
+        assert element_count(values) == n, values
