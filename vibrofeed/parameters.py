@@ -391,8 +391,8 @@ MAX_FRAMES = 1_000_000
 
 def _check_relations(p: Mapping[str, float]) -> None:
     """Limits that involve several parameters."""
-    drives = (("amp_n", "freq"), ("amp_t", "freq"), ("amp_c", "freq"),
-              *((f"s{k}_amp_{a}", f"s{k}_freq") for k in range(2, MAX_SECTIONS + 1) for a in "ntc"))
+    drives = ((f"{s}amp_{a}", f"{s}freq")
+              for s in ("", *(f"s{k}_" for k in range(2, MAX_SECTIONS + 1))) for a in "ntc")
     for amp, freq in drives:
         if amp in p and freq in p:
             speed = 2 * math.pi * p[freq] * p[amp]
@@ -832,12 +832,10 @@ def run_steps(p: Mapping[str, float]) -> tuple[float, float] | None:
         return None
     dt = p.get("dt", 0.0)
     if dt <= 0:
-        drives = [(p.get("freq", 0.0), math.hypot(p.get("amp_t", 0.0), p.get("amp_c", 0.0)),
-                   p.get("amp_n", 0.0))]
         # (a cross stroke adds to the along one: the decks' peak speed is the amplitudes' norm)
-        drives += [(p.get(f"s{k}_freq", 0.0),
-                    math.hypot(p.get(f"s{k}_amp_t", 0.0), p.get(f"s{k}_amp_c", 0.0)),
-                    p.get(f"s{k}_amp_n", 0.0)) for k in range(2, int(p.get("sections", 1)) + 1)]
+        drives = [(p.get(f"{s}freq", 0.0), math.hypot(p.get(f"{s}amp_t", 0.0), p.get(f"{s}amp_c", 0.0)),
+                   p.get(f"{s}amp_n", 0.0))
+                  for s in ("", *(f"s{k}_" for k in range(2, int(p.get("sections", 1)) + 1)))]
         freq, amp_t, amp_n = max(drives, key=lambda d: d[0] * math.hypot(d[1], d[2]))
         times = contact_times({**p, "freq": freq, "amp_t": amp_t, "amp_n": amp_n})
         if times is None:

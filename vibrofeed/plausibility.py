@@ -146,6 +146,8 @@ def _without_effect(p: Mapping[str, float], given: Collection[str]) -> list[str]
             idle[phase] = "shifts the normal motion against the tangential one: one of them is 0"
         if f"{s}phase_c" in p and p.get(f"{s}amp_c", 0.0) == 0:
             idle[f"{s}phase_c"] = f"shifts the cross stroke: {s}amp_c=0 has none"
+        if f"{s}gate_at" in p and p.get(f"{s}gate_width", 0.0) == 0:
+            idle[f"{s}gate_at"] = f"places the gate: {s}gate_width=0 has none"
     if "part_size" in p and int(p.get("shape", 0)) == 0:
         idle["part_thickness"] = "applies to chips, discs and boxes (shape 1, 2, 3), not to spheres"
     if "part_size" in p and int(p.get("shape", 0)) != 3:
@@ -157,9 +159,6 @@ def _without_effect(p: Mapping[str, float], given: Collection[str]) -> list[str]
     if "part_size" in p and int(p.get("shape", 0)) == 3 and p.get("bump_height", 0.0) == 0:
         for name in ("bump_diameter", "bump_at"):
             idle[name] = "shapes the bump: bump_height=0 has none"
-    for s in ("", *(f"s{k}_" for k in sorted(set(sections)))):
-        if f"{s}gate_at" in p and p.get(f"{s}gate_width", 0.0) == 0:
-            idle[f"{s}gate_at"] = f"places the gate: {s}gate_width=0 has none"
     if p.get("inlet_rate", 1.0) == 0:
         idle["inlet_batch"] = "groups the inlet's parts: inlet_rate=0 has no inlet"
     if p.get("n_parts", 1.0) == 0:
