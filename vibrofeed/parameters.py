@@ -12,6 +12,7 @@ import math
 import re
 import warnings
 from collections.abc import Callable, Mapping
+from pathlib import Path
 
 from .bowl import check_bowl, climb_advice
 from .decks import RESERVED, Deck
@@ -265,17 +266,61 @@ UNIT_SLIPS: dict[str, tuple[Callable[[float], bool], str]] = {
 def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
     """Deck defaults overridden by ``given``, checked; values as strings. A value
     that runs but looks like a slip (:func:`vibrofeed.plausibility.advice`) is a
-    :class:`ParameterWarning` naming it."""
+    :class:`ParameterWarning` naming it. A feeder description's refusals and warnings name
+    each value as the user gave it: its dotted name in the file (``element.2.jet.delay``),
+    or the name given to ``-p``."""
+    if not deck.aliases:
+        return _resolve(deck, given)
+    named: dict[str, str] = {}
+    said: dict[str, str] = {}  # the deck's name -> the name it was given by
+    for name, value in given.items():
+        own = deck.aliases.get(name, name)
+        if own in named:
+            raise ParameterError(f"parameter {own} given twice, as {said[own]} and as {name}")
+        named[own], said[own] = value, name
+    dotted = {own: alias for alias, own in deck.aliases.items() if own not in said}
+    speak = _speaker(dotted, said, getattr(deck.description, "path", None))
+    try:
+        with warnings.catch_warnings(record=True) as heard:
+            warnings.simplefilter("always", ParameterWarning)
+            values = _resolve(deck, named)
+    except ParameterError as exc:
+        raise ParameterError(speak(str(exc))) from None
+    for w in heard:
+        if issubclass(w.category, ParameterWarning):
+            warnings.warn(speak(str(w.message)), ParameterWarning, stacklevel=2)
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    return values
+
+
+def _speaker(described: Mapping[str, str], said: Mapping[str, str], path) -> Callable[[str], str]:
+    """A function that puts each deck name in a message as the user gave it: the name given
+    to ``-p`` (``said``), else its dotted name in the description (``described``), with the
+    description's file name before a message that names a value from the file."""
+    names = {**described, **said}
+    if not names:
+        return lambda text: text
+    # a name where it cites its value ("s2_width=0.0003 m"): elsewhere the prose may mean the
+    # name in general ("the two drives' amp_n"), which both spellings accept
+    pattern = re.compile(r"(?<![\w.])(" + "|".join(map(re.escape, sorted(names, key=len, reverse=True)))
+                         + r")(?==)")
+    prefix = f"{Path(path).name}: " if path else ""
+
+    def speak(text: str) -> str:
+        from_file = False
+
+        def name(m: re.Match) -> str:
+            nonlocal from_file
+            from_file = from_file or m[1] not in said
+            return names[m[1]]
+        spoken = pattern.sub(name, text)
+        return prefix + spoken if from_file and prefix and not text.startswith(prefix) else spoken
+    return speak
+
+
+def _resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
     tunables = deck.tunables
-    if deck.aliases:  # a feeder description's dotted names (element.3.drive.amp_n) for the deck's own
-        named: dict[str, str] = {}
-        said: dict[str, str] = {}  # the deck's name -> the name it was given by
-        for name, value in given.items():
-            own = deck.aliases.get(name, name)
-            if own in named:
-                raise ParameterError(f"parameter {own} given twice, as {said[own]} and as {name}")
-            named[own], said[own] = value, name
-        given = named
     for name in given:
         if name in RESERVED:
             raise ParameterError(f"parameter {name} is set by vibrofeed itself, not by -p")
@@ -326,7 +371,7 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
     moved = [n for n in given if n in numbers and (not tunables[n].is_numeric
                                                   or numbers[n] != float(tunables[n].default))]
     for line in advice(numbers, moved) + climb_advice(numbers):
-        warnings.warn(line, ParameterWarning, stacklevel=2)
+        warnings.warn(line, ParameterWarning, stacklevel=3)
     return values
 
 
@@ -806,7 +851,7 @@ def _check_contact_step(p: Mapping[str, float]) -> None:
     if problem and p.get("dt_unchecked", 0):
         warnings.warn(f"{problem}, run as dt_unchecked=1 asks: vibrofeed check rejects the result, "
                       "so the run fails (its frames kept in OUT.h5.part)",
-                      ParameterWarning, stacklevel=4)
+                      ParameterWarning, stacklevel=5)
     elif problem:
         anyway = ("; to run it anyway add -p dt_unchecked=1 (the run then fails, as vibrofeed check "
                   "rejects its result, with its frames kept)"

@@ -9,7 +9,7 @@ import pytest
 from helpers import DECKS, REPO, channel
 from vibrofeed.cli.demo import CASES
 from vibrofeed.decks import Deck
-from vibrofeed.errors import ParameterError
+from vibrofeed.errors import ParameterError, ParameterWarning
 from vibrofeed.feeders import Feeder
 from vibrofeed.feeders.deck import line_files
 from vibrofeed.feeders.description import read
@@ -107,9 +107,32 @@ def test_dotted_names_set_the_decks_own(tmp_path):
 def test_a_joint_that_does_not_step_down_is_refused_naming_the_element(tmp_path):
     deck = Deck.find(EXAMPLES / "three_section_line.toml")
     # equal amplitudes 60 degrees apart move 20 um apart normal to the floors: a 10 um step is lost
-    with pytest.raises(ParameterError, match=r"^s3_step=1e-05 m: the joint must step down by more than "
-                                             r"the floors move apart normal to them \(2e-05 m"):
+    # named as given to -p (no file name: the value is not the file's)
+    with pytest.raises(ParameterError, match=r"^element.3.step=1e-05 m: the joint must step down by more "
+                                             r"than the floors move apart normal to them \(2e-05 m"):
         resolve(deck, {"element.3.step": "1e-5", "element.3.drive.phase": "30"})
+    with pytest.raises(ParameterError, match=r"^s3_step=1e-05 m: the joint must step down"):
+        resolve(deck, {"s3_step": "1e-5", "element.3.drive.phase": "30"})
+
+
+def test_a_refusal_names_each_value_as_the_user_gave_it(tmp_path):
+    """A value from the file by its dotted name after the file's name; one given to -p by the
+    name given; the prose around the names as it was; warnings alike."""
+    text = (EXAMPLES / "three_section_line.toml").read_text()
+    assert "[run]" in text
+    late = described(tmp_path, text.replace("[run]", "[run]\nseed = -5"), "seeded.toml")
+    with pytest.raises(ParameterError, match=r"^seeded.toml: parameter run.seed=-5 must be >= 1$"):
+        resolve(Deck.find(late), {})
+    with pytest.raises(ParameterError, match=r"^parameter seed=-6 must be >= 1$"):
+        resolve(Deck.find(late), {"seed": "-6"})
+    with pytest.raises(ParameterError, match=r"^parameter run.seed=-7 must be >= 1$"):
+        resolve(Deck.find(late), {"run.seed": "-7"})
+    with pytest.warns(ParameterWarning, match=r"^parameter element.2.length=8 m is 8 metres"):
+        resolve(Deck.find(EXAMPLES / "three_section_line.toml"), {"element.2.length": "8"})
+    metres = re.sub(r"(\[\[element\]\][^\[]*?length = )[0-9.e-]+", r"\g<1>8", text, count=2)
+    long = described(tmp_path, metres, "long.toml")
+    with pytest.warns(ParameterWarning, match=r"^long.toml: parameter element.2.length=8 m is 8 metres"):
+        resolve(Deck.find(long), {})
 
 
 @pytest.mark.parametrize("change, words", [
@@ -231,7 +254,8 @@ def test_the_first_section_s_cross_stroke_is_the_bulk_deck_s_amp_c(tmp_path):
     assert re.search(r"fix shake_c all move/mesh mesh track viblin axis 0 1 0 order 1 amplitude "
                      r"\$\{amp_c\} &\n     phase \$\(v_phic-PI/2\)", deck)
     square = text.replace("amp_c = 1e-5", "waveform = 1, amp_c = 1e-5")
-    with pytest.raises(ParameterError, match=r"amp_c=1e-05 m: a cross stroke is a sine, and waveform=1"):
+    with pytest.raises(ParameterError, match=r"^square.toml: element.1.drive.amp_c=1e-05 m: a cross stroke "
+                                             r"is a sine, and element.1.drive.waveform=1"):
         resolve(Deck.find(described(tmp_path, square, "square.toml")), {"n_parts": "0", "inlet_rate": "50"})
 
 
