@@ -20,6 +20,9 @@ from .errors import ParameterError, ParameterWarning
 from .feeders.feeder import Feeder, inserts_between_walls
 from .feeders.linear import MAX_SECTIONS, keep_word
 from .feeders.records import Part
+from .limits import JET_THROW, MIN_SPEED_LIMIT, SPEED_FACTOR
+from .models.constants import G
+from .models.deck import mass as part_mass
 from .orientation import correct_word
 from .parts import Box, box_template, check_box, mass_properties
 from .plausibility import DENSITY_MAX, PART_MAX, advice
@@ -460,6 +463,7 @@ def _check_relations(p: Mapping[str, float]) -> None:
                              f"{int(p['waveform'])} is not (waveform=0, or amp_c=0)")
     _check_bulk_feeder(p)
     _check_feeder(p)
+    _check_jet_throw(p)
     check_bowl(p)
     _check_surface_forces(p)
     dt = p.get("dt", 0.0)
@@ -476,6 +480,37 @@ def _check_feeder(p: Mapping[str, float]) -> None:
     """A line's sections and joints, and its rejects' return (vibrofeed.feeders: the rules
     live there, the deck repeats none of them)."""
     Feeder.check_values(p)
+
+
+def _check_jet_throw(p: Mapping[str, float]) -> None:
+    """A warning for an air jet strong enough to throw the part it blows off faster or farther
+    than ``vibrofeed check`` accepts of any part (vibrofeed.limits): the run would fail its
+    check. Judged on the throw's upper bound (LinearSection.jet_throw): a warning, not a
+    refusal, as friction and the part's weight take some of it."""
+    if not any(p.get(f"s{k}_jet_force", 0.0) > 0 for k in range(2, MAX_SECTIONS + 1)) \
+            or "part_size" not in p or "density" not in p:
+        return
+    feeder = Feeder.from_values(p)
+    try:
+        mass = part_mass(p)
+    except (ValueError, OSError):  # an stl part's STL: its own check names what is wrong
+        return
+    sections = feeder.linear_sections
+    peak = max(2 * math.pi * s.drive.freq * math.hypot(s.drive.amp_t, s.drive.amp_n) for s in sections)
+    fastest = max(MIN_SPEED_LIMIT, SPEED_FACTOR * peak)
+    farthest = JET_THROW * max(s.x1 for s in sections)
+    for s in sections:
+        if s.jet is None:
+            continue
+        speed, reach = s.jet_throw(feeder.part, mass, G)
+        if speed > fastest or reach > farthest:
+            name = s.name(("jet", "force"))
+            warnings.warn(
+                f"{name}={s.jet.force:g} N ({s.jet.force / (mass * G):.3g} times the part's weight) "
+                f"may throw a part it blows off at up to {speed:.3g} m/s, {reach:.3g} m beyond the track; "
+                f"vibrofeed check fails a run whose parts fly faster than {fastest:.3g} m/s or "
+                f"farther than {farthest:.3g} m from the track (a few weights blow a part off)",
+                ParameterWarning, stacklevel=5)
 
 
 def circumscribed_radius(p: Mapping[str, float]) -> float:

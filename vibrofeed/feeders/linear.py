@@ -234,6 +234,21 @@ class LinearSection:
                 self.lowest - self.drive.amp_n - part.widest,
                 -self.level + self.wall_height + self.drive.amp_n + part.widest)
 
+    def jet_throw(self, part: Part, mass: float, g: float = 9.81) -> tuple[float, float]:
+        """How fast [m/s] and how far beyond the track's open side (+y) [m] the jet can throw
+        a part of ``mass`` [kg] at most: its whole force on the part and nothing against it
+        (no weight, no friction) for its duration or until the part has crossed its block
+        along the blow, then a free flight from the block's top to a part below its bottom."""
+        xlo, xhi, ylo, yhi, zlo, zhi = self.jet_block(part)
+        a = math.radians(self.jet.angle + self.cross_tilt)
+        across, height = yhi + self.width / 2, zhi - zlo  # from the far wall to the block's side
+        path = min(across / max(math.cos(a), 1e-12), height / max(math.sin(a), 1e-12))
+        push = self.jet.force / mass
+        v = min(push * self.jet.duration, math.sqrt(2 * push * path))
+        up, out = v * math.sin(a), v * math.cos(a)
+        flight = (up + math.sqrt(up * up + 2 * g * (height + part.widest))) / g
+        return v, yhi - self.width / 2 + out * flight
+
     def mesh_section(self) -> Section:
         """The section as vibrofeed.line meshes it (a further section of a line)."""
         drop, wiper, slot = self.side_drop, self.wiper, self.slot

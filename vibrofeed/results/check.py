@@ -12,6 +12,7 @@ import numpy as np
 from ..errors import ParameterError, said
 from ..feeders.bowl import TURN_NAMES, Turn
 from ..feeders.feeder import Feeder, element_count
+from ..limits import JET_THROW, MIN_SPEED_LIMIT, SPEED_FACTOR
 from ..models.constants import G
 from . import layout as L
 from .reader import DAMAGED, _reason, _text, damaged_object
@@ -482,15 +483,6 @@ class _Checker:
                               "run records no 'target_error'")
 
 
-# The physical limits (FORMAT.md, "What check checks"). No part of a vibratory
-# feeder moves faster than a hundred times the surface's peak speed plus the free
-# fall from the height of the scene, nor than MIN_SPEED_LIMIT whatever the drive.
-SPEED_FACTOR = 100.0
-MIN_SPEED_LIMIT = 1.0  # m/s
-# A run whose air jets fired: its parts may fly this many track sizes from the track (blown
-# off over the wall, they fall to the catch plane on a ballistic path) before they count as
-# escaped.
-JET_THROW = 4.0
 # Frames read at once by the physical checks (values of one float element).
 _BLOCK_VALUES = 2_000_000
 # A line's further sections must sit where their sine drive puts them to this fraction of the

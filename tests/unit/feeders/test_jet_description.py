@@ -82,3 +82,41 @@ def test_a_jet_on_the_first_section_is_refused(tmp_path):
     text = JET.replace('gate = { width = 4.5e-4, at = 0.9 }', 'jet = { force = 1e-6 }', 1)
     with pytest.raises(ParameterError, match="a jet is built on the second section on"):
         read(described(tmp_path, text))
+
+
+FILL = {"fill_to": "0.5", "n_parts": "20"}  # a fill that fits section 1
+
+
+def test_a_jets_throw_is_bounded_by_its_block_and_duration(tmp_path):
+    """Blowing straight across (angle 0, no cross tilt) the bound is hand-computable: the whole
+    force for the duration or across the block (the far wall to two part sizes beyond the near
+    one), then a fall from the block's top to a part below its bottom."""
+    values = resolve(Deck.find(described(tmp_path, JET.replace("mode = ", "angle = 0\nmode = "))), FILL)
+    feeder = Feeder.from_values(values)
+    s2, part = feeder.elements[1], feeder.part
+    rho, g = float(values["density"]), 9.81
+    mass = rho * 3e-4 ** 2 * 1.5e-4  # a chip: size^2 x thickness
+    across = 4.5e-4 + 2 * 3e-4  # the far wall to the block's side, two part sizes past the wall
+    height = 6e-4 + 2 * 2e-5 + 2 * 3e-4  # the walls, the normal stroke both ways, a part each way
+    push = 2e-6 / mass
+    speed = min(push * 0.02, (2 * push * across) ** 0.5)
+    fall = (2 * g * (height + 3e-4)) ** 0.5 / g
+    got = s2.jet_throw(part, mass, g)
+    assert got[0] == pytest.approx(speed, rel=1e-12)
+    assert got[1] == pytest.approx(2 * 3e-4 + speed * fall, rel=1e-12)
+
+
+def test_a_jet_that_would_throw_parts_past_what_check_accepts_is_warned_of(tmp_path):
+    from vibrofeed.errors import ParameterWarning
+
+    # a chip of 3.1e-8 kg (3.1e-7 N); the block 1.05 mm across: 65 weights throw it 0.16 m (check: 0.028 m)
+    path = described(tmp_path, JET.replace("force = 2e-6", "force = 2e-5"))
+    weights = 2e-5 / (2330 * 3e-4 ** 2 * 1.5e-4 * 9.81)
+    said = rf"^jet.toml: element.2.jet.force=2e-05 N \({weights:.3g} times the part's weight\) may throw"
+    with pytest.warns(ParameterWarning, match=said):
+        resolve(Deck.find(path), FILL)
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ParameterWarning)  # three weights blow it off, no farther
+        resolve(Deck.find(path), {**FILL, "element.2.jet.force": "9.5e-7"})
