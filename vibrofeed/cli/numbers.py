@@ -12,8 +12,8 @@ import argparse
 import math
 
 
-def real(above: float | None = None, at_least: float | None = None):
-    """A finite number, > ``above`` or >= ``at_least`` when given."""
+def real(above: float | None = None, at_least: float | None = None, at_most: float | None = None):
+    """A finite number, > ``above`` or >= ``at_least``, and <= ``at_most`` when given."""
     def parse(text: str) -> float:
         try:
             x = float(text)
@@ -25,6 +25,8 @@ def real(above: float | None = None, at_least: float | None = None):
             raise argparse.ArgumentTypeError(f"must be > {above:g}, got {text or 'nothing'}")
         if at_least is not None and not x >= at_least:
             raise argparse.ArgumentTypeError(f"must be >= {at_least:g}, got {text or 'nothing'}")
+        if at_most is not None and not x <= at_most:
+            raise argparse.ArgumentTypeError(f"must be <= {at_most:g}, got {text or 'nothing'}")
         return x
     return parse
 

@@ -29,7 +29,7 @@ def add_arguments(p) -> None:
                         "then lengthwise or any-direction, and lead +x or lead -x (default: the run's "
                         "parameter correct, 'up, lengthwise' for a result that records none); given, "
                         "it overrides the run's, and the figures say so")
-    p.add_argument("--within", type=real(above=0), default=20.0, metavar="DEG",
+    p.add_argument("--within", type=real(above=0, at_most=90), default=20.0, metavar="DEG",
                    help="lengthwise: the long axis within DEG degrees of the path (default 20)")
     p.add_argument("--start", type=real(), metavar="S", help="start of the window [s] (default: "
                    "the detected steady window)")

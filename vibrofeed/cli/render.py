@@ -30,7 +30,7 @@ def add_arguments(p) -> None:
     p.add_argument("result", metavar="RUN.h5", help="result file")
     p.add_argument("-o", "--output", metavar="FILE.png|FILE.mp4",
                    help="picture (.png) or movie (.mp4) to write (default: RUN.png here)")
-    p.add_argument("--frame", type=int, metavar="K",
+    p.add_argument("--frame", type=whole(), metavar="K",
                    help="frame to draw in a PNG, from 0; negative counts from the end (default -1)")
     p.add_argument("--color", choices=("speed", "cluster", "state"), default="speed",
                    help="colour the parts by speed [mm/s], by the size of their cluster of "

@@ -89,3 +89,10 @@ def test_the_runs_own_correct_is_the_default_and_correct_overrides_it_saying_so(
     assert figures["run_correct"] == "down, any-direction" and figures["correct_fraction"] == 1.0
     table = vibrofeed("orientation", path, "--correct", "up", check=True).stdout
     assert "(--correct, overriding the run's down, any-direction;" in table
+
+
+def test_an_angle_beyond_a_right_angle_is_refused_naming_the_option(run_file):
+    proc = vibrofeed("orientation", run_file, "--within", "200")
+    assert proc.returncode == 2 and proc.stdout == ""
+    assert proc.stderr == ("vibrofeed: error: orientation: argument --within: must be <= 90, got 200 "
+                           "(see vibrofeed orientation --help)\n")

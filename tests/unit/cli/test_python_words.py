@@ -82,3 +82,20 @@ def test_an_analysis_option_given_as_a_numpy_number():
     with pytest.raises(InputError) as err:
         Flights(None, contact_tolerance=np.float64(math.nan))
     assert str(err.value).endswith("got nan")
+
+
+def test_no_option_is_read_by_pythons_own_int_or_float():
+    """argparse's int and float say "invalid int value: 'abc'" (and float takes nan and inf):
+    every numeric option is read by vibrofeed.cli.numbers, whose refusals name the option and
+    the number as the user typed it."""
+    import argparse
+
+    from vibrofeed.cli import build_parser
+
+    parser = build_parser()
+    commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    raw = [f"{name} {'/'.join(action.option_strings) or action.dest}"
+           for name, sub in commands.choices.items() for action in sub._actions
+           if action.type in (int, float)]
+    assert raw == []
+    assert len(commands.choices) == 17  # every command was built, not only one
