@@ -7,6 +7,7 @@ parameter, the value and the limit, before anything is started or written.
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
 import math
 import re
@@ -18,7 +19,7 @@ from .bowl import check_bowl, climb_advice
 from .decks import RESERVED, Deck
 from .errors import ParameterError, ParameterWarning
 from .feeders.feeder import Feeder, inserts_between_walls
-from .feeders.linear import MAX_SECTIONS, keep_word
+from .feeders.linear import MAX_SECTIONS, LinearSection, keep_word
 from .feeders.records import Part
 from .limits import JET_THROW, MIN_SPEED_LIMIT, SPEED_FACTOR
 from .models.constants import G
@@ -658,23 +659,13 @@ def _check_bulk_feeder(p: Mapping[str, float]) -> None:
                              f"({widest:g} m across)")
     _check_insertion(p)
     _check_inlet(p)
-    gate = p.get("gate_width", 0.0)
     length = p.get("track_length", math.inf)
-    if gate > 0:
-        # a box passes a gate lengthwise (a gate narrower than its length is a width restriction
-        # that turns it or holds it back crosswise); other parts whichever way they lie
-        abreast = p.get("part_width", size) if shape == 3 else widest
-        if gate < abreast:
-            raise ParameterError(f"gate_width={gate:g} m is narrower than a part ({abreast:g} m across"
-                                 f"{' it lengthwise' if shape == 3 else ''})")
-        if gate >= p["track_width"]:
-            raise ParameterError(f"gate_width={gate:g} m must be narrower than track_width="
-                                 f"{p['track_width']:g} m (gate_width=0: no gate)")
-        gate_x = p.get("gate_at", 0.7) * length
-        if gate_x + (p["track_width"] - gate) / 2 > length:
-            raise ParameterError(f"gate_at={p.get('gate_at', 0.7):g}: the gate's 45 degree taper "
-                                 f"(ends {(p['track_width'] - gate) / 2:g} m after it starts) runs "
-                                 "past the outlet edge; lower gate_at")
+    if p.get("gate_width", 0.0) > 0:  # the gate's rules are every section's (LinearSection)
+        section = LinearSection.from_values(p, 1)
+        if "track_length" not in p:  # a partial set of parameters: no end to run past
+            section = dataclasses.replace(section, length=math.inf)
+        last = p.get("sections", 1) <= 1
+        section.check_gate(Part.from_values(p), "the outlet edge" if last else "the end of section 1")
         if p.get("n_parts", 1) > 0 and p.get("fill_to", 0.0) > p.get("gate_at", 0.7):
             raise ParameterError(f"fill_to={p['fill_to']:g} reaches into the gate (gate_at="
                                  f"{p.get('gate_at', 0.7):g}); lower fill_to")

@@ -326,8 +326,8 @@ class LinearSection:
         if self.width < need:
             raise ParameterError(f"{n(('width',))}={self.width:g} m is narrower than a part "
                                  f"({need:g} m across{' riding lengthwise' if need < part.widest else ''})")
-        if self.gate is not None and self.number > 1:  # (section 1's: vibrofeed.parameters)
-            self._check_gate(part, end)
+        if self.gate is not None and self.number > 1:  # (section 1's: vibrofeed.parameters calls it)
+            self.check_gate(part, end)
         radius = part.tallest / 2
         if self.wall_height <= radius:
             raise ParameterError(f"{n(('wall_height',))}={self.wall_height:g} m is no higher than a "
@@ -363,14 +363,16 @@ class LinearSection:
         if self.jet is not None:
             self.check_jet(part)
 
-    def _check_gate(self, part: Part, end: str) -> None:
-        """A later section's gate: a part passes it riding lengthwise, its taper lies on the
-        section, and the side drop and slot (placed from the reference wall) end before it."""
+    def check_gate(self, part: Part, end: str) -> None:
+        """The section's gate, on any section: a part passes it (a box riding lengthwise), its
+        taper lies on the section before ``end``, and the side drop and slot (placed from the
+        reference wall) end before it."""
         g, n = self.gate, self.name
         wide, at = n(("gate", "width")), n(("gate", "at"))
         if g.width < part.abreast:
+            riding = " riding lengthwise" if part.abreast < part.widest else ""
             raise ParameterError(f"{wide}={g.width:g} m is narrower than a part ({part.abreast:g} m "
-                                 "across riding lengthwise)")
+                                 f"across{riding})")
         if g.width >= self.width:
             raise ParameterError(f"{wide}={g.width:g} m must be narrower than {n(('width',))}="
                                  f"{self.width:g} m ({wide}=0: no gate)")

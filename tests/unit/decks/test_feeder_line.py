@@ -229,7 +229,7 @@ def test_a_single_section_is_the_bulk_feeder_unchanged(tmp_path):
       "s2_drop_width": 2.4e-4, "gate_width": 0, "n_parts": 10},
      "less than half a part (0.00025 m across it in a file)"),
     ({"shape": "box", "part_size": 1e-3, "part_width": 5e-4, "part_thickness": 3.5e-4, "track_width": 2e-3,
-      "wall_height": 1.5e-3, "s2_width": 2e-3, "gate_width": 4.9e-4}, "(0.0005 m across it lengthwise)"),
+      "wall_height": 1.5e-3, "s2_width": 2e-3, "gate_width": 4.9e-4}, "(0.0005 m across riding lengthwise)"),
     ({"s2_drop_to": 0.5, "s2_drop_width": 0}, "must be > 0"),  # a drop's extent with no floor left
     ({"s2_drop_to": 0.5, "s2_drop_width": 5e-4}, "narrower than s2_width"),
     ({"s2_drop_to": 0.5, "s2_drop_width": 4.2e-4}, "narrower than s2_width"),  # as wide
@@ -622,3 +622,24 @@ def test_a_wiper_past_a_later_gate_spans_its_narrowed_walls():
         under = bar[same(bar[:, 2], s.floor_z(bar[:, 1]) + 3.5e-4)]
         assert len(under) == 4 and np.allclose(np.abs(under[:, 1]), half, rtol=0, atol=TOL)
     Feeder.from_values(later_gate(s2_wiper_height=4e-4, s2_wiper_at=0.6)).check()
+
+
+@pytest.mark.parametrize("given, words", [
+    ({"gate_width": 2.9e-4}, "gate_width=0.00029 m is narrower than a part (0.0003 m across)"),
+    ({"gate_width": 1.2e-3}, "gate_width=0.0012 m must be narrower than track_width=0.0012 m"),
+    # 4 mm, the taper 0.3 mm long from 3.8 mm: past section 1's end, the joint, not the outlet
+    ({"gate_width": 6e-4, "gate_at": 0.95}, "gate_at=0.95: the gate's 45 degree taper (0.0003 m long) "
+                                            "runs past the end of section 1; lower gate_at"),
+])
+def test_section_one_s_gate_has_the_same_rules_as_a_later_one(given, words):
+    """One rule for every section's gate (LinearSection.check_gate), section 1's named by the
+    bulk deck's names and measured to the joint in a line."""
+    from vibrofeed.decks import Deck
+    from vibrofeed.parameters import resolve
+
+    line = {"sections": 2, "part_size": 3e-4, "track_width": 1.2e-3, "track_length": 4e-3, "s2_length": 5e-3,
+            "s2_width": 1.2e-3, "s2_wall_height": 6e-4, "s2_step": 5e-5, **given}
+    values = {k: str(v) for k, v in line.items()}
+    with pytest.raises(ParameterError) as err:
+        resolve(Deck.find("bulk_feeder"), {**values, "n_parts": "0", "inlet_rate": "10"})
+    assert words in str(err.value) and "\n" not in str(err.value)

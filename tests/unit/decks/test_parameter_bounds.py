@@ -373,7 +373,7 @@ def test_bulk_relations_at_and_past_their_edges():
     assert "must be narrower than track_width" in bulk_problem(gate_width=0.5)
     assert bulk_problem(gate_width=down(0.5), gate_at=0.75) is None
     assert bulk_problem(gate_width=0.25, gate_at=0.875) is None          # taper ends at the edge
-    assert ("gate_at=0.8751: the gate's 45 degree taper (ends 0.125 m after it starts) runs past "
+    assert ("gate_at=0.8751: the gate's 45 degree taper (0.125 m long) runs past "
             "the outlet edge") in bulk_problem(gate_width=0.25, gate_at=0.8751)
     assert bulk_problem(gate_width=0.25, fill_to=0.75) is None           # fill up to the gate
     assert "reaches into the gate" in bulk_problem(gate_width=0.25, fill_to=up(0.75))
