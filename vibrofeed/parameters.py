@@ -329,7 +329,7 @@ def _resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
         if name in RESERVED:
             raise ParameterError(f"parameter {name} is set by vibrofeed itself, not by -p")
         if name not in tunables:
-            close = difflib.get_close_matches(name, tunables, n=1)
+            close = difflib.get_close_matches(name, [*tunables, *deck.aliases], n=1)
             hint = f" (did you mean {close[0]}?)" if close else ""
             raise ParameterError(
                 f"unknown parameter {name} for deck {deck.name}{hint}; "

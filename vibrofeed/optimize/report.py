@@ -50,7 +50,8 @@ def read(folder) -> tuple[dict, list[dict], object]:
                          "optimize wrote")
     rows, _ = S.read(folder, stem=STEM)
     spec = parse(doc["spec_text"], str(doc.get("source", "study.toml")))  # as it ran, not as edited since
-    return doc, rows, spec
+    renames = doc.get("renames")  # a description's dotted names, run by the deck's own
+    return doc, rows, spec.renamed(renames if isinstance(renames, dict) else {})
 
 
 def importances(folder, spec) -> dict:

@@ -39,6 +39,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import shlex
 import sys
 from dataclasses import dataclass
@@ -431,6 +432,7 @@ def optimize(spec_path, output=None, workers: int = 1, budget: int | None = None
     out = out or sys.stdout
     spec = load(spec_path)
     deck = find_deck(spec)
+    spec = own_names(spec, deck)
     for names, key in ((spec.parameters, ("variables",)), (list(spec.robustness), ("robustness",)),
                        ([n for q in spec.inequalities for n in q.names], ("constraints", "require"))):
         unknown = sorted({n for n in names if n not in deck.tunables})
@@ -477,6 +479,28 @@ def optimize(spec_path, output=None, workers: int = 1, budget: int | None = None
         os.close(lock)
 
 
+def own_names(spec: StudySpec, deck) -> StudySpec:
+    """The study with the deck's own names for a feeder description's dotted ones
+    (``element.2.drive.amp_t`` -> ``s2_amp_t``, as ``-p`` and resolve read them; the study
+    file records the renaming for optimize-report); a parameter fixed or varied under both
+    names is refused naming both."""
+    names = {n: deck.aliases[n] for n in [*spec.parameters, *spec.robustness] if n in deck.aliases}
+    seen: dict[str, str] = {}
+    for table, name in [("fixed", n) for n in spec.fixed] + [("variables", v.name) for v in spec.variables]:
+        own = names.get(name, name)
+        if own in seen:
+            raise ParameterError(f"{spec.where(table, name)}: parameter {own} is set twice, as "
+                                 f"{seen[own]} and as {name}; a parameter is fixed or a design "
+                                 "variable, not both")
+        seen[own] = name
+    varied = {names.get(v.name, v.name) for v in spec.variables}
+    for name in spec.robustness:
+        if names.get(name, name) in varied:
+            raise ParameterError(f"{spec.where('robustness', name)}: {name} is a design variable; "
+                                 "robustness varies what the design does not fix")
+    return spec.renamed(names)
+
+
 def check_values(spec: StudySpec, deck) -> None:
     """What the study's file asks that no run could give, before any run: a value of
     ``[fixed]``, a variable's choice or a ``[robustness]`` value that ``vibrofeed run``
@@ -490,13 +514,16 @@ def check_values(spec: StudySpec, deck) -> None:
     given += [(("variables", v.name), v.name, c) for v in spec.variables for c in v.choices]
     given += [(("robustness", name), name, value) for name, values in spec.robustness.items()
               for value in values]
+    written = {own: name for name, own in spec.renames.items()}  # as the file names it
     for key, name, value in given:
         try:
             checked_value(deck, name, value_text(value))
         except ParameterError as exc:
-            what = {"fixed": "", "variables": f"variable {name}: a choice: ",
-                    "robustness": f"robustness {name}: "}[key[0]]
-            raise ParameterError(f"{spec.where(*key)}: {what}{exc}") from None
+            shown = written.get(name, name)
+            what = {"fixed": "", "variables": f"variable {shown}: a choice: ",
+                    "robustness": f"robustness {shown}: "}[key[0]]
+            message = re.sub(rf"(?<![\w.]){re.escape(name)}(?==)", shown, str(exc))
+            raise ParameterError(f"{spec.where(*key)}: {what}{message}") from None
     outlet = any(name in deck.formulas for name in L.BULK_CONTRACT)
     shapes = ({value_text(c) for v in spec.variables if v.name == "shape" for c in v.choices}
               or {value_text(spec.fixed.get("shape", deck.tunables["shape"].default
@@ -567,7 +594,7 @@ def _run(spec, deck, folder, runs, workers, quiet, comm, out, spec_path) -> int:
     doc = json.loads((folder / STUDY_JSON).read_text()) if (folder / STUDY_JSON).is_file() else {}
     doc.update({"format": "vibrofeed-study", "fingerprint": spec.fingerprint, "source": str(spec.source),
                 "deck": str(deck.path), "spec": spec.data, "spec_text": spec.text,
-                "budget_runs": runs})
+                "renames": spec.renames, "budget_runs": runs})
     units = {n: deck.tunables[n].unit for n in spec.parameters}
     meta = {"fingerprint": spec.fingerprint, "deck": deck.name, "source": str(spec.source),
             "objectives": json.dumps(spec.maximize), "units": json.dumps(units), "spec": spec.text}

@@ -48,13 +48,14 @@ parsed content) ties an output folder to one study.
 from __future__ import annotations
 
 import ast
+import dataclasses
 import math
 import operator
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import said
-from ..sweep.spec import KeyReader, fingerprint, parse_toml, read_file, scalar, target_error
+from ..sweep.spec import KeyReader, fingerprint, flat, parse_toml, read_file, scalar, target_error
 
 TOP_KEYS = ("deck", "ranks_per_run", "seed", "description", "target_error", "fixed", "variables",
             "constraints", "objective", "budget", "robustness")
@@ -134,6 +135,9 @@ class StudySpec:
     robustness: dict
     lines: dict
     target_error: float | None = None
+    # a parameter's name as the file wrote it -> the deck's own (a feeder description's dotted
+    # names, read as the deck's; StudySpec.renamed)
+    renames: dict = field(default_factory=dict)
 
     @property
     def fingerprint(self) -> str:
@@ -154,6 +158,23 @@ class StudySpec:
 
     def where(self, *path) -> str:
         return KeyReader(self.source, self.lines).where(*path)
+
+    def renamed(self, names: dict[str, str]) -> StudySpec:
+        """The study with each parameter called as ``names`` says (a feeder description's
+        dotted name -> the deck's own, vibrofeed.optimize.search.own_names), each line kept."""
+        if not names:
+            return self
+        reader = KeyReader(self.source, self.lines)
+        lines = dict(self.lines)
+        for table in ("fixed", "variables", "robustness"):
+            for old, new in names.items():
+                if (line := reader.line(table, old)) is not None and (table, old) != (table, new):
+                    lines.setdefault((table, new), line)
+        return dataclasses.replace(
+            self, fixed={names.get(n, n): v for n, v in self.fixed.items()},
+            variables=[dataclasses.replace(v, name=names.get(v.name, v.name)) for v in self.variables],
+            robustness={names.get(n, n): v for n, v in self.robustness.items()}, lines=lines,
+            renames={**self.renames, **names})
 
 
 def _evaluate(node, values: dict) -> float:
@@ -190,12 +211,13 @@ def parse(text: str, source: Path | str = "study.toml") -> StudySpec:
         if isinstance(value, bool) or not isinstance(value, int) or value < low:
             r.fail((key,), f"{key} must be a whole number >= {low}, got {said(value)}")
     fixed = {}
-    for name, value in data.get("fixed", {}).items():
+    for name, path, value in flat(data.get("fixed", {})):
         if not scalar(value):
-            r.fail(("fixed", name), f"[fixed] {name} must be one number or string, got {said(value)}")
-        r.claim(name, ("fixed", name))
+            r.fail(("fixed", *path), f"[fixed] {name} must be one number or string, got {said(value)}")
+        r.claim(name, ("fixed", *path))
         fixed[name] = value
-    variables = [_variable(name, spec, r) for name, spec in data.get("variables", {}).items()]
+    variables = [_variable(name, spec, r, path)
+                 for name, path, spec in flat(data.get("variables", {}), leaf=_VARIABLE_KEYS)]
     if not variables:
         r.fail(("variables",), "no design variables: add [variables] with name = { low = .., high = .. }")
     constraints, inequalities = _constraints(data.get("constraints", {}), r)
@@ -214,12 +236,15 @@ def _number(value) -> bool:
     return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
 
 
-def _variable(name: str, spec, r: KeyReader) -> Variable:
-    key = ("variables", name)
+_VARIABLE_KEYS = {"low", "high", "log", "type", "choices"}
+
+
+def _variable(name: str, spec, r: KeyReader, path: tuple = ()) -> Variable:
+    key = ("variables", *(path or (name,)))
     r.claim(name, key)
     if not isinstance(spec, dict):
         r.fail(key, f"variable {name} must be a table: {{ low = .., high = .. }} or {{ choices = [..] }}")
-    unknown = set(spec) - {"low", "high", "log", "type", "choices"}
+    unknown = set(spec) - _VARIABLE_KEYS
     if unknown:
         r.fail(key, f"variable {name}: unknown key(s) {', '.join(sorted(unknown))} "
                     "(low, high, log, type, choices)")
@@ -348,8 +373,8 @@ def _budget(table: dict, r: KeyReader) -> dict:
 
 def _robustness(table: dict, r: KeyReader, variables: set[str]) -> dict:
     out = {}
-    for name, values in table.items():
-        where = ("robustness", name)
+    for name, path, values in flat(table):
+        where = ("robustness", *path)
         if name in variables:
             r.fail(where, f"{name} is a design variable; robustness varies what the design does not fix")
         if not (isinstance(values, list) and values and all(scalar(v) for v in values)):

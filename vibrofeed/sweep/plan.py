@@ -66,13 +66,19 @@ def find_deck(spec: SweepSpec) -> Deck:
 
 
 def _check_names(spec: SweepSpec, deck: Deck) -> None:
+    """Every name the file sets is the deck's (or, for a feeder description, one of its dotted
+    names: resolve reads them, and refuses one parameter given by both names)."""
     tunables = deck.tunables
     for name in spec.parameters:
         if name in RESERVED:
             raise ParameterError(f"{spec.where(*spec.place(name))}: parameter {name} is set by "
                                  "vibrofeed itself, not by a sweep")
-        if name not in tunables:
-            close = difflib.get_close_matches(name, tunables, n=1)
+        if deck.aliases.get(name) == "seed" and name in spec.varied and spec.replicates > 1:
+            raise ParameterError(f"{spec.where(*spec.place(name))}: {name} (the seed) is varied and "
+                                 "replicates > 1: replicates set the seeds (seed, seed+1, ...); fix "
+                                 "it or set replicates = 1")
+        if name not in tunables and name not in deck.aliases:
+            close = difflib.get_close_matches(name, [*tunables, *deck.aliases], n=1)
             hint = f" (did you mean {close[0]}?)" if close else ""
             raise ParameterError(f"{spec.where(*spec.place(name))}: unknown parameter {name} for "
                                  f"deck {deck.name}{hint}; valid parameters: {', '.join(tunables)}")
@@ -173,7 +179,8 @@ def plan(spec: SweepSpec, deck: Deck | None = None) -> list[Job]:
         params = {name: value_text(v) for name, v in setting.items()}
         seed = None
         if has_seed:
-            base = setting.get("seed", deck.tunables["seed"].default)
+            named = next((n for n in setting if deck.aliases.get(n, n) == "seed"), "seed")
+            base = setting.get(named, deck.tunables["seed"].default)
             try:
                 x = float(base)
             except ValueError:
@@ -182,7 +189,7 @@ def plan(spec: SweepSpec, deck: Deck | None = None) -> list[Job]:
             # (never truncated: 7.5 is no seed 7)
             seed = int(x) + r if x.is_integer() else None
             if seed is not None:
-                params["seed"] = str(seed)
+                params[named] = str(seed)
         try:
             values = resolve(deck, params)
         except ParameterError as exc:

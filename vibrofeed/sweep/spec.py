@@ -99,7 +99,10 @@ class SweepSpec:
         return list(self.fixed) + [k for k in self.varied if k not in self.fixed]
 
     def line_of(self, *path) -> int | None:
-        """The line of a key path (``("grid", "amp_n")``, ``("point", 1, "fill_to")``)."""
+        """The line of a key path (``("grid", "amp_n")``, ``("point", 1, "fill_to")``; a
+        dotted name written as TOML's dotted key, ``("grid", "element.2.jet.delay")``, too)."""
+        if path and isinstance(path[-1], str) and "." in path[-1] and path not in self.lines:
+            path = path[:-1] + tuple(path[-1].split("."))
         while path:
             if path in self.lines:
                 return self.lines[path]
@@ -213,6 +216,21 @@ def key_lines(text: str) -> dict[tuple, int]:
 
 
 # ---------------------------------------------------------------- parsing
+def flat(table: dict, prefix: tuple = (), leaf: set | frozenset = frozenset()) -> list[tuple]:
+    """(name, key path, value) of each value of ``table``. A TOML dotted key written bare
+    (``element.2.jet.delay = [...]``) is read by TOML as nested tables: it is the one dotted
+    name it spells (a feeder description's name), as the same key quoted is. A table whose
+    keys are all in ``leaf`` is a value (a study's variable, ``{ low = .., high = .. }``)."""
+    out = []
+    for key, value in table.items():
+        path = prefix + (key,)
+        if isinstance(value, dict) and value and not set(value) <= leaf:
+            out += flat(value, path, leaf)
+        else:
+            out.append((".".join(path), path, value))
+    return out
+
+
 def scalar(value) -> bool:
     return isinstance(value, int | float | str) and not isinstance(value, bool)
 
@@ -241,10 +259,18 @@ class KeyReader:
         self.source, self.lines = source, lines
         self.owner: dict[str, tuple] = {}  # parameter -> the key path that sets it
 
-    def where(self, *key) -> str:
+    def line(self, *key) -> int | None:
+        """The line of a key path, or of its nearest table (a dotted name written as TOML's
+        dotted key, ``("variables", "element.2.drive.amp_t")``, by its own line)."""
+        if key and isinstance(key[-1], str) and "." in key[-1] and key not in self.lines:
+            key = key[:-1] + tuple(key[-1].split("."))
         while key and key not in self.lines:
             key = key[:-1]
-        return f"{self.source}:{self.lines[key]}" if key else str(self.source)
+        return self.lines[key] if key else None
+
+    def where(self, *key) -> str:
+        line = self.line(*key)
+        return f"{self.source}:{line}" if line else str(self.source)
 
     def fail(self, key: tuple, message: str):
         raise InputError(f"{self.where(*key)}: {message}")
@@ -331,11 +357,11 @@ def _top_level(data: dict, r: KeyReader) -> dict[str, int]:
 def _fixed(data: dict, r: KeyReader) -> dict:
     """The [fixed] parameters: one value each."""
     fixed = {}
-    for name, value in data.get("fixed", {}).items():
+    for name, path, value in flat(data.get("fixed", {})):
         if not scalar(value):
-            r.fail(("fixed", name), f"[fixed] {name} must be one number or string, got {said(value)} "
-                                    "(lists of values go in [grid] or [zip.NAME])")
-        r.claim(name, ("fixed", name))
+            r.fail(("fixed", *path), f"[fixed] {name} must be one number or string, got {said(value)} "
+                                     "(lists of values go in [grid] or [zip.NAME])")
+        r.claim(name, ("fixed", *path))
         fixed[name] = value
     return fixed
 
@@ -343,8 +369,8 @@ def _fixed(data: dict, r: KeyReader) -> dict:
 def _grid_axes(data: dict, r: KeyReader) -> list[Axis]:
     """One axis per [grid] list."""
     axes = []
-    for name, value in data.get("grid", {}).items():
-        key = ("grid", name)
+    for name, path, value in flat(data.get("grid", {})):
+        key = ("grid", *path)
         r.claim(name, key)
         axes.append(Axis("grid", name, [name], [{name: v} for v in r.values_list(key, name, value)]))
     return axes
@@ -358,8 +384,8 @@ def _zip_axes(data: dict, r: KeyReader) -> list[Axis]:
             r.fail(("zip", group), f"zip.{group} must be a table of lists: [zip.{group}] then name = [...]")
         length = None
         columns = {}
-        for name, value in table.items():
-            key = ("zip", group, name)
+        for name, path, value in flat(table):
+            key = ("zip", group, *path)
             r.claim(name, key)
             columns[name] = r.values_list(key, f"zip.{group}.{name}", value)
             if length is not None and len(value) != length:
@@ -379,19 +405,23 @@ def _point_axes(data: dict, r: KeyReader) -> list[Axis]:
     if not points:
         return []
     keys: list[str] = []
+    settings = []
     for i, point in enumerate(points):
         if not isinstance(point, dict) or not point:
             r.fail(("point", i), "each [[point]] must set at least one parameter")
-        for name, value in point.items():
+        setting = {}
+        for name, path, value in flat(point):
             if not scalar(value):
-                r.fail(("point", i, name), f"[[point]] {name} must be one number or string, "
-                                           f"got {said(value)}")
+                r.fail(("point", i, *path), f"[[point]] {name} must be one number or string, "
+                                            f"got {said(value)}")
             if name not in keys:  # first [[point]] naming it
-                r.claim(name, ("point", i, name))
+                r.claim(name, ("point", i, *path))
                 keys.append(name)
-    if len({json.dumps(p, sort_keys=True) for p in points}) != len(points):
+            setting[name] = value
+        settings.append(setting)
+    if len({json.dumps(p, sort_keys=True) for p in settings}) != len(settings):
         r.fail(("point",), "two [[point]] tables are the same setting")
-    return [Axis("point", "point", keys, [dict(p) for p in points])]
+    return [Axis("point", "point", keys, settings)]
 
 
 def describe_change(old: dict, new: dict) -> str:

@@ -546,11 +546,11 @@ def test_a_sweep_file_that_cannot_be_read_is_refused_naming_the_file_and_why(tmp
      "zip.s.1: amp_t has 1 values"),
     ('deck = "bulk_feeder"\n[ zip . "s.1" ]\nfreq = [50, 100]\namp_t = [1e-4]\n', 4,
      "zip.s.1: amp_t has 1 values"),
-    # a dotted key where one value is wanted: the line of the dotted key, not of its table
-    ('deck = "bulk_feeder"\n[fixed]\nt_end = 1\ng.h = 2\n', 4, "[fixed] g must be one number or string"),
-    ('deck = "bulk_feeder"\n[grid]\nphase = [0, 90]\nx.y = [1]\n', 4, "x must be a non-empty list of values"),
-    ('deck = "bulk_feeder"\n[[point]]\nmu = 0.3\n[[point]]\nphase = 0\nx.y = 1\n', 6,
-     "[[point]] x must be one number or string"),
+    # a dotted key is one dotted name (a feeder description's): the line of the dotted key
+    ('deck = "bulk_feeder"\n[fixed]\nt_end = 1\ng.h = [2]\n', 4, "[fixed] g.h must be one number or string"),
+    ('deck = "bulk_feeder"\n[grid]\nphase = [0, 90]\nx.y = 1\n', 4, "x.y must be a non-empty list of values"),
+    ('deck = "bulk_feeder"\n[[point]]\nmu = 0.3\n[[point]]\nphase = 0\nx.y = [1]\n', 6,
+     "[[point]] x.y must be one number or string"),
     ('deck = "bulk_feeder"\n\nfoo.bar = 1\n', 3, "unknown key foo"),
     # inline tables: no line of their own keys, so the line of the key holding the table
     ('deck = "bulk_feeder"\n[zip]\n\ns = { freq = [50, 50] }\n', 4, "zip.s.freq lists a value twice"),
