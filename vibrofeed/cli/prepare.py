@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import re
 import shlex
 import sys
+import tempfile
+from pathlib import Path
 
 from .options import add_deck_arguments
 
@@ -34,15 +37,41 @@ def _stamps(folder) -> dict:
     return {p.name: (p.stat().st_ino, p.stat().st_mtime_ns) for p in folder.iterdir() if p.is_file()}
 
 
+def _inputs(deck, values: dict[str, str]) -> list[Path]:
+    """The files a prepare reads: the deck (a description's, and the project deck it is made
+    from), the decks' shared blocks, an stl part's STL and a mesh element's."""
+    from ..engine.runner import deck_inputs
+
+    files = [*deck_inputs(deck), *(p for p in deck.include_dir.rglob("*") if p.is_file())]
+    return files + [Path(v) for k, v in values.items() if v and re.fullmatch(r"part_file|s\d+_file", k)]
+
+
+def _names(deck, values: dict[str, str]) -> list[str]:
+    """The files a prepare of ``deck`` with ``values`` writes, by a prepare into a scratch
+    folder (cheap: meshes and templates), so that none replaces an input before it is read."""
+    from ..decks import Deck
+
+    with tempfile.TemporaryDirectory(prefix="vibrofeed-prepare-") as scratch:
+        if deck.description is not None:
+            deck = Deck.from_description(deck.description.path, Path(scratch))
+        deck.prepare(values, scratch)
+        return sorted(p.name for p in Path(scratch).iterdir())
+
+
 def run(args) -> int:
     from ..decks import Deck
     from ..parameters import parse_assignments, resolve
-    from .outputs import folder_destination, written
+    from .outputs import folder_destination, names_in, not_an_input, written
 
     deck = Deck.find(args.deck)
     given = parse_assignments(args.param)
     values = resolve(deck, given)
     folder = folder_destination("-o", args.output, parents=True)
+    names = _names(deck, values)
+    inputs = _inputs(deck, values)
+    for name in names:
+        not_an_input("-o", args.output, folder / name, inputs)
+    names_in("-o", folder, names)
     before = _stamps(folder)
     if deck.description is not None:  # the generated deck goes with its meshes, to be run by hand
         deck = Deck.from_description(deck.description.path, folder.resolve())

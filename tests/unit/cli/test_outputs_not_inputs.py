@@ -5,11 +5,12 @@ complete result under an unfinished one's name."""
 
 from __future__ import annotations
 
+import re
 import shutil
 
 import pytest
 
-from helpers import DECKS, vibrofeed
+from helpers import DECKS, REPO, vibrofeed
 from vibrofeed.decks import Deck
 from vibrofeed.engine.runner import check_output, deck_inputs
 from vibrofeed.errors import UsageError
@@ -105,3 +106,22 @@ def test_render_over_the_result_it_reads_is_refused_by_default_or_by_name(tmp_pa
     proc = vibrofeed("render", "r.png", "-o", tmp_path / "r.png", cwd=tmp_path)
     assert proc.returncode == 2 and proc.stderr.startswith(f"vibrofeed: error: -o {tmp_path / 'r.png'}: ")
     assert result.read_bytes() == b"not touched"
+
+
+def test_prepare_into_the_decks_it_reads_is_refused_and_leaves_them(decks, tmp_path, monkeypatch):
+    """A description named as the project deck it is made from, prepared into the decks'
+    folder, would have replaced bulk_feeder.liggghts with the generated deck; an STL a mesh
+    element reads, in the output folder under a name prepare writes, likewise."""
+    monkeypatch.setenv("VIBROFEED_DECKS", str(decks))
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    before = {p: p.read_bytes() for p in decks.rglob("*") if p.is_file()}
+    text = (REPO / "feeders" / "demo_line.toml").read_text()
+    named = tmp_path / "bulk.toml"
+    named.write_text(re.sub(r'(?m)^name = ".*"$', 'name = "bulk_feeder"', text))
+    proc = vibrofeed("prepare", named, "-o", decks)
+    assert proc.returncode == 2 and len(proc.stderr.splitlines()) == 1, proc.stderr
+    assert f"would replace {decks / 'bulk_feeder.liggghts'}, which the command reads" in proc.stderr
+    assert untouched(decks, before)
+    proc = vibrofeed("prepare", named, "-o", tmp_path / "elsewhere")  # the same, elsewhere: fine
+    assert proc.returncode == 0, proc.stderr
+    assert (tmp_path / "elsewhere" / "bulk_feeder.liggghts").is_file()
