@@ -305,10 +305,11 @@ def _speaker(described: Mapping[str, str], said: Mapping[str, str], path) -> Cal
     names = {**described, **said}
     if not names:
         return lambda text: text
-    # a name where it cites its value ("s2_width=0.0003 m"): elsewhere the prose may mean the
-    # name in general ("the two drives' amp_n"), which both spellings accept
-    pattern = re.compile(r"(?<![\w.])(" + "|".join(map(re.escape, sorted(names, key=len, reverse=True)))
-                         + r")(?==)")
+    # a name where it cites its value ("s2_width=0.0003 m") or is the message's subject
+    # ("parameter duty has no effect"): elsewhere the prose may mean the name in general ("the
+    # two drives' amp_n"), which both spellings accept
+    alternatives = "|".join(map(re.escape, sorted(names, key=len, reverse=True)))
+    pattern = re.compile(rf"(?<![\w.])({alternatives})(?==)|(?<=parameter )({alternatives})(?![\w.])")
     prefix = f"{Path(path).name}: " if path else ""
 
     def speak(text: str) -> str:
@@ -316,8 +317,9 @@ def _speaker(described: Mapping[str, str], said: Mapping[str, str], path) -> Cal
 
         def name(m: re.Match) -> str:
             nonlocal from_file
-            from_file = from_file or m[1] not in said
-            return names[m[1]]
+            found = m[1] or m[2]
+            from_file = from_file or found not in said
+            return names[found]
         spoken = pattern.sub(name, text)
         return prefix + spoken if from_file and prefix and not text.startswith(prefix) else spoken
     return speak
@@ -374,6 +376,9 @@ def _resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
     # (callers such as the validation cases pass every value).
     moved = [n for n in given if n in numbers and (not tunables[n].is_numeric
                                                   or numbers[n] != float(tunables[n].default))]
+    # a description's numbers are its deck's defaults, yet each one the file writes is a choice
+    written = getattr(deck.description, "values", None) or {}
+    moved += [n for n in written if n in numbers and n not in moved and n != "sections"]
     for line in advice(numbers, moved) + climb_advice(numbers):
         warnings.warn(line, ParameterWarning, stacklevel=3)
     return values

@@ -287,8 +287,10 @@ def test_export_refuses_a_name_it_writes_that_is_taken_before_any_work(run_file,
 
 def test_prepare_names_a_file_it_cannot_write_in_one_line(tmp_path):
     (tmp_path / "p" / "track.stl").mkdir(parents=True)
+    # named before anything is written (prepare learns its files' names first)
     one_line_error(vibrofeed("prepare", "bulk_feeder", "-o", tmp_path / "p"), 2,
-                   f"{(tmp_path / 'p' / 'track.stl').resolve()}: Is a directory")
+                   f"{tmp_path / 'p' / 'track.stl'} is a folder; the command writes a file there")
+    assert [p.name for p in (tmp_path / "p").iterdir()] == ["track.stl"]
 
 
 def test_sweep_report_names_a_map_it_cannot_write_in_one_line(tmp_path):
