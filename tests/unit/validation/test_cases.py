@@ -230,3 +230,24 @@ def test_every_case_s_runs_resolve_in_the_runner_as_the_case_resolved_them(name,
             warnings.simplefilter("ignore")  # (the case's own, said when it resolved them)
             again = resolve(run.request.deck, run.request.params)
         assert again == run.params
+
+
+def test_a_case_holding_a_parameter_idle_at_some_points_does_not_warn_of_it():
+    """vdw_sticking keeps its roughness at A = 0, where surface forces are off: by design, so
+    validate says nothing of it; any other warning still reaches the user."""
+    import warnings
+
+    from vibrofeed.errors import ParameterWarning
+    from vibrofeed.parameters import resolve
+    from vibrofeed.validation.crosscheck import CrossCheck, held_across_points
+
+    case = C.find("vdw_sticking")
+    with warnings.catch_warnings(record=True) as heard:
+        warnings.simplefilter("always")
+        runs = CrossCheck(case, "/nonexistent").plan()
+    assert not [w for w in heard if issubclass(w.category, ParameterWarning)]
+    idle = next(r for r in runs if r.values["hamaker"] == 0)
+    with pytest.warns(ParameterWarning, match="parameter roughness has no effect"):
+        resolve(idle.request.deck, idle.request.params)  # said, outside a case
+    with held_across_points(), pytest.warns(ParameterWarning, match="radius=0.15 m is 150 mm"):
+        resolve(idle.request.deck, {**idle.request.params, "radius": "0.15"})
