@@ -519,7 +519,7 @@ def _jet(values: Mapping, k: int, get, part: Part | None = None) -> Jet | None:
         keep = parse_correct(words["keep"], deck_name(k, ("jet", "keep")))
     mode = words["mode"].lower()
     if mode not in JET_MODES:
-        raise ParameterError(f"{deck_name(k, ('jet', 'mode'))}={words['mode']!r} must be "
+        raise ParameterError(f"{deck_name(k, ('jet', 'mode'))}={words['mode']} must be "
                              f"{' or '.join(JET_MODES)}")
     return Jet(force=force, keep=keep, at=get(("jet", "at"), 0.5), delay=get(("jet", "delay"), 0.0),
                duration=get(("jet", "duration"), 0.01), offset=get(("jet", "offset"), 0.0),

@@ -120,3 +120,9 @@ def test_a_jet_that_would_throw_parts_past_what_check_accepts_is_warned_of(tmp_p
     with warnings.catch_warnings():
         warnings.simplefilter("error", ParameterWarning)  # three weights blow it off, no farther
         resolve(Deck.find(path), {**FILL, "element.2.jet.force": "9.5e-7"})
+
+
+def test_a_jet_mode_given_to_p_is_refused_in_the_users_words(tmp_path):
+    path = described(tmp_path, JET)
+    with pytest.raises(ParameterError, match=r"^s2_jet_mode=Gentle must be region or ideal$"):
+        resolve(Deck.find(path), {**FILL, "s2_jet_mode": "Gentle"})
