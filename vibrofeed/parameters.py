@@ -306,10 +306,11 @@ def _speaker(described: Mapping[str, str], said: Mapping[str, str], path) -> Cal
     if not names:
         return lambda text: text
     # a name where it cites its value ("s2_width=0.0003 m") or is the message's subject
-    # ("parameter duty has no effect"): elsewhere the prose may mean the name in general ("the
+    # ("parameter duty has no effect", "correct: no state named ..."): elsewhere the prose may mean the name in general ("the
     # two drives' amp_n"), which both spellings accept
     alternatives = "|".join(map(re.escape, sorted(names, key=len, reverse=True)))
-    pattern = re.compile(rf"(?<![\w.])({alternatives})(?==)|(?<=parameter )({alternatives})(?![\w.])")
+    pattern = re.compile(rf"(?<![\w.])({alternatives})(?==)|(?<=parameter )({alternatives})(?![\w.])"
+                         rf"|^({alternatives})(?=: )")
     prefix = f"{Path(path).name}: " if path else ""
 
     def speak(text: str) -> str:
@@ -317,7 +318,7 @@ def _speaker(described: Mapping[str, str], said: Mapping[str, str], path) -> Cal
 
         def name(m: re.Match) -> str:
             nonlocal from_file
-            found = m[1] or m[2]
+            found = m[1] or m[2] or m[3]
             from_file = from_file or found not in said
             return names[found]
         spoken = pattern.sub(name, text)

@@ -127,6 +127,8 @@ def test_a_refusal_names_each_value_as_the_user_gave_it(tmp_path):
         resolve(Deck.find(late), {"seed": "-6"})
     with pytest.raises(ParameterError, match=r"^parameter run.seed=-7 must be >= 1$"):
         resolve(Deck.find(late), {"run.seed": "-7"})
+    with pytest.raises(ParameterError, match=r"^parts.correct: no state named 'sideways'"):
+        resolve(Deck.find(late), {"parts.correct": "sideways"})  # the subject of the message
     with pytest.warns(ParameterWarning, match=r"^parameter element.2.length=8 m is 8 metres"):
         resolve(Deck.find(EXAMPLES / "three_section_line.toml"), {"element.2.length": "8"})
     metres = re.sub(r"(\[\[element\]\][^\[]*?length = )[0-9.e-]+", r"\g<1>8", text, count=2)
