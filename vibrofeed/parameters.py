@@ -306,8 +306,8 @@ def _speaker(described: Mapping[str, str], said: Mapping[str, str], path) -> Cal
     if not names:
         return lambda text: text
     # a name where it cites its value ("s2_width=0.0003 m") or is the message's subject
-    # ("parameter duty has no effect", "correct: no state named ..."): elsewhere the prose may mean the name in general ("the
-    # two drives' amp_n"), which both spellings accept
+    # ("parameter duty has no effect", "correct: no state named ..."): elsewhere the prose
+    # may mean the name in general ("the two drives' amp_n"), which both spellings accept
     alternatives = "|".join(map(re.escape, sorted(names, key=len, reverse=True)))
     pattern = re.compile(rf"(?<![\w.])({alternatives})(?==)|(?<=parameter )({alternatives})(?![\w.])"
                          rf"|^({alternatives})(?=: )")
