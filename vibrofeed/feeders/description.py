@@ -376,6 +376,14 @@ def deck_text(description: Description, template: str, variables: dict) -> str:
             text = v.description.replace("section 2", f"section {k}").replace(
                 "section 1's exit", f"section {k - 1}'s exit")
             out.append(_declaration(name, values.get(name, v.default), v.unit, text))
+    # a further element's number its deck would not declare would be dropped silently, as a
+    # bowl's exit section's gate once was: refused, naming it
+    declared = {m[1] for line in out if (m := re.match(r"^variable (\S+) ", line))}
+    for name in values:
+        if further.match(name) and name not in declared:
+            raise _fail(description.path, f"{by_name.get(name, name)}: a feeder whose first element is a "
+                                          f"{description.kinds[0]} has no such number in this version "
+                                          f"({description.template} does not declare {name})")
     body = lines[c:]
     header = _header(description, n, template)
     return "\n".join(header + [""] + out + [""] + body) + "\n"

@@ -178,3 +178,49 @@ def test_the_store_a_pre_fill_drains_is_the_first_elements_sections():
     line = {"part_size": 3e-4, "track_length": 4e-3, "track_width": 1.2e-3, "wall_height": 1e-3,
             "sections": 2, "s2_length": 4e-3, "s2_width": 1.2e-3, "s2_wall_height": 1e-3, "s2_step": 5e-5}
     assert store_sections(line) == 1 and store_sections({}) == 1  # (no feeder: a single track)
+
+
+def test_every_number_of_a_linear_section_is_declared_after_a_bowl_as_after_a_section():
+    """A bowl's exit section takes the line's tooling: every s2_* number the bulk deck declares
+    for a section, bowl_feeder declares too (their gate, cross stroke and slot were once
+    missing, and a description's gate on a bowl's exit line was dropped without a word)."""
+    from vibrofeed.decks import decks_dir
+    from vibrofeed.feeders.linear import deck_names
+
+    bulk, bowl = (Deck(decks_dir() / f"{n}.liggghts").tunables for n in ("bulk_feeder", "bowl_feeder"))
+    linear = set(deck_names(2).values())
+    assert linear <= set(bulk) and linear <= set(bowl)
+    assert {n for n in bulk if n.startswith("s2_")} <= set(bowl)
+
+
+def test_a_gate_on_a_bowls_exit_section_is_built(tmp_path):
+    """The exit section's gate narrows its walls: the mesh's half-width past the taper is the
+    gate's, before it the section's."""
+    text = (REPO / "feeders" / "bowl_line.toml").read_text()
+    drop = "side_drop = { from = 0.4, to = 0.6, width = 6.5e-4 }"
+    assert drop in text
+    path = tmp_path / "g.toml"
+    path.write_text(text.replace(drop, "gate = { width = 6.5e-4, at = 0.2 }"))
+    values = resolve(Deck.find(path), {})
+    assert (float(values["s2_gate_width"]), float(values["s2_gate_at"])) == (6.5e-4, 0.2)
+    line = Feeder.from_values(values).elements[1]
+    assert line.gate is not None and line.gate.width == 6.5e-4
+    s = line.mesh_section()
+    assert s.half_width(s.x0 + 0.1 * s.length) == pytest.approx(1.5e-3 / 2, rel=1e-12)
+    assert s.half_width(s.x0 + 0.5 * s.length) == pytest.approx(6.5e-4 / 2, rel=1e-12)
+
+
+def test_a_further_number_its_deck_does_not_declare_is_refused_not_dropped(tmp_path):
+    from vibrofeed.decks import decks_dir
+    from vibrofeed.feeders.description import deck_text, read
+
+    template = (decks_dir() / "bowl_feeder.liggghts").read_text()
+    lacking = "\n".join(line for line in template.splitlines() if not line.startswith("variable s2_gate"))
+    text = (REPO / "feeders" / "bowl_line.toml").read_text().replace(
+        "side_drop = { from = 0.4, to = 0.6, width = 6.5e-4 }", "gate = { width = 6.5e-4, at = 0.2 }")
+    path = tmp_path / "g.toml"
+    path.write_text(text)
+    described = read(path)
+    with pytest.raises(ParameterError, match=r"^g.toml: element.2.gate.width: a feeder whose first element "
+                                             r"is a bowl has no such number in this version"):
+        deck_text(described, lacking, Deck.parse_variables(lacking))
