@@ -38,11 +38,14 @@ def _stamps(folder) -> dict:
 
 
 def _inputs(deck, values: dict[str, str]) -> list[Path]:
-    """The files a prepare reads: the deck (a description's, and the project deck it is made
-    from), the decks' shared blocks, an stl part's STL and a mesh element's."""
+    """The files a prepare reads: the deck and what it includes (a description, and the project
+    deck it is made from), an stl part's STL and a mesh element's."""
+    from ..decks import DECK_SUFFIX, decks_dir
     from ..engine.runner import deck_inputs
 
-    files = [*deck_inputs(deck), *(p for p in deck.include_dir.rglob("*") if p.is_file())]
+    files = list(deck_inputs(deck))  # (a description's included: its generated deck's)
+    if deck.description is not None:
+        files.append(decks_dir() / f"{deck.description.template}{DECK_SUFFIX}")
     return files + [Path(v) for k, v in values.items() if v and re.fullmatch(r"part_file|s\d+_file", k)]
 
 
