@@ -315,6 +315,13 @@ def channel(points, width, wall, holes=(), flipped=()):
     return v, t
 
 
+def one_body_balanced(mb) -> None:
+    """The mass balance of a run of :func:`place_one_body`: the one part inserted from the
+    first step on (frame 0 is before it), none lost, and exact at every frame."""
+    assert (mb["inserted"][1:] == 1).all() and (mb["lost"] == 0).all()
+    assert (mb["inserted"] == mb["on_track"] + mb["exited"] + mb["rejected"]).all()
+
+
 def place_one_body(at, quaternion, seed: int, half: float = 1e-7) -> list[str]:
     """LIGGGHTS commands (after a bulk feeder's deck) that remove its pre-fill and insert one part
     of the deck's own template with its centre of mass at ``at`` (3,) [m], turned by

@@ -283,7 +283,7 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
             raise ParameterError(f"parameter {own} given twice, as {said[own]} and as {name}")
         named[own], said[own] = value, name
     dotted = {own: alias for alias, own in deck.aliases.items() if own not in said}
-    speak = _speaker(dotted, said, getattr(deck.description, "path", None))
+    speak = speaker(dotted, said, getattr(deck.description, "path", None))
     try:
         with warnings.catch_warnings(record=True) as heard:
             warnings.simplefilter("always", ParameterWarning)
@@ -298,7 +298,7 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
     return values
 
 
-def _speaker(described: Mapping[str, str], said: Mapping[str, str], path) -> Callable[[str], str]:
+def speaker(described: Mapping[str, str], said: Mapping[str, str], path=None) -> Callable[[str], str]:
     """A function that puts each deck name in a message as the user gave it: the name given
     to ``-p`` (``said``), else its dotted name in the description (``described``), with the
     description's file name before a message that names a value from the file."""
@@ -503,8 +503,7 @@ def _check_jet_throw(p: Mapping[str, float]) -> None:
     except (ValueError, OSError):  # an stl part's STL: its own check names what is wrong
         return
     sections = feeder.linear_sections
-    peak = max(2 * math.pi * s.drive.freq * math.hypot(s.drive.amp_t, s.drive.amp_n) for s in sections)
-    fastest = max(MIN_SPEED_LIMIT, SPEED_FACTOR * peak)
+    fastest = max(MIN_SPEED_LIMIT, SPEED_FACTOR * max(s.drive.peak_speed for s in sections))
     farthest = JET_THROW * max(s.x1 for s in sections)
     for s in sections:
         if s.jet is None:

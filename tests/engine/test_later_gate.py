@@ -17,7 +17,7 @@ balance is exact at every frame (inserted = on track + exited + rejected).
 import numpy as np
 import pytest
 
-from helpers import place_one_body
+from helpers import one_body_balanced, place_one_body
 from vibrofeed.decks import Deck
 from vibrofeed.engine.runner import run_deck
 from vibrofeed.feeders.feeder import section_from
@@ -80,12 +80,6 @@ def runs(tmp_path_factory):
     return {pose: run(folder / f"{pose}.h5", pose) for pose in POSES}
 
 
-def balanced(found):
-    mb = found["mb"]  # (frame 0 is before the first step inserted the box)
-    assert (mb["inserted"][1:] == 1).all() and (mb["lost"] == 0).all()
-    assert (mb["inserted"] == mb["on_track"] + mb["exited"] + mb["rejected"]).all()
-
-
 def never_wider_than_the_gate_past_it(found):
     past = (found["x"] >= found["narrow"]) & (found["x"] <= found["end"])
     assert (found["across"][past] <= GATE + OVERLAP).all(), \
@@ -94,7 +88,7 @@ def never_wider_than_the_gate_past_it(found):
 
 def test_a_box_lengthwise_passes_a_later_gate(runs):
     found = runs["lengthwise"]
-    balanced(found)
+    one_body_balanced(found["mb"])
     assert found["across"][0] == pytest.approx(W_, abs=OVERLAP)  # as placed: W across
     never_wider_than_the_gate_past_it(found)
     assert (found["x"] > found["narrow"]).any()  # it went through
@@ -103,7 +97,7 @@ def test_a_box_lengthwise_passes_a_later_gate(runs):
 
 def test_a_box_crosswise_does_not_pass_a_later_gate_crosswise(runs):
     found = runs["crosswise"]
-    balanced(found)
+    one_body_balanced(found["mb"])
     assert found["across"][0] == pytest.approx(L_, abs=OVERLAP)  # as placed: L across, wider
     never_wider_than_the_gate_past_it(found)
     assert not found["rejects"]  # walled on both sides: nothing falls off

@@ -23,7 +23,7 @@ import math
 import numpy as np
 import pytest
 
-from helpers import place_one_body
+from helpers import one_body_balanced, place_one_body
 from vibrofeed.decks import Deck
 from vibrofeed.engine.runner import run_deck
 from vibrofeed.feeders.feeder import Feeder, section_from
@@ -96,16 +96,10 @@ def runs(tmp_path_factory):
     return {pose: run(folder / f"{pose}.h5", pose) for pose in POSES}
 
 
-def balanced(found):
-    mb = found["mb"]  # (frame 0 is before the first step inserted the box)
-    assert (mb["inserted"][1:] == 1).all() and (mb["lost"] == 0).all()
-    assert (mb["inserted"] == mb["on_track"] + mb["exited"] + mb["rejected"]).all()
-
-
 @pytest.mark.parametrize("pose", ["flat", "crosswise"])
 def test_a_box_lying_flat_bridges_the_slot(runs, pose):
     found = runs[pose]
-    balanced(found)
+    one_body_balanced(found["mb"])
     assert len(found["out"]) == 1 and not found["rejects"]  # over the slot and out
     assert found["mb"]["exited"][-1] == 1
     # it crossed the slot riding the wall: its centre no farther from it than half its width
@@ -119,7 +113,7 @@ def test_a_box_lying_flat_bridges_the_slot(runs, pose):
 @pytest.mark.parametrize("pose", ["side", "end"])
 def test_a_box_on_its_side_or_end_falls_through_the_slot(runs, pose):
     found = runs[pose]
-    balanced(found)
+    one_body_balanced(found["mb"])
     assert not found["out"] and len(found["rejects"]) == 1
     assert found["by"] == ["slot"]  # attributed to the slot: it fell within its stretch
     a, b = found["slot"]

@@ -39,7 +39,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import re
 import shlex
 import sys
 from dataclasses import dataclass
@@ -50,7 +49,7 @@ import numpy as np
 from ..engine import batch
 from ..engine.runner import check_at_once
 from ..errors import ParameterError, RunError, UsageError
-from ..parameters import resolve
+from ..parameters import resolve, speaker
 from ..sweep import folder as F
 from ..sweep import summary as S
 from ..sweep.execute import run_job
@@ -515,6 +514,7 @@ def check_values(spec: StudySpec, deck) -> None:
     given += [(("robustness", name), name, value) for name, values in spec.robustness.items()
               for value in values]
     written = {own: name for name, own in spec.renames.items()}  # as the file names it
+    speak = speaker({}, written)
     for key, name, value in given:
         try:
             checked_value(deck, name, value_text(value))
@@ -522,8 +522,7 @@ def check_values(spec: StudySpec, deck) -> None:
             shown = written.get(name, name)
             what = {"fixed": "", "variables": f"variable {shown}: a choice: ",
                     "robustness": f"robustness {shown}: "}[key[0]]
-            message = re.sub(rf"(?<![\w.]){re.escape(name)}(?==)", shown, str(exc))
-            raise ParameterError(f"{spec.where(*key)}: {what}{message}") from None
+            raise ParameterError(f"{spec.where(*key)}: {what}{speak(str(exc))}") from None
     outlet = any(name in deck.formulas for name in L.BULK_CONTRACT)
     shapes = ({value_text(c) for v in spec.variables if v.name == "shape" for c in v.choices}
               or {value_text(spec.fixed.get("shape", deck.tunables["shape"].default

@@ -166,10 +166,11 @@ class StudySpec:
             return self
         reader = KeyReader(self.source, self.lines)
         lines = dict(self.lines)
-        for table in ("fixed", "variables", "robustness"):
-            for old, new in names.items():
-                if (line := reader.line(table, old)) is not None and (table, old) != (table, new):
-                    lines.setdefault((table, new), line)
+        keyed = ([("fixed", n) for n in self.fixed] + [("variables", v.name) for v in self.variables]
+                 + [("robustness", n) for n in self.robustness])
+        for table, old in keyed:
+            if old in names and (line := reader.line(table, old)) is not None:
+                lines.setdefault((table, names[old]), line)
         return dataclasses.replace(
             self, fixed={names.get(n, n): v for n, v in self.fixed.items()},
             variables=[dataclasses.replace(v, name=names.get(v.name, v.name)) for v in self.variables],

@@ -101,13 +101,7 @@ class SweepSpec:
     def line_of(self, *path) -> int | None:
         """The line of a key path (``("grid", "amp_n")``, ``("point", 1, "fill_to")``; a
         dotted name written as TOML's dotted key, ``("grid", "element.2.jet.delay")``, too)."""
-        if path and isinstance(path[-1], str) and "." in path[-1] and path not in self.lines:
-            path = path[:-1] + tuple(path[-1].split("."))
-        while path:
-            if path in self.lines:
-                return self.lines[path]
-            path = path[:-1]
-        return None
+        return KeyReader(self.source, self.lines).line(*path)
 
     def where(self, *path) -> str:
         """``FILE:LINE`` of a key path (``FILE`` when it cannot be placed)."""
