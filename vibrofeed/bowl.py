@@ -455,14 +455,18 @@ def check_bowl(p: Mapping[str, float]) -> None:
     if b.track_width >= b.radius / 2:
         raise ParameterError(f"track_width={b.track_width:g} m is more than a quarter of bowl_diameter="
                              f"{2 * b.radius:g} m: the track would fill the bowl")
-    if b.pitch - max(b.lip_height, 0.0) < 3 * tall:
-        raise ParameterError(f"helix_angle={b.helix_angle:g} deg rises {b.pitch:.3g} m per turn, less "
-                             f"than three parts ({3 * tall:.3g} m) above the turn below: parts would "
-                             "jam between turns; a steeper helix or a wider bowl")
-    if b.wall_height <= tall:
-        raise ParameterError(f"wall_height={b.wall_height:g} m is no higher than a part ({tall:g} m)")
     if b.lip_height and b.lip_height >= b.pitch / 2:
         raise ParameterError(f"lip_height={b.lip_height:g} m reaches half way to the next turn")
+    if b.pitch - max(b.lip_height, 0.0) < 3 * tall:
+        lip = b.lip_height > 0  # (the lip stands in the room between turns)
+        raise ParameterError(f"helix_angle={b.helix_angle:g} deg rises {b.pitch:.3g} m per turn"
+                             + (f", and lip_height={b.lip_height:g} m leaves {b.pitch - b.lip_height:.3g} m "
+                                "of it," if lip else ",")
+                             + f" less than three parts ({3 * tall:.3g} m) above the turn below: parts "
+                             "would jam between turns; "
+                             + ("a lower lip, " if lip else "") + "a steeper helix or a wider bowl")
+    if b.wall_height <= tall:
+        raise ParameterError(f"wall_height={b.wall_height:g} m is no higher than a part ({tall:g} m)")
     if b.drop_from != 0 or b.drop_to != 0:  # a side drop asked for
         _check_drop(b, wide, tall)
     if b.wiper_height != 0:

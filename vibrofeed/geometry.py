@@ -35,10 +35,7 @@ from .feeders.feeder import Feeder
 from .feeders.records import number, shape_code
 from .line import combined
 from .mesh import MeshBuilder, write_stl, write_template
-from .stl_part import DEFAULTS as STL_DEFAULTS
 from .stl_part import stl_lines
-
-STL_NUMBERS = list(STL_DEFAULTS)  # an stl part's numbers prepared.in holds a run by hand to
 
 # Largest spacing of a clump's spheres, as a fraction of their diameter: the faces stay
 # within 4 % of the thickness of flat (the bumps between spheres are shallow).
@@ -260,7 +257,7 @@ def prepare_bulk_feeder(values: Mapping[str, str], folder: str | Path) -> Prepar
     write_stl(vertices, triangles, folder / "track.stl", "track")
     lines, template = _part_files(values, folder, "prepare_bulk_feeder", feeder.part.shape, size,
                                   thickness)
-    lines += guard_lines({**values, "shape": feeder.part.shape}, feeder_names(feeder))
+    lines += guard_lines({**values, "shape": feeder.part.shape})
     (folder / "prepared.in").write_text("".join(lines))
 
     further = write_line_files(feeder, folder)
@@ -268,17 +265,6 @@ def prepare_bulk_feeder(values: Mapping[str, str], folder: str | Path) -> Prepar
         vertices, triangles = combined((vertices, triangles), *further)
     return Prepared(variables={"mesh_dir": str(folder.resolve())}, track=(vertices, triangles),
                     body_template=template)
-
-
-def feeder_names(feeder: Feeder) -> list[str]:
-    """The parameters a line's geometry and its checks read: what prepared.in holds a run
-    by hand to (the part, section 1's track, and a line's every element and drive)."""
-    names = ["shape", "part_size", "part_thickness", "size_spread", "sections"]
-    if feeder.part.shape == 3:  # (the box's template and mass are written for these)
-        names += ["part_width", "bump_height", "bump_diameter", "bump_at", "clump_spacing", "density"]
-    if feeder.part.shape == 4:  # (the STL's template and mass; its file is a word, not held)
-        names += ["part_width", "density", *STL_NUMBERS]
-    return names + feeder.element_names()
 
 
 def prepare_bowl_feeder(values: Mapping[str, str], folder: str | Path) -> Prepared:
@@ -302,14 +288,10 @@ def prepare_bowl_feeder(values: Mapping[str, str], folder: str | Path) -> Prepar
                                   numbers["part_size"], numbers["part_thickness"])
     lines += write_bowl({k: str(v) for k, v in numbers.items()}, folder)
     # an exit line (sections >= 2): its elements and joints checked, their meshes and the
-    # deck's line files written, a run by hand held to their values, as for a line
+    # deck's line files written; a run by hand held to every value checked, as for a line
     feeder = Feeder.from_values(values)
     feeder.check()
-    box = list(BOX_PART) + ["density"] if numbers["shape"] == 3 else []
-    if numbers["shape"] == 4:
-        box = ["part_width", "density", *STL_NUMBERS]
-    line_names = [n for e in feeder.elements[1:] for n in e.deck_names()]
-    lines += guard_lines(values, ["sections"] + box + line_names)
+    lines += guard_lines({**values, "shape": numbers["shape"]})
     (folder / "prepared.in").write_text("".join(lines))
     track = bowl_mesh(bowl_from(numbers))
     further = write_line_files(feeder, folder)

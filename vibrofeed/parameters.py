@@ -25,7 +25,7 @@ from .limits import JET_THROW, MIN_SPEED_LIMIT, SPEED_FACTOR
 from .models.constants import G
 from .models.deck import mass as part_mass
 from .orientation import correct_word
-from .parts import Box, box_template, check_box, mass_properties
+from .parts import Box, box_template, check_box, clump_count, mass_properties
 from .plausibility import DENSITY_MAX, PART_MAX, advice
 
 NO_MICRO_PART = "a metre is no micro-part; lengths are in metres"
@@ -279,6 +279,8 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
     said: dict[str, str] = {}  # the deck's name -> the name it was given by
     for name, value in given.items():
         own = deck.aliases.get(name, name)
+        if own not in deck.tunables and own not in RESERVED:
+            raise ParameterError(_unknown_dotted(deck, name))
         if own in named:
             raise ParameterError(f"parameter {own} given twice, as {said[own]} and as {name}")
         named[own], said[own] = value, name
@@ -305,12 +307,20 @@ def speaker(described: Mapping[str, str], said: Mapping[str, str], path=None) ->
     names = {**described, **said}
     if not names:
         return lambda text: text
-    # a name where it cites its value ("s2_width=0.0003 m") or is the message's subject
-    # ("parameter duty has no effect", "correct: no state named ..."): elsewhere the prose
-    # may mean the name in general ("the two drives' amp_n"), which both spellings accept
-    alternatives = "|".join(map(re.escape, sorted(names, key=len, reverse=True)))
-    pattern = re.compile(rf"(?<![\w.])({alternatives})(?==)|(?<=parameter )({alternatives})(?![\w.])"
-                         rf"|^({alternatives})(?=: )")
+    # A name spelt as code (amp_n, s2_drop_to) is a value wherever it stands, but for the
+    # prose's names in general ("the two drives' amp_n"), which both spellings accept. A name
+    # that is also a word (phase, correct, shape) only where it is plainly the value: citing it
+    # ("freq=50 Hz"), the message's subject ("parameter duty has no effect", "correct: ..."),
+    # in a list of values to change ("(amp_t, s2_amp_t)") or as the value to change ("lower
+    # amp_n or freq").
+    def either(group):
+        return "|".join(map(re.escape, sorted(group, key=len, reverse=True))) or "(?!)"
+    code = either(n for n in names if re.search(r"[_\d]", n))
+    every = either(names)
+    pattern = re.compile(
+        rf"(?<![\w.'])(?<!' )({code})(?![\w.])"
+        rf"|(?<![\w.])({every})(?==)|(?<=parameter )({every})(?![\w.])|^({every})(?=: )"
+        rf"|(?:^|(?<=\()|(?<=, )|(?<=: )|(?<=lower )|(?<=raise )|(?<= or ))({every})(?=[,)?]| or | and |;|$)")
     prefix = f"{Path(path).name}: " if path else ""
 
     def speak(text: str) -> str:
@@ -318,12 +328,36 @@ def speaker(described: Mapping[str, str], said: Mapping[str, str], path=None) ->
 
         def name(m: re.Match) -> str:
             nonlocal from_file
-            found = m[1] or m[2] or m[3]
+            found = next(g for g in m.groups() if g)
             from_file = from_file or found not in said
             return names[found]
         spoken = pattern.sub(name, text)
         return prefix + spoken if from_file and prefix and not text.startswith(prefix) else spoken
     return speak
+
+
+def _unknown_dotted(deck: Deck, name: str) -> str:
+    """The refusal of a name a description's deck does not know, in the description's words:
+    its elements, its dotted names (and the deck's own for a name given undotted)."""
+    description = deck.description
+    kinds = getattr(description, "kinds", [])
+    file = Path(getattr(description, "path", deck.name)).name
+    if m := re.fullmatch(r"element\.(\d+)\.(.+)", name):
+        k, key = int(m[1]), m[2]
+        if not 1 <= k <= len(kinds):
+            return (f"unknown parameter {name}: {file} has element{'s 1 to' if len(kinds) > 1 else ''} "
+                    f"{len(kinds)}")
+        if key == "kind":
+            return (f"parameter {name} is the element's kind ({kinds[k - 1]}), not a number -p "
+                    f"varies: change it in {file}")
+    spoken = {}  # each tunable by its dotted name where it has one
+    for alias, own in deck.aliases.items():
+        spoken.setdefault(own, alias)
+    valid = [spoken.get(n, n) for n in deck.tunables]
+    candidates = valid if "." in name else list(deck.tunables)
+    close = difflib.get_close_matches(name, candidates, n=1)
+    hint = f" (did you mean {close[0]}?)" if close else ""
+    return f"unknown parameter {name} for {file}{hint}; valid parameters: {', '.join(valid)}"
 
 
 def _resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
@@ -809,6 +843,34 @@ def _rayleigh_time(radius: float, density: float, youngs: float, poisson: float)
     return math.pi * radius * math.sqrt(density / shear) / (0.1631 * poisson + 0.8766)
 
 
+def _clump(p: Mapping[str, float]):
+    """The part's clump, (n, 4) x y z r [m] (vibrofeed.parts, vibrofeed.stl_part,
+    vibrofeed.geometry); None for a sphere."""
+    shape = int(p.get("shape", 0))
+    if shape == 3:
+        return box_template(Box.of(Part.from_values(p)))
+    if shape == 4:
+        from .stl_part import StlPart, template
+
+        return template(StlPart.of(p))
+    if shape in (1, 2):
+        from .geometry import chip_template, disc_template
+
+        size = p["part_size"]
+        return (chip_template if shape == 1 else disc_template)(size, p.get("part_thickness", size))
+    return None
+
+
+def part_spheres(p: Mapping[str, float]) -> int:
+    """How many spheres a part of ``p`` is (1 for a sphere, or without a part's numbers)."""
+    if "part_size" not in p or (int(p.get("shape", 0)) == 4 and "part_file" not in p):
+        return 1
+    if int(p.get("shape", 0)) == 3:
+        return clump_count(Box.of(Part.from_values(p)))  # (counted: a refused film is not built)
+    rows = _clump(p)
+    return 1 if rows is None else len(rows)
+
+
 def contact_times(p: Mapping[str, float]) -> dict[str, float] | None:
     """``{"hertz": s, "rayleigh": s}``: the shortest contact times of a deck's parts,
     as the decks derive their automatic dt (decks/*.liggghts, "derived"); None
@@ -835,19 +897,10 @@ def contact_times(p: Mapping[str, float]) -> dict[str, float] | None:
     r_sph = size / 2 if shape == 0 else thickness / 2
     r_min = r_sph * (1 - p.get("size_spread", 0.0))
     mass = part_volume(shape, size, thickness) * rho if shape < 3 else volume_of(p) * rho
-    spheres = 1
-    if shape == 3:  # the box's clump: spheres of T/2, a bump's maybe smaller (vibrofeed.parts)
-        rows = box_template(Box.of(Part.from_values(p)))
-        r_sph, r_min, spheres = rows[0, 3], float(rows[:, 3].min()), len(rows)
-    elif shape == 4:  # CLUMP's spheres of the STL (vibrofeed.stl_part): the largest and smallest
-        from .stl_part import StlPart, template
-
-        rows = template(StlPart.of(p))
-        r_sph, r_min, spheres = float(rows[:, 3].max()), float(rows[:, 3].min()), len(rows)
-    elif shape != 0:  # a clump: its spheres share the mass (vibrofeed.geometry builds them)
-        from .geometry import chip_template, disc_template
-
-        spheres = len((chip_template if shape == 1 else disc_template)(size, thickness))
+    rows = _clump(p)
+    if rows is not None and shape >= 3:  # a box's or an STL's: its largest and smallest spheres
+        r_sph, r_min = float(rows[:, 3].max()), float(rows[:, 3].min())
+    spheres = 1 if rows is None else len(rows)  # (a clump's spheres share the mass)
     m = mass * (r_min / r_sph) ** 3 / spheres
     youngs_track = p.get("youngs_track", 0.0) or youngs * 70 / 130
     e_pp = youngs / (2 * (1 - nu ** 2))
@@ -891,11 +944,29 @@ def _check_contact_step(p: Mapping[str, float]) -> None:
                              f"lower dt or set dt=0 (automatic){anyway}")
 
 
-# The engine's speed the run time is estimated at [steps/s]: the demo's run (README, "The
-# demo": 75 parts of the feeder line on 1 rank, 31k steps/s on 1 of 2 Xeon cores with other
-# work running). A lone part runs faster, a bed of hundreds of parts slower: the estimate
-# tells hours from days, not minutes from minutes.
-STEPS_PER_SECOND = 31_000
+# The engine's cost of a step on one core [s], the run time's estimate: a fixed share (a lone
+# part on its plate ~5 us; a feeder's meshes, movers and tooling 15.7 us for a track and
+# 32.6 us for the demo's line with ~10 parts) and one per sphere of the parts held (0.28-0.31
+# us per sphere-step for spheres, chips and boxes alike); BENCHMARKS.md, bench_bulk and
+# bench_parts. It tells hours from days, and a line of 36-sphere boxes from one of spheres.
+STEP_SECONDS = {"single": 5e-6, "feeder": 30e-6}
+SPHERE_STEP_SECONDS = 0.3e-6
+
+
+def parts_held(p: Mapping[str, float]) -> float:
+    """The parts a run holds on average, for its cost: the pile and the track's, and half of
+    those fed over the run (a line fills as it runs); one for the single part."""
+    if "radius" in p:
+        return 1.0
+    fed = p.get("inlet_rate", 0.0) * p.get("t_end", 0.0) / 2
+    return max(p.get("n_parts", 0.0) + p.get("n_track", 0.0) + fed, 1.0)
+
+
+def step_seconds(p: Mapping[str, float]) -> float:
+    """Estimated wall seconds per step on one core of a run of ``p``: the fixed share and each
+    sphere of the parts held (:func:`parts_held`, :func:`part_spheres`)."""
+    base = STEP_SECONDS["single" if "radius" in p else "feeder"]
+    return base + SPHERE_STEP_SECONDS * parts_held(p) * part_spheres(p)
 
 
 def run_steps(p: Mapping[str, float]) -> tuple[float, float] | None:

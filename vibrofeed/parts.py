@@ -51,6 +51,9 @@ from .errors import ParameterError
 CLUMP_SPACING = 0.75
 # The clump's sphere diameter as a fraction of the thickness (see box_template).
 SPHERE_OF_THICKNESS = 0.5
+# Most spheres a box's clump may have: a part costs as many spheres per step (the demo's box
+# has 36 or 84), and a thin box's count grows as (L/T)(W/T) (a film of 1 um: 1e6 spheres).
+MAX_CLUMP_SPHERES = 10_000
 
 
 @dataclass(frozen=True)
@@ -100,6 +103,11 @@ def check_box(box: Box) -> None:
     if not 0.5 <= box.spacing <= 1.0:
         raise ParameterError(f"clump_spacing={box.spacing:g} must be in [0.5, 1]: spheres further apart "
                              "than their diameter leave gaps a neighbour's sphere enters")
+    if (n := clump_count(box)) > MAX_CLUMP_SPHERES:
+        raise ParameterError(
+            f"a box of {L:g} x {W:g} x {T:g} m is a clump of {n:.3g} spheres of part_thickness/2 "
+            f"(at most {MAX_CLUMP_SPHERES}: each part costs as many spheres per step); a thicker "
+            f"part_thickness or a larger clump_spacing (up to 1)")
     h, db, at = box.bump_height, box.bump_diameter, box.bump_at
     if h < 0 or db < 0:
         raise ParameterError(f"bump_height={h:g} m and bump_diameter={db:g} m must be >= 0")
@@ -218,8 +226,20 @@ def box_frame_orientation(quaternions, box: Box) -> np.ndarray:
 
 # ------------------------------------------------------------------ the clump
 def _axis(span: float, d: float, spacing: float = CLUMP_SPACING) -> np.ndarray:
-    n = max(2, math.ceil(span / (spacing * d) - 1e-9) + 1) if span > 0 else 1
-    return np.linspace(-span / 2, span / 2, n)
+    return np.linspace(-span / 2, span / 2, _rows(span, d, spacing))
+
+
+def _rows(span: float, d: float, spacing: float) -> int:
+    return max(2, math.ceil(span / (spacing * d) - 1e-9) + 1) if span > 0 else 1
+
+
+def clump_count(box: Box) -> int:
+    """How many spheres the box's clump has (box_template's shell, the bump's sphere with it),
+    counted without building it."""
+    d = box.sphere_diameter
+    n = [_rows(e - d, d, box.spacing) for e in (box.length, box.width, box.thickness)]
+    inner = math.prod(max(k - 2, 0) for k in n)
+    return math.prod(n) - inner + box.has_bump
 
 
 def box_template_box_frame(box: Box) -> np.ndarray:

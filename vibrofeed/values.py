@@ -45,9 +45,9 @@ def number(values: Mapping, name: str, default: float | None = None) -> float:
     naming the parameter when it is missing or not a number."""
     if name not in values:
         if default is None:
-            raise ParameterError(f"the feeder needs the parameter {name!r}")
+            raise ParameterError(f"the feeder needs the parameter {name}")
         return float(default)
     try:
         return float(values[name])
     except (TypeError, ValueError):
-        raise ParameterError(f"parameter {name}={values[name]!r} is not a number") from None
+        raise ParameterError(f"parameter {name}={values[name]} is not a number") from None

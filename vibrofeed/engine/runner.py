@@ -148,11 +148,12 @@ class LongRunWarning(UserWarning):
 
 def estimated_seconds(values: Mapping[str, str]) -> tuple[float, float, float] | None:
     """(wall seconds, steps, timestep [s]) a run of resolved ``values`` is estimated to take on
-    one core (:func:`vibrofeed.parameters.run_steps` at
-    :data:`~vibrofeed.parameters.STEPS_PER_SECOND`); None when it cannot be estimated."""
+    one core (:func:`vibrofeed.parameters.run_steps`, each step at
+    :func:`~vibrofeed.parameters.step_seconds`: its parts' spheres count); None when it cannot
+    be estimated."""
     import math
 
-    from ..parameters import STEPS_PER_SECOND, run_steps
+    from ..parameters import run_steps, step_seconds
 
     numbers = {}
     for name, text in values.items():
@@ -164,13 +165,12 @@ def estimated_seconds(values: Mapping[str, str]) -> tuple[float, float, float] |
     if estimate is None or not math.isfinite(estimate[0]):
         return None
     steps, dt = estimate
-    return steps / STEPS_PER_SECOND, steps, dt
+    return steps * step_seconds(numbers), steps, dt
 
 
 def long_run(values: Mapping[str, str]) -> str | None:
     """How long a run of resolved ``values`` will take, when more than
     ``VIBROFEED_LONG_RUN_HOURS`` (:func:`estimated_seconds`); None when less, or not estimated."""
-    from ..parameters import STEPS_PER_SECOND
     from ..values import duration
 
     estimate = estimated_seconds(values)
@@ -183,8 +183,8 @@ def long_run(values: Mapping[str, str]) -> str | None:
     span = f"{seconds / 86400:.3g} days" if seconds >= 2 * 86400 else duration(seconds)
     given = "" if float(values.get("dt", 0) or 0) > 0 else " (automatic)"
     return (f"this run will take about {span}: {steps:.3g} steps of dt={dt:.3g} s{given} at "
-            f"{STEPS_PER_SECOND / 1e3:.0f}k steps/s (the demo's speed on one core; more parts run "
-            f"slower); VIBROFEED_LONG_RUN_HOURS={hours:g} sets when this is said")
+            f"{steps / seconds:,.0f} steps/s (one core, its parts' spheres counted); "
+            f"VIBROFEED_LONG_RUN_HOURS={hours:g} sets when this is said")
 
 
 def warn_long_run(values: Mapping[str, str]) -> None:

@@ -130,6 +130,3 @@ class BowlElement:
     def name(self, key: tuple[str, ...]) -> str:
         """The deck name of ``key`` on the bowl (for messages)."""
         return KEYS.get(key, ".".join(key))
-
-    def deck_names(self, drive: bool = True) -> list[str]:
-        return []  # (a bowl's geometry is held by its own prepared.in lines, vibrofeed.bowl)

@@ -127,10 +127,6 @@ class Chute:
     def bounds(self) -> list[tuple[float, float]]:
         return [(self.x0, self.x1)]
 
-    def deck_names(self, drive: bool = True) -> list[str]:
-        """The deck's names of this chute's numbers (it has no drive)."""
-        return [f"s{self.number}_kind"] + [deck_name(self.number, key) for key in KEYS]
-
     def name(self, key) -> str:
         key = key[0] if isinstance(key, tuple) else key
         return deck_name(self.number, key) if key in KEYS else key

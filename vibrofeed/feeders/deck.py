@@ -21,14 +21,14 @@ before lines of more sections existed.
   on by the driver only: vibrofeed.engine.jets).
 
 :func:`guard_lines` is the part of prepared.in that refuses, in a run by hand, any value
-other than those the geometry was checked and built for: the rules live in Python
-(:mod:`vibrofeed.feeders`) and the deck repeats none of them.
+other than those vibrofeed checked and built the folder for: the rules live in Python
+(:mod:`vibrofeed.parameters`, :mod:`vibrofeed.feeders`) and the decks repeat none of them.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Mapping
 from pathlib import Path
 
 from ..mesh import write_stl
@@ -125,18 +125,26 @@ def write_line_files(feeder: Feeder, folder: str | Path) -> list:
     return meshes
 
 
-def guard_lines(values: Mapping, names: Iterable[str]) -> list[str]:
-    """prepared.in's refusals of a run by hand with other values of ``names`` than the
-    ``values`` the geometry was checked and written for (numbers compare as numbers)."""
+# What a run by hand may set itself: the returns are the driver's (the deck refuses
+# recirculate=1 by hand on its own, and prepare prints the line with recirculate 0).
+HAND_FREE = ("recirculate",)
+
+
+def guard_lines(values: Mapping) -> list[str]:
+    """prepared.in's refusals of a run by hand with other values than the ``values`` vibrofeed
+    checked and wrote the folder for: every number (the part, the elements and their drives,
+    the supply, the contact, the run's clock) but :data:`HAND_FREE`; words (a jet's keep, an
+    STL's file) are held by the files written for them. Numbers compare as numbers."""
     lines = []
-    for name in names:
-        if name not in values:
+    for name, value in values.items():
+        try:
+            x = float(value)
+        except (TypeError, ValueError):
             continue
-        x = float(values[name])
-        if not math.isfinite(x):
+        if name in HAND_FREE or not math.isfinite(x):
             continue
         shown = repr(x)
         lines.append(f'if "${{{name}}} != {shown}" then &\n'
-                     f"  \"print 'Invalid {name}: the geometry in mesh_dir was checked and written for "
+                     f"  \"print 'Invalid {name}: mesh_dir was checked and written for "
                      f"{name}={shown}; run vibrofeed prepare again with the new value'\" \"quit\"\n")
     return lines

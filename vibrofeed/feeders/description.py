@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import difflib
 import hashlib
+import json
 import math
 import os
 import re
@@ -83,6 +84,11 @@ class Description:
     source: str = ""
 
 
+def _toml(value) -> str:
+    """A value as TOML writes it (a message cites the line the user wrote)."""
+    return json.dumps(value, ensure_ascii=False, default=str)
+
+
 def _fail(path: Path, message: str) -> ParameterError:
     return ParameterError(f"{path.name}: {message}")
 
@@ -97,7 +103,7 @@ def _value(path: Path, dotted: str, value) -> str:
     """A description's number (a shape's name, what is correct: words) as the deck's string."""
     if dotted == "parts.correct":  # words: what counts as correctly oriented
         if not isinstance(value, str):
-            raise _fail(path, f"{dotted} = {value!r} must be text, e.g. \"up, lengthwise\"")
+            raise _fail(path, f"{dotted} = {_toml(value)} must be text, e.g. \"up, lengthwise\"")
         try:
             return correct_word(value, dotted)
         except ParameterError as exc:
@@ -115,20 +121,20 @@ def _value(path: Path, dotted: str, value) -> str:
             return str(shape_code(value))
         except ParameterError as exc:
             raise _fail(path, f"parts.{exc}".replace("parameter ", "")) from None
-    raise _fail(path, f"{dotted} = {value!r} must be a number")
+    raise _fail(path, f"{dotted} = {_toml(value)} must be a number")
 
 
 def _jet_word(path: Path, dotted: str, value) -> str:
     """A jet's keep (parse_correct's words) or mode as the deck's word (no blanks)."""
     if not isinstance(value, str):
-        raise _fail(path, f"{dotted} = {value!r} must be text")
+        raise _fail(path, f"{dotted} = {_toml(value)} must be text")
     if dotted.endswith(".keep"):
         try:
             return keep_word(value)
         except ParameterError as exc:
             raise _fail(path, str(exc).replace("jet.keep", dotted, 1)) from None
     if value.strip().lower() not in JET_MODES:
-        raise _fail(path, f"{dotted} = {value!r} must be {' or '.join(map(repr, JET_MODES))}")
+        raise _fail(path, f"{dotted} = {_toml(value)} must be {' or '.join(map(_toml, JET_MODES))}")
     return value.strip().lower()
 
 
@@ -207,16 +213,16 @@ def _element(path: Path, k: int, element: dict, last: bool) -> dict[str, str]:
     where = f"element {k}"
     kind = element.get("kind")
     if kind not in ELEMENT_KINDS:
-        raise _fail(path, f"{where}: kind = {kind!r}: this version builds "
+        raise _fail(path, f"{where}: kind = {_toml(kind)}: this version builds "
                           f"{', '.join(ELEMENT_KINDS[:-1])} and {ELEMENT_KINDS[-1]} elements")
     if k == 1 and kind not in TEMPLATES:
-        raise _fail(path, f"{where}: kind = {kind!r}: the first element is a linear section or a "
+        raise _fail(path, f"{where}: kind = {_toml(kind)}: the first element is a linear section or a "
                           "bowl (the supply falls onto it)")
     if k > 1 and not KINDS[kind].later:
-        raise _fail(path, f"{where}: kind = {kind!r}: a {kind} is the first element (the supply's "
+        raise _fail(path, f"{where}: kind = {_toml(kind)}: a {kind} is the first element (the supply's "
                           "store); elements after it are its exit line")
     if kind == "mesh" and not last:
-        raise _fail(path, f"{where}: kind = 'mesh': a mesh element is the last element in this "
+        raise _fail(path, f"{where}: kind = \"mesh\": a mesh element is the last element in this "
                           "version (its path's end is the outlet edge)")
     known, names = KINDS[kind].keys(k)
     singles = [key[0] for key in known if len(key) == 1]
@@ -260,7 +266,7 @@ def _mesh_word(path: Path, k: int, key: str, value) -> str:
     where = f"element {k}: {key}"
     if key == "unit":
         if value not in mesh_element.UNITS:
-            raise _fail(path, f"{where} = {value!r}: the STL's unit is \"mm\" (as CAD exports) or \"m\"")
+            raise _fail(path, f"{where} = {_toml(value)}: the STL's unit is \"mm\" (as CAD exports) or \"m\"")
         return repr(mesh_element.UNITS[value])
     if key == "file":
         if not isinstance(value, str) or not value.strip():
@@ -294,14 +300,15 @@ def _part_word(path: Path, key: str, value) -> str:
             raise _fail(path, f"parts.file: {full} has a space or a character LIGGGHTS' variables cannot "
                               "hold; move the STL to a plain path")
         if not full.is_file():
-            raise _fail(path, f"parts.file = {value!r}: no such file ({full})")
+            raise _fail(path, f"parts.file = {_toml(value)}: no such file ({full})")
         return str(full)
     if key == "unit":
         if value not in stl_part.UNITS:
-            raise _fail(path, f"parts.unit = {value!r}: the STL's unit is \"mm\" (as CAD exports) or \"m\"")
+            raise _fail(path, f"parts.unit = {_toml(value)}: the STL's unit is \"mm\" (as CAD exports) "
+                              "or \"m\"")
         return repr(stl_part.UNITS[value])
     if value not in stl_part.METHODS:
-        raise _fail(path, f"parts.method = {value!r}: CLUMP's methods are "
+        raise _fail(path, f"parts.method = {_toml(value)}: CLUMP's methods are "
                           f"{', '.join(repr(m) for m in stl_part.METHODS)}")
     return str(stl_part.METHODS[value])
 

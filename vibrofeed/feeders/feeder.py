@@ -288,13 +288,6 @@ class Feeder:
         fires, vibrofeed.engine.jets; a run records its firings)."""
         return any(getattr(e, "jet", None) is not None for e in self.elements)
 
-    def element_names(self) -> list[str]:
-        """The deck's names of its elements' numbers its geometry and checks read (what the
-        prepare hook holds a run by hand to): every element's, with the drives where it has
-        joints (a joint's check reads the drives on either side of it)."""
-        drive = bool(self.joints)
-        return [name for e in self.elements for name in e.deck_names(drive=drive)]
-
     @property
     def linear_sections(self) -> list[LinearSection]:
         return [e for e in self.elements if isinstance(e, LinearSection)]

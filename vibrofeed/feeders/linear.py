@@ -305,11 +305,6 @@ class LinearSection:
             f'if "${{driver}} == 0" then "print \'WARNING: the air jet of section {self.number} is '
             "inactive in a run by hand: only vibrofeed run senses the parts it fires at'\""]
 
-    def deck_names(self, drive: bool = True) -> list[str]:
-        """The deck's names of this section's numbers (``drive``: with its drive's)."""
-        return [name for key, name in deck_names(self.number).items()
-                if (drive or key[0] != "drive") and key not in WORDS]
-
     def name(self, key: tuple[str, ...]) -> str:
         """The deck name of ``key`` on this section (for messages)."""
         return deck_name(self.number, key) or ".".join(key)
@@ -458,11 +453,11 @@ class LinearSection:
         k = j.keep
         if set(k.states) == set(STATES) and not k.lengthwise and not k.lead:
             if j.keeps_correct:
-                raise ParameterError(f"correct={keep_word(str(k))!r} counts every state correct, and "
+                raise ParameterError(f"correct=\"{keep_word(str(k))}\" counts every state correct, and "
                                      f"the jet of section {self.number} keeps it: the jet would never "
-                                     f"fire; give it a keep of its own ({n(('jet', 'keep'))}), e.g. 'up'")
-            raise ParameterError(f"{n(('jet', 'keep'))}={keep_word(str(k))!r} keeps every state: "
-                                 "the jet would never fire; name the state(s) to keep, e.g. 'up'")
+                                     f"fire; give it a keep of its own ({n(('jet', 'keep'))}), e.g. \"up\"")
+            raise ParameterError(f"{n(('jet', 'keep'))}=\"{keep_word(str(k))}\" keeps every state: "
+                                 "the jet would never fire; name the state(s) to keep, e.g. \"up\"")
         for key, value in (("delay", j.delay), ("offset", j.offset), ("length", j.length)):
             if key != "offset" and value < 0:
                 raise ParameterError(f"{n(('jet', key))}={value:g} must be >= 0")

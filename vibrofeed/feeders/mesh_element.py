@@ -104,7 +104,7 @@ class MeshElement:
             raise ParameterError(f"element {k}'s path ({name}): give at least two points of three "
                                  "coordinates each, x, y, z in the STL's unit")
         if deck_name(k, ("file",)) not in values:
-            raise ParameterError(f"the feeder needs the parameter {deck_name(k, ('file',))!r}")
+            raise ParameterError(f"the feeder needs the parameter {deck_name(k, ('file',))}")
         step = get(("step",), 0.0)
         drive = Drive(freq=get(("drive", "freq")), amp_t=get(("drive", "amp_t")),
                       amp_n=get(("drive", "amp_n")), phase=get(("drive", "phase"), 0.0))
@@ -261,11 +261,6 @@ class MeshElement:
         return z.reshape(y.shape) if y.shape else float(z[0])
 
     # ---------------------------------------------------------------- the deck
-    def deck_names(self, drive: bool = True) -> list[str]:
-        """The deck's names of its numbers (its file and path are words, held by its mesh)."""
-        return [f"s{self.number}_kind"] + [deck_name(self.number, key) for key in KEYS
-                                           if key[0] not in WORDS and (drive or key[0] != "drive")]
-
     def name(self, key) -> str:
         key = (key,) if isinstance(key, str) else tuple(key)
         return deck_name(self.number, key) if key in KEYS else ".".join(key)

@@ -161,7 +161,6 @@ def time_estimate(todo: list, at_once: int) -> str:
     :func:`~vibrofeed.engine.runner.estimated_seconds`, ``at_once`` at a time), in words for
     its head line; empty when none can be estimated."""
     from ..engine.runner import estimated_seconds
-    from ..parameters import STEPS_PER_SECOND
     from ..values import duration
 
     seconds = [e[0] for job in todo if (e := estimated_seconds(job.values)) is not None]
@@ -170,8 +169,7 @@ def time_estimate(todo: list, at_once: int) -> str:
     # the longest run bounds the wall time from below however the rest are shared out
     total = max(sum(seconds) / max(at_once, 1), max(seconds))
     some = "" if len(seconds) == len(todo) else f" ({len(todo) - len(seconds)} not estimated)"
-    return (f"about {duration(total)} to run{some} at {STEPS_PER_SECOND / 1e3:.0f}k steps/s per run "
-            "(more parts run slower)")
+    return f"about {duration(total)} to run{some} (one core per run, each run's parts counted)"
 
 
 def sweep(spec_path, output=None, workers: int = 1, retry_failed: bool = False,

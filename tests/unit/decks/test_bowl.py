@@ -736,6 +736,7 @@ def test_each_fill_cube_stands_a_twentieth_of_a_part_above_the_highest_floor_und
 def test_the_refusals_say_what_is_wrong_in_numbers():
     """Each message names the parameter with its value and the number it fails (by hand)."""
     pitch = 2 * math.pi * 9.4e-3 * tan(0.5)
+    pitch15 = 2 * math.pi * 9.4e-3 * tan(1.5)
     exit_length = math.sqrt(0.01 ** 2 - 0.0088 ** 2) / math.cos(math.radians(3))
     for change, message in [
         ({"turns": 0}, "turns=0 must be > 0: the track climbs at least part of a turn"),
@@ -755,6 +756,12 @@ def test_the_refusals_say_what_is_wrong_in_numbers():
          "wall_height=0.0001 m is no higher than a part (0.0001 m)"),
         ({"track_width": 6e-3}, "track_width=0.006 m is more than a quarter of bowl_diameter=0.02 m"),
         ({"lip_height": 2e-3}, "lip_height=0.002 m reaches half way to the next turn"),
+        # the lip stands in the room between turns: its height is named with the helix's
+        ({"helix_angle": 1.5, "lip_height": 7e-4},
+         f"helix_angle=1.5 deg rises {pitch15:.3g} m per turn, and lip_height=0.0007 m leaves "
+         f"{pitch15 - 7e-4:.3g} m of it, less than three parts (0.0009 m) above the turn below: parts "
+         "would jam between turns; a lower lip, a steeper helix or a wider bowl"),
+        ({"lip_height": 1e9}, "lip_height=1e+09 m reaches half way to the next turn"),
     ]:
         with pytest.raises(ParameterError) as refused:
             check_bowl({**PARAMS, **change})

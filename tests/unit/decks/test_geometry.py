@@ -472,8 +472,8 @@ def test_prepare_track_is_level_without_cross_tilt_and_tilted_with_it(tmp_path):
 
 
 @pytest.mark.parametrize("change, words", [
-    ({"track_width": None}, "needs the parameter 'track_width'"),
-    ({"part_size": "big"}, "part_size='big' is not a number"),
+    ({"track_width": None}, "needs the parameter track_width"),
+    ({"part_size": "big"}, "part_size=big is not a number"),
 ])
 def test_prepare_refuses_a_missing_or_unreadable_number_in_one_line(tmp_path, change, words):
     values = {k: v for k, v in {**VALUES, **change}.items() if v is not None}

@@ -115,9 +115,9 @@ def test_the_descriptions_parts_keys(tmp_path, box_stl):
     assert float(v["part_unit"]) == 1e-3 and v["clump_method"] == "1"
     assert v["clump_spheres"] == "8" and v["clump_resolution"] == "30"
     refusals = {
-        'shape = "stl"\nfile = "nowhere.stl"': "parts.file = 'nowhere.stl': no such file",
-        'shape = "stl"\nfile = "box.stl"\nunit = "inch"': "parts.unit = 'inch'",
-        'shape = "stl"\nfile = "box.stl"\nmethod = "octree"': "parts.method = 'octree'",
+        'shape = "stl"\nfile = "nowhere.stl"': 'parts.file = "nowhere.stl": no such file',
+        'shape = "stl"\nfile = "box.stl"\nunit = "inch"': 'parts.unit = "inch"',
+        'shape = "stl"\nfile = "box.stl"\nmethod = "octree"': 'parts.method = "octree"',
         'shape = "stl"\nfile = "box.stl"\nsize = 1e-3': "parts.size: an stl part's sizes are its STL's",
         'shape = "stl"': "needs parts.file",
         'shape = "box"\nfile = "box.stl"': "parts.file shapes an stl part",

@@ -623,16 +623,18 @@ def test_a_run_that_will_take_long_says_so_before_it_starts(monkeypatch):
 
     from vibrofeed.decks import Deck
     from vibrofeed.engine.runner import LongRunWarning, long_run, warn_long_run
-    from vibrofeed.parameters import STEPS_PER_SECOND, contact_times, resolve, run_steps
+    from vibrofeed.parameters import contact_times, resolve, run_steps
 
     monkeypatch.delenv("VIBROFEED_LONG_RUN_HOURS", raising=False)
     deck = Deck.find("single_part")
     values = resolve(deck, {"dt": "1e-12", "t_end": "0.2"})
+    # by hand: 2e11 steps of a lone sphere, 5 us a step and 0.3 us for its one sphere
+    step = 5e-6 + 0.3e-6
     assert long_run(values) == (
-        f"this run will take about {0.2 / 1e-12 / STEPS_PER_SECOND / 86400:.3g} days: 2e+11 steps of "
-        "dt=1e-12 s at 31k steps/s (the demo's speed on one core; more parts run slower); "
+        f"this run will take about {0.2 / 1e-12 * step / 86400:.3g} days: 2e+11 steps of "
+        f"dt=1e-12 s at {1 / step:,.0f} steps/s (one core, its parts' spheres counted); "
         "VIBROFEED_LONG_RUN_HOURS=1 sets when this is said")
-    with pytest.warns(LongRunWarning, match="^this run will take about 74.7 days"):
+    with pytest.warns(LongRunWarning, match="^this run will take about 12.3 days"):
         warn_long_run(values)
     # the deck's own timestep: the output interval in whole steps of at most 1/50 of the
     # Hertz time (decks/include/contact_time.liggghts, dt_auto)
@@ -651,7 +653,7 @@ def test_a_run_that_will_take_long_says_so_before_it_starts(monkeypatch):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         warn_long_run(resolve(deck, {}))
-    monkeypatch.setenv("VIBROFEED_LONG_RUN_HOURS", str(steps / STEPS_PER_SECOND / 3600 / 2))
-    assert long_run(resolve(deck, {})).startswith(f"this run will take about {round(steps / 31000)}s: ")
+    monkeypatch.setenv("VIBROFEED_LONG_RUN_HOURS", str(steps * step / 3600 / 2))
+    assert long_run(resolve(deck, {})).startswith(f"this run will take about {round(steps * step)}s: ")
     monkeypatch.setenv("VIBROFEED_LONG_RUN_HOURS", "2000")
     assert long_run(values) is None

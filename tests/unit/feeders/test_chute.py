@@ -122,6 +122,6 @@ def test_a_chute_cannot_come_first(tmp_path):
     path = tmp_path / "c.toml"
     path.write_text('[parts]\nsize = 3e-4\n[[element]]\nkind = "chute"\nlength = 0.003\nwidth = 1e-3\n'
                     'slope = 5\n')
-    with pytest.raises(ParameterError, match="element 1: kind = 'chute': the first element is a linear "
-                                             "section"):
+    with pytest.raises(ParameterError, match='element 1: kind = "chute": the first element is a linear '
+                                             'section'):
         read(path)

@@ -123,7 +123,7 @@ def test_a_jet_keeping_a_correct_of_every_state_names_correct(tmp_path):
     deck = Deck.find(described(tmp_path))
     with pytest.raises(ParameterError) as info:
         resolve(deck, {**RUN, "correct": "up|down|side|end, any-direction"})
-    one_line(info, "correct='up|down|side|end' counts every state correct", "s2_jet_keep")
+    one_line(info, 'correct="up|down|side|end" counts every state correct', "element.2.jet.keep")
 
 
 def test_correct_in_words_reads_back_as_itself():

@@ -100,7 +100,8 @@ def test_dotted_names_set_the_decks_own(tmp_path):
     twice = r"^parameter s3_amp_t given twice, as element.3.drive.amp_t and as s3_amp_t$"
     with pytest.raises(ParameterError, match=twice):
         resolve(deck, {"element.3.drive.amp_t": "2e-4", "s3_amp_t": "1e-4"})
-    with pytest.raises(ParameterError, match="unknown parameter element.4.length for deck three_"):
+    with pytest.raises(ParameterError, match="^unknown parameter element.4.length: three_section_line.toml "
+                                             "has elements 1 to 3$"):
         resolve(deck, {"element.4.length": "0.003"})
 
 
@@ -142,7 +143,7 @@ def test_a_refusal_names_each_value_as_the_user_gave_it(tmp_path):
      "f.toml: unknown key 'lenght' in element 2 (did you mean 'length'?)"),
     (("amp_t = 1e-4", "ampt = 1e-4"), "unknown key 'ampt' in element 2's drive (did you mean 'amp_t'?)"),
     (("[parts]", "[part]"), "unknown key 'part' in the description (did you mean 'parts'?)"),
-    (("size = 3e-4", "size = \"big\""), "f.toml: parts.size = 'big' must be a number"),
+    (("size = 3e-4", "size = \"big\""), 'f.toml: parts.size = "big" must be a number'),
     (("size = 3e-4", "size = 3e-4\nshape = \"cube\""),
      "f.toml: parts.shape=cube must be sphere, chip, disc, box or stl (0, 1, 2, 3 or 4)"),
     (("step = 5e-5", "step = 5e-5\nside_drop = { from = 0.2, to = 0.5, wdith = 4e-4 }"),
@@ -150,9 +151,9 @@ def test_a_refusal_names_each_value_as_the_user_gave_it(tmp_path):
     (('kind = "linear"\nlength = 0.004', 'kind = "linear"\nstep = 1e-5\nlength = 0.004'),
      "element 1: step: the first section has no joint before it to step down at"),
     (('kind = "linear"\nlength = 0.003', 'kind = "spiral"\nlength = 0.003'),
-     "element 2: kind = 'spiral': this version builds bowl, linear, chute and mesh elements"),
+     'element 2: kind = "spiral": this version builds bowl, linear, chute and mesh elements'),
     (('kind = "linear"\nlength = 0.003', 'kind = "bowl"\nlength = 0.003'),
-     "element 2: kind = 'bowl': a bowl is the first element"),
+     'element 2: kind = "bowl": a bowl is the first element'),
     (("length = 0.003\n", ""), "element 2 has no length: every linear element states its own"),
     (("[[element]]", "[[elements]]"), "unknown key 'elements' in the description (did you mean 'element'?)"),
     (("size = 3e-4", "size = 3e-4\n[[element"), "f.toml: not valid TOML"),
@@ -220,6 +221,36 @@ def test_prepared_in_holds_a_run_by_hand_to_the_values_it_was_checked_for(tmp_pa
     assert "run vibrofeed prepare again with the new value" in text
     assert sorted(p.name for p in (tmp_path / "m").glob("track*.stl")) == [
         "track.stl", "track_s2.stl", "track_s3.stl"]
+
+
+@pytest.mark.parametrize("name, given", [
+    ("bulk_feeder", {}),
+    ("bulk_feeder", {"sections": "2", "recirculate": "1", "s2_drop_from": "0.2", "s2_drop_to": "0.5",
+                     "s2_drop_width": "1e-3"}),
+    ("bowl_feeder", {}), ("bowl_line.toml", {}), ("orient_line.toml", {})])
+def test_a_run_by_hand_is_held_to_every_number_vibrofeed_checked(tmp_path, name, given):
+    """The rules live in Python only: the decks repeat none, and prepared.in refuses a run by
+    hand with another value of any number (the part, the drives of a single track too, the
+    supply, the run's clock), but recirculate (the driver's: the deck refuses 1 by hand)."""
+    deck = Deck.find(EXAMPLES / name if name.endswith(".toml") else name)
+    values = resolve(deck, given)
+    deck.prepare(values, tmp_path / "m")
+    text = (tmp_path / "m" / "prepared.in").read_text()
+    held = set(re.findall(r'^if "\$\{(\w+)\} != ([^"]+)" then &$', text, re.M))
+    numbers = {}
+    for n, v in values.items():
+        try:
+            numbers[n] = float(v)
+        except ValueError:
+            pass
+    assert {n for n, _ in held} == set(numbers) - {"recirculate"}
+    for n, shown in held:
+        assert float(shown) == numbers[n], n
+    assert {"freq", "amp_n", "n_parts", "t_end", "output_dt", "seed", "youngs"} <= {n for n, _ in held}
+    # the project decks hold no rule of their own but the driver's
+    for project in ("bulk_feeder", "bowl_feeder"):
+        refusals = re.findall(r"print 'Invalid (\w+)", (DECKS / f"{project}.liggghts").read_text())
+        assert refusals == (["recirculate"] if project == "bulk_feeder" else []), project
 
 
 def test_a_cross_stroke_adds_a_third_mover_and_its_recorded_sway_to_that_section_only(tmp_path):

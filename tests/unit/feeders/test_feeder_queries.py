@@ -44,20 +44,6 @@ def test_an_air_jet_on_a_further_section_is_seen():
     assert Feeder.from_values({**jet, "s2_jet_force": 0}).has_jets is False
 
 
-def test_the_drives_are_held_where_the_feeder_has_joints():
-    """A joint's check reads the drives on either side of it: a line holds every element's
-    drive; a single track only its geometry (its drive is no part of it); a bowl's numbers are
-    held by its own prepared.in lines (none here), its exit line's with their drives."""
-    single = Feeder.from_values(TRACK).element_names()
-    assert "track_length" in single and "track_width" in single
-    assert not {"freq", "amp_t", "amp_n", "phase"} & set(single)
-    line = Feeder.from_values(LINE).element_names()
-    assert {"freq", "amp_t", "s2_freq", "s2_amp_n", "s2_step", "s2_drop_from"} <= set(line)
-    assert Feeder.from_values(BOWL).element_names() == []
-    exit_line = Feeder.from_values(BOWL_LINE).element_names()
-    assert {"s2_length", "s2_freq", "s2_amp_t"} <= set(exit_line) and "bowl_diameter" not in exit_line
-
-
 @pytest.mark.parametrize("values, bowl", [(TRACK, False), (LINE, False), (BOWL, True), (BOWL_LINE, True),
                                           ({"bowl_diameter": 0.02}, True), ({"freq": 50}, False)])
 def test_the_parameter_rules_questions_of_a_partial_set(values, bowl):

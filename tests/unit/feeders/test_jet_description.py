@@ -67,7 +67,7 @@ def test_a_jet_is_described_by_its_keys_and_the_deck_declares_its_words(tmp_path
 
 @pytest.mark.parametrize("change, words", [
     ('keep = "up, lengthwise, lead +x"', "element.2.jet.keep: no state named 'sideways'"),
-    ('mode = "ideal"', "element.2.jet.mode = 'gentle' must be 'region' or 'ideal'"),
+    ('mode = "ideal"', 'element.2.jet.mode = "gentle" must be "region" or "ideal"'),
     ("force = 2e-6\n", "element 2's jet has no force"),
 ])
 def test_a_jets_slip_is_one_line_naming_the_key(tmp_path, change, words):

@@ -163,12 +163,12 @@ def _description(file, unit, path, kinds=("mesh",)):
 
 @pytest.mark.parametrize("file, unit, path, kinds, words", [
     ('"s.stl"', '"cm"', [[0, 0, 0], [1, 0, 0]], ("mesh",),
-     "element 2: unit = 'cm': the STL's unit is \"mm\" (as CAD exports) or \"m\""),
+     'element 2: unit = "cm": the STL\'s unit is "mm" (as CAD exports) or "m"'),
     ('"s.stl"', '"mm"', [[0, 0, 0]], ("mesh",), "element 2: path must be a list of at least two points"),
     ('"s.stl"', '"mm"', [[0, 0], [1, 0]], ("mesh",), "element 2: path must be a list of at least two points"),
     ('"a b/s.stl"', '"mm"', [[0, 0, 0], [1, 0, 0]], ("mesh",), "element 2: file: "),
     ('"s.stl"', '"mm"', [[0, 0, 0], [1, 0, 0]], ("mesh", "linear"),
-     "element 2: kind = 'mesh': a mesh element is the last element in this version"),
+     'element 2: kind = "mesh": a mesh element is the last element in this version'),
 ])
 def test_a_description_slip_on_a_mesh_element_is_one_line(tmp_path, file, unit, path, kinds, words):
     (tmp_path / "f.toml").write_text(_description(file, unit, path, kinds))

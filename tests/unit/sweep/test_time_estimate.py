@@ -1,30 +1,60 @@
-"""A sweep's estimate of its wall time, from each run's steps (vibrofeed.sweep.execute.time_estimate)."""
+"""A sweep's estimate of its wall time, from each run's steps and the spheres of the parts it
+holds (vibrofeed.sweep.execute.time_estimate, vibrofeed.parameters.step_seconds)."""
 
+import warnings
 from types import SimpleNamespace
 
-from vibrofeed.parameters import STEPS_PER_SECOND
+import pytest
+
+from helpers import REPO
+from vibrofeed.decks import Deck
+from vibrofeed.engine.runner import estimated_seconds
+from vibrofeed.parameters import resolve
 from vibrofeed.sweep.execute import time_estimate
 from vibrofeed.values import duration
 
+# a feeder's step without parts, and one sphere's share (vibrofeed.parameters.STEP_SECONDS)
+FEEDER, SPHERE = 30e-6, 0.3e-6
 
-def job(t_end, dt):
-    return SimpleNamespace(values={"t_end": str(t_end), "dt": str(dt)})
+
+def job(t_end, dt, **more):
+    values = {"t_end": t_end, "dt": dt, **more}
+    return SimpleNamespace(values={k: str(v) for k, v in values.items()})
 
 
 def test_runs_shared_between_workers():
-    # 4 runs of 1e6 steps each: 4e6 steps, two at a time
+    # 4 runs of 1e6 steps each (no parts named: one sphere held): 4e6 steps, two at a time
     jobs = [job(1.0, 1e-6)] * 4
     said = time_estimate(jobs, 2)
-    assert said.startswith(f"about {duration(2e6 / STEPS_PER_SECOND)} to run")
+    assert said.startswith(f"about {duration(2e6 * (FEEDER + SPHERE))} to run")
 
 
 def test_the_longest_run_bounds_it():
     # one long run and a short one on 8 workers: the long one's time, not the sum / 8
     said = time_estimate([job(1.0, 1e-7), job(1.0, 1e-5)], 8)
-    assert said.startswith(f"about {duration(1e7 / STEPS_PER_SECOND)} to run")
+    assert said.startswith(f"about {duration(1e7 * (FEEDER + SPHERE))} to run")
 
 
 def test_runs_without_an_estimate():
     jobs = [job(1.0, 1e-6), SimpleNamespace(values={"dt": "1e-6"})]  # no t_end: not estimated
     assert "(1 not estimated)" in time_estimate(jobs, 1)
     assert time_estimate([SimpleNamespace(values={})], 1) == ""
+
+
+def test_the_parts_held_set_the_cost_of_a_step():
+    """A sweep of a line of boxes was estimated at 4 minutes and took 15: the estimate ran every
+    deck at the demo's speed. By hand: the pile, the track's and half of those fed are held,
+    each a sphere, or a box's 36 (1.0 x 0.5 x 0.35 mm at clump_spacing 1)."""
+    spheres = job(1.0, 1e-6, n_parts=40, n_track=10, inlet_rate=20, part_size=3e-4)
+    (seconds, steps, _dt) = estimated_seconds(spheres.values)
+    assert steps == pytest.approx(1e6, rel=1e-12)
+    assert seconds == pytest.approx(1e6 * (FEEDER + SPHERE * (40 + 10 + 20 * 1.0 / 2)), rel=1e-12)
+    boxes = job(1.0, 1e-6, n_parts=40, n_track=10, inlet_rate=20, part_size=1e-3, part_width=5e-4,
+                part_thickness=3.5e-4, shape=3, clump_spacing=1.0)
+    assert estimated_seconds(boxes.values)[0] == pytest.approx(1e6 * (FEEDER + SPHERE * 60 * 36), rel=1e-12)
+    # the orientation demo's line as it runs (12 pre-filled, 9 parts/s over 2 s): 21 boxes of 36
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        values = resolve(Deck.find(REPO / "feeders" / "orient_line.toml"), {})
+    seconds, steps, _dt = estimated_seconds(values)
+    assert seconds == pytest.approx(steps * (FEEDER + SPHERE * 21 * 36), rel=1e-12)
