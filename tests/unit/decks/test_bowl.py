@@ -198,6 +198,10 @@ def test_the_prepare_hook_writes_numbers_liggghts_reads(tmp_path):
         if line.startswith("region track_fill_"):
             regions += 1
             assert re.fullmatch(rf"region track_fill_\d+ block( {number}){{6}} units box", line), line
+        elif line.startswith("if "):  # a run by hand held to the values checked (vibrofeed.feeders.deck)
+            assert re.fullmatch(rf'if "\$\{{\w+\}} != {number}" then &', line), line
+        elif line.startswith("  \"print 'Invalid "):
+            assert line.endswith("run vibrofeed prepare again with the new value'\" \"quit\""), line
         elif not line.startswith("region track_fill union"):
             assert re.fullmatch(rf"variable \w+ equal {number}", line), line
     got = dict(re.findall(r"variable (bowl_\w+) equal (\S+)", "\n".join(lines)))
