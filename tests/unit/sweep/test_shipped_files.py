@@ -35,4 +35,5 @@ def test_each_study_loads_with_its_deck(path):
 
     spec = load(path)
     deck = find_deck(spec)
-    assert set(spec.names) <= set(deck.tunables)
+    # (a description's dotted names too)
+    assert {deck.aliases.get(n, n) for n in spec.names} <= set(deck.tunables)
