@@ -616,9 +616,7 @@ class _Run:
             _stop(self.proc)
         frames = _frames_in(self.part)[0] if self.part.exists() else 0
         if frames:
-            from ..results.writer import mark_file_status  # h5py: only when needed
-
-            if mark_file_status(self.part, L.STATUS_INTERRUPTED, why):
+            if _mark(self.part, L.STATUS_INTERRUPTED, why):
                 return (f"the {frames} frames written before the interruption are kept in "
                         f"{self.part} (status: interrupted)")
             return (f"the {frames} frames written are kept in {self.part}, which could not be "
@@ -686,9 +684,7 @@ class _Run:
         frames = _frames_in(self.part)[0] if self.part.exists() else 0
         full = isinstance(error, OutputError) and str(error).startswith("no space left")
         if frames:
-            from ..results.writer import mark_file_status
-
-            if mark_file_status(self.part, L.STATUS_FAILED, str(error)):
+            if _mark(self.part, L.STATUS_FAILED, str(error)):
                 error.partial = (self.part, frames)
         elif not full and not _unreadable(self.part):
             self.part.unlink(missing_ok=True)  # nothing in it; a file we cannot read is kept
@@ -758,6 +754,31 @@ def _stop(proc: subprocess.Popen) -> None:
     if not _group_ended(proc, 10):
         _signal_group(proc, signal.SIGKILL)
         _group_ended(proc, 10)
+
+
+def _mark(path: Path, status: str, why: str, seconds: float = 15.0) -> bool:
+    """Set a stopped run's file status, waiting up to ``seconds`` for the file's lock: an MPI
+    rank that outlived its group's end may still be closing the file (on a loaded machine
+    the status once stayed ``running``). False if it still cannot be opened."""
+    from ..results.writer import mark_file_status  # h5py: only when needed
+
+    end = time.monotonic() + seconds
+    while not mark_file_status(path, status, why):
+        if time.monotonic() >= end or not _locked(path):  # (a full disk's file: at once)
+            return False
+        time.sleep(0.2)
+    return True
+
+
+def _locked(path: Path) -> bool:
+    """Whether another process holds the HDF5 file's lock."""
+    import h5py
+
+    try:
+        with h5py.File(path, "r+"):
+            return False
+    except OSError as exc:
+        return "lock" in str(exc).lower()
 
 
 def _read(path: Path) -> str:

@@ -657,3 +657,31 @@ def test_a_run_that_will_take_long_says_so_before_it_starts(monkeypatch):
     assert long_run(resolve(deck, {})).startswith(f"this run will take about {round(steps * step)}s: ")
     monkeypatch.setenv("VIBROFEED_LONG_RUN_HOURS", "2000")
     assert long_run(values) is None
+
+
+def test_a_stopped_runs_status_waits_for_a_rank_still_closing_the_file(tmp_path):
+    """A hung rank's run once kept status "running": its rank 0, killed with its group, still
+    held the file's lock when the runner marked it. The mark waits for the lock (here a
+    process holding it 1 s), and gives up at once on a file that is not locked."""
+    import subprocess
+    import time
+
+    from helpers import write_result
+
+    path = tmp_path / "r.h5.part"
+    write_result(path, [(0, 0.0, parts([1], [[0.001, 0.0, 1e-4]]))], status=None)
+    holder = subprocess.Popen(
+        [sys.executable, "-c", f"import h5py, time\nf = h5py.File({str(path)!r}, 'r+')\n"
+                               "print('open', flush=True)\ntime.sleep(1.0)\nf.close()"],
+        stdout=subprocess.PIPE, text=True)
+    assert holder.stdout.readline().strip() == "open"
+    assert runner._locked(path)
+    assert runner._mark(path, L.STATUS_FAILED, "hung", seconds=20) is True
+    holder.wait()
+    with h5py.File(path, "r") as f:
+        assert f[L.RUN].attrs["status"] == L.STATUS_FAILED and f[L.RUN].attrs["message"] == "hung"
+    # not HDF5 (nothing to wait for): refused at once, not after the 20 s
+    (tmp_path / "text.h5").write_text("not hdf5")
+    start = time.monotonic()
+    assert runner._mark(tmp_path / "text.h5", L.STATUS_FAILED, "x", seconds=20) is False
+    assert time.monotonic() - start < 5
