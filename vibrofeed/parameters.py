@@ -280,7 +280,7 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
     for name, value in given.items():
         own = deck.aliases.get(name, name)
         if own not in deck.tunables and own not in RESERVED:
-            raise ParameterError(_unknown_dotted(deck, name))
+            raise ParameterError(_unknown(deck, name))
         if own in named:
             raise ParameterError(f"parameter {own} given twice, as {said[own]} and as {name}")
         named[own], said[own] = value, name
@@ -336,13 +336,13 @@ def speaker(described: Mapping[str, str], said: Mapping[str, str], path=None) ->
     return speak
 
 
-def _unknown_dotted(deck: Deck, name: str) -> str:
-    """The refusal of a name a description's deck does not know, in the description's words:
-    its elements, its dotted names (and the deck's own for a name given undotted)."""
+def _unknown(deck: Deck, name: str) -> str:
+    """The refusal of a name ``deck`` does not know; a description's in its words: its
+    elements, its dotted names (and the deck's own for a name given undotted)."""
     description = deck.description
     kinds = getattr(description, "kinds", [])
-    file = Path(getattr(description, "path", deck.name)).name
-    if m := re.fullmatch(r"element\.(\d+)\.(.+)", name):
+    file = Path(description.path).name if description is not None else f"deck {deck.name}"
+    if description is not None and (m := re.fullmatch(r"element\.(\d+)\.(.+)", name)):
         k, key = int(m[1]), m[2]
         if not 1 <= k <= len(kinds):
             return (f"unknown parameter {name}: {file} has element{'s 1 to' if len(kinds) > 1 else ''} "
@@ -366,11 +366,7 @@ def _resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
         if name in RESERVED:
             raise ParameterError(f"parameter {name} is set by vibrofeed itself, not by -p")
         if name not in tunables:
-            close = difflib.get_close_matches(name, [*tunables, *deck.aliases], n=1)
-            hint = f" (did you mean {close[0]}?)" if close else ""
-            raise ParameterError(
-                f"unknown parameter {name} for deck {deck.name}{hint}; "
-                f"valid parameters: {', '.join(tunables)}")
+            raise ParameterError(_unknown(deck, name))
     values = {name: str(given.get(name, v.default)) for name, v in tunables.items()}
     for name, names in NAMED_VALUES.items():
         if name in values and values[name].strip().lower() in names:

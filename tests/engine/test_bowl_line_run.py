@@ -73,7 +73,7 @@ def test_a_bowl_hands_its_dies_to_its_exit_line_with_the_mass_balance_exact(tmp_
         assert (mb["inserted"] == mb["on_track"] + mb["exited"] + mb["rejected"]).all()
         assert mb["inserted"][-1] == 12
         assert r.outlet_plane["outlet_x"] == pytest.approx(OUTLET_X, rel=1e-12)
-        assert r.rotating and r.n_sections == 2
+        assert r.holds("surface_angle") and r.n_sections == 2
         f = Feeder.from_values(r.parameters)
         v, _ = r.track_mesh
         split = r.track_sections

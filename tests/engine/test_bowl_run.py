@@ -57,7 +57,7 @@ def test_a_short_bowl_run_keeps_every_part_and_records_the_bowls_motion(tmp_path
         np.testing.assert_array_equal(v, want_v)
         np.testing.assert_array_equal(t, want_t)
         # the bowl's motion: the closed form of the movers' sums at each frame's step
-        assert r.rotating
+        assert r.holds("surface_angle")
         dt = float(r.derived["dt_used"])
         w = 2 * math.pi * p["freq"]
         phi = math.radians(p["phase"])

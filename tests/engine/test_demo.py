@@ -57,7 +57,7 @@ def test_the_bowl_case_runs_the_bowl_with_its_dies(tmp_path):
     with Result(out / "bowl_feeder.h5") as r:
         assert r.deck_name == "bowl_feeder" and r.status == "complete"
         assert r.parameters["shape"] == 1 and r.parameters["freq"] == 75  # the case's dies and drive
-        assert r.rotating
+        assert r.holds("surface_angle")
         mb = {k: int(v[-1]) for k, v in r.mass_balance.items()}
     assert mb["inserted"] == 12 and mb["lost"] == 0 and mb["inserted"] == mb["on_track"] + mb["exited"]
     assert "Feed rate" in proc.stdout and "Singulation" in proc.stdout

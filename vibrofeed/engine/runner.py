@@ -763,11 +763,9 @@ def _mark(path: Path, status: str, why: str, seconds: float = 15.0) -> bool:
     from ..results.writer import mark_file_status  # h5py: only when needed
 
     end = time.monotonic() + seconds
-    while not mark_file_status(path, status, why):
-        if time.monotonic() >= end or not _locked(path):  # (a full disk's file: at once)
-            return False
+    while _locked(path) and time.monotonic() < end:  # (a file not locked: marked at once)
         time.sleep(0.2)
-    return True
+    return mark_file_status(path, status, why)
 
 
 def _locked(path: Path) -> bool:

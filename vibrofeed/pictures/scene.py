@@ -160,10 +160,9 @@ def read_frame(result, index: int) -> FrameData:
     except KeyError:  # a result without bodies: every part is a sphere, unrotated
         orientation = np.tile((1.0, 0.0, 0.0, 0.0), (len(frame), 1))
     position, velocity = section_motion(result, index)
-    angle = rate = 0.0
-    if result.rotating:
-        angle = float(result.read("surface_angle", frames=index)[2])
-        rate = float(result.read("surface_angular_velocity", frames=index)[2])
+    # (zeros for a surface that does not turn)
+    angle = float(result.read("surface_angle", frames=index)[2])
+    rate = float(result.read("surface_angular_velocity", frames=index)[2])
     return FrameData(
         index=index, n_frames=n, time=frame.time, ids=frame.ids,
         orientation=np.asarray(orientation, dtype=float).reshape(len(frame), 4),

@@ -256,7 +256,7 @@ def _write(result, sink: _Sink, index: np.ndarray, n_rows: int, names: list[str]
             for (name, (scale, unit)), values in zip(SURFACE_UNITS.items(), motion):
                 ds = _time_series(surface, name, (len(index), 3), "f8", np.nan, unit, step, time)[0]
                 ds[:] = values * scale
-            if k == 1 and result.rotating:  # a bowl's rotation about z: radians in every unit system
+            if k == 1 and result.holds("surface_angle"):  # a rotation about z: radians in every unit system
                 for name, (_, _, unit) in L.ROTATION_ELEMENTS.items():
                     ds = _time_series(surface, name, (len(index), 3), "f8", np.nan, unit, step, time)[0]
                     ds[:] = result.read(f"surface_{name}", frames=index)

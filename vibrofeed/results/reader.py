@@ -441,10 +441,11 @@ class Result:
         out[np.asarray(ids) != L.ID_FILL] = L.IDENTITY_QUATERNION
         return out
 
-    @property
-    def rotating(self) -> bool:
-        """Whether the surface turns about z (a bowl: its angle is recorded, format 1.6)."""
-        return "angle" in self.file[L.SURFACE]
+    def holds(self, name: str) -> bool:
+        """Whether the file records field ``name``: an optional element such as a rotating
+        surface's ``surface_angle`` (format 1.6) or the bodies' ``orientation``. What kind of
+        feeder made it is the feeder's to say (vibrofeed.feeders), not the file's."""
+        return self._dataset(name)[0] is not None
 
     def recorded(self, name: str, frames=None) -> bool:
         """Whether per-part field ``name`` holds values, judged at the first (selected) frame

@@ -94,7 +94,7 @@ def test_the_bowls_rotation_reads_back_and_a_fixed_surface_reads_none(tmp_path):
     path = write_file(tmp_path / "bowl.h5")
     angle, rate, lift, vz = motion(np.arange(12) * EVERY)
     with Result(path) as r:
-        assert r.rotating is True
+        assert r.holds("surface_angle") is True
         np.testing.assert_array_equal(r.read("surface_angle")[:, 2], angle)   # stored float64
         np.testing.assert_array_equal(r.read("surface_angular_velocity", frames=[3, 1])[:, 2], rate[[3, 1]])
         assert not r.read("surface_angle")[:, :2].any()
@@ -102,7 +102,7 @@ def test_the_bowls_rotation_reads_back_and_a_fixed_surface_reads_none(tmp_path):
     flat = write_result(tmp_path / "flat.h5", [(0, 0.0, parts([1], [[0, 0, 1e-4]])),
                                                 (1, 1e-3, parts([1], [[0, 0, 1e-4]]))])
     with Result(flat) as r:
-        assert r.rotating is False
+        assert r.holds("surface_angle") is False
         assert r.read("surface_angle").tolist() == [[0.0, 0.0, 0.0]] * 2   # zeros, one per frame
         assert r.read("surface_angular_velocity", frames=-1).tolist() == [0.0, 0.0, 0.0]
 
