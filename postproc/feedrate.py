@@ -764,10 +764,10 @@ class FeedRate(AnalysisBase):
         they left its track, and the parts a line (or a bowl's exit line) lost over a side,
         where they crossed the catch plane (empty for a single track)."""
         r, line = self.results, self.result.rejects
-        shift = feeder.path_shift if feeder is not None else 0.0
         time = [np.asarray(line["time"], dtype=float)]
         section = [np.asarray(line["section"], dtype=np.int64)]
-        where = [np.asarray(line["position"][:, self.axis], dtype=float) + shift]
+        x = np.asarray(line["position"][:, self.axis], dtype=float)
+        where = [feeder.path_at_x(x) if feeder is not None else x]
         ids = [np.asarray(line["id"], dtype=np.int64)]
         if feeder is not None and feeder.bowl is not None:
             fell = np.asarray(r.fell_where, dtype=float)

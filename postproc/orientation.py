@@ -105,14 +105,14 @@ def path_directions(feeder, s) -> tuple[np.ndarray, np.ndarray]:
                                     np.full(len(theta), math.sin(a))])
         chute = (s >= b.length) & (s <= b.length + b.chute_length)
         t[chute] = feeder.elements[0].exit_direction
-    shift = feeder.path_shift
-    for e in feeder.elements[1:]:
+    for i, (e, shift) in enumerate(zip(feeder.elements[1:], feeder.offsets[1:]), start=1):
         if not hasattr(e, "points"):  # straight elements run along +x
             continue
         p = e.points + np.asarray(feeder.line_origin)
         d = np.diff(p, axis=0)
         arc = np.r_[0.0, np.cumsum(np.linalg.norm(d, axis=1))]
-        on = (s >= e.x0 + shift) & np.isfinite(s)
+        end = e.x0 + shift + arc[-1] if i < len(feeder.elements) - 1 else np.inf  # (the last: beyond)
+        on = (s >= e.x0 + shift) & (s < end) & np.isfinite(s)
         seg = np.clip(np.searchsorted(arc, s[on] - e.x0 - shift, side="right") - 1, 0, len(d) - 1)
         t[on] = d[seg] / np.linalg.norm(d[seg], axis=1, keepdims=True)
     return t, up_of(t)

@@ -18,7 +18,7 @@ from pathlib import Path
 from .bowl import check_bowl, climb_advice
 from .decks import RESERVED, Deck
 from .errors import ParameterError, ParameterWarning
-from .feeders.feeder import Feeder, inserts_between_walls
+from .feeders.feeder import Feeder, inserts_between_walls, starts_with_bowl
 from .feeders.linear import MAX_SECTIONS, LinearSection, keep_word
 from .feeders.records import Part
 from .limits import JET_THROW, MIN_SPEED_LIMIT, SPEED_FACTOR
@@ -942,10 +942,12 @@ def _check_contact_step(p: Mapping[str, float]) -> None:
 
 # The engine's cost of a step on one core [s], the run time's estimate: a fixed share (a lone
 # part on its plate ~5 us; a feeder's meshes, movers and tooling 15.7 us for a track and
-# 32.6 us for the demo's line with ~10 parts) and one per sphere of the parts held (0.28-0.31
-# us per sphere-step for spheres, chips and boxes alike); BENCHMARKS.md, bench_bulk and
-# bench_parts. It tells hours from days, and a line of 36-sphere boxes from one of spheres.
-STEP_SECONDS = {"single": 5e-6, "feeder": 30e-6}
+# 32.6 us for the demo's line with ~10 parts; a bowl's 602 triangles, turned and lifted, 150
+# us: its demo of 50 nine-sphere dies steps 3 505 times a second) and one per sphere of the
+# parts held (0.28-0.31 us per sphere-step for spheres, chips and boxes alike); BENCHMARKS.md,
+# bench_bulk and bench_parts. It tells hours from days, and a line of 36-sphere boxes from one
+# of spheres.
+STEP_SECONDS = {"single": 5e-6, "feeder": 30e-6, "bowl": 150e-6}
 SPHERE_STEP_SECONDS = 0.3e-6
 
 
@@ -961,7 +963,7 @@ def parts_held(p: Mapping[str, float]) -> float:
 def step_seconds(p: Mapping[str, float]) -> float:
     """Estimated wall seconds per step on one core of a run of ``p``: the fixed share and each
     sphere of the parts held (:func:`parts_held`, :func:`part_spheres`)."""
-    base = STEP_SECONDS["single" if "radius" in p else "feeder"]
+    base = STEP_SECONDS["single" if "radius" in p else "bowl" if starts_with_bowl(p) else "feeder"]
     return base + SPHERE_STEP_SECONDS * parts_held(p) * part_spheres(p)
 
 

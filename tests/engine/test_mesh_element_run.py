@@ -91,3 +91,53 @@ def test_a_cad_track_conveys_with_an_exact_mass_balance(tmp_path, monkeypatch, r
         assert last.any() and np.abs(s[last] - x[last] - 0.4e-3).max() <= 1e-12
         # past the path's end, on along its last leg (along +x): as far past it as past 8.6 mm
         assert np.abs((s[past] - 9e-3) - (x[past] - 8.6e-3)).max(initial=0) <= 1e-12
+
+
+# A detour from CAD between two linear sections: legs 1.5, 2 (1.6, 1.2), 1.5, 2 (1.6, -1.2), 1.5 mm,
+# 8.5 mm of path for 7.7 mm along x, back on the centre line; a wiper and a gate on it; then 2 mm.
+DETOUR_PATH = [(0, 0, 0), (1.5, 0, 0), (3.1, 1.2, 0), (4.6, 1.2, 0), (6.2, 0, 0), (7.7, 0, 0)]
+DETOUR = BEND.replace('name = "bend"', 'name = "detour"').replace("t_end = 0.12", "t_end = 0.3").replace(
+    'file = "bend.stl"', 'file = "detour.stl"').replace(
+    f"path = {[list(p) for p in PATH]}", f"path = {[list(p) for p in DETOUR_PATH]}") + """
+wiper = { height = 4.5e-4, at = 0.3 }
+gate = { width = 9e-4, at = 0.8 }
+
+[[element]]
+kind = "linear"
+length = 0.002
+width = 1.2e-3
+step = 5e-5
+drive = { freq = 100, amp_t = 1.5e-4, amp_n = 5e-5, phase = -20 }
+"""
+
+
+@pytest.mark.parametrize("ranks", [1, 2])
+def test_a_cad_detour_between_two_sections_hands_its_parts_on(tmp_path, monkeypatch, ranks):
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    write_stl(*channel(DETOUR_PATH, 1.2, 1.0), tmp_path / "detour.stl", "detour")
+    (tmp_path / "detour.toml").write_text(DETOUR)
+    out = tmp_path / f"detour{ranks}.h5"
+    vibrofeed("run", tmp_path / "detour.toml", "-q", "-o", out, "-n", ranks, check=True)
+    report = check_file(out)
+    assert report.ok, [str(p) for p in report.problems]
+    with Result(out) as r:
+        mb, ev, plane = r.mass_balance, r.outlet, r.outlet_plane
+        assert (mb["lost"] == 0).all() and mb["inserted"][-1] == 16
+        assert (mb["inserted"] == mb["on_track"] + mb["exited"] + mb["rejected"]).all()
+        # the outlet: 4 mm, the detour's 7.7 mm along x, 2 mm; along the path 4 + 8.5 + 2 mm
+        assert plane["outlet_x"] == pytest.approx(13.7e-3, abs=1e-12)
+        assert path_end(r) == pytest.approx(14.5e-3, abs=1e-12)
+        assert len(ev["id"]) == mb["exited"][-1] > 0 and (ev["position"][:, 0] > 13.7e-3).all()
+        v, _ = r.track_mesh
+        mine, third = v[r.track_sections == 2], v[r.track_sections == 3]
+        # its tools are in its mesh: the wiper's underside 0.45 mm above its floor
+        assert np.isclose(mine[:, 2], -5e-5 + 4.5e-4, rtol=0, atol=1e-8).sum() >= 4
+        assert third[:, 0].min() == pytest.approx(11.7e-3, abs=1e-8)
+        frames = np.arange(r.n_frames)
+        s, _ = along(r, frames)
+        x = r.read("position", frames=frames)[..., 0]
+        # over the third section the path coordinate is x plus the detour's 0.8 mm
+        on_third = np.isfinite(s) & (x > 11.7e-3 + 3e-4) & (x <= 13.7e-3)
+        assert on_third.any() and np.abs(s[on_third] - x[on_third] - 0.8e-3).max() <= 1e-12
+        on_detour = np.isfinite(s) & (x > 4.3e-3) & (x < 11.7e-3 - 3e-4)
+        assert on_detour.any() and (s[on_detour] > 4e-3).all() and (s[on_detour] < 12.5e-3).all()

@@ -199,7 +199,7 @@ def read(path: str | os.PathLike, text: str | None = None) -> Description:
     if len(elements) > MAX_SECTIONS:
         raise _fail(path, f"{len(elements)} elements: at most {MAX_SECTIONS} in this version")
     for k, element in enumerate(elements, start=1):
-        values.update(_element(path, k, element, k == len(elements)))
+        values.update(_element(path, k, element))
     values["sections"] = str(len(elements))
     kinds = [e["kind"] for e in elements]
     feeder = data.get("feeder", {})
@@ -208,7 +208,7 @@ def read(path: str | os.PathLike, text: str | None = None) -> Description:
                        values=values, aliases=aliases(kinds), source=text)
 
 
-def _element(path: Path, k: int, element: dict, last: bool) -> dict[str, str]:
+def _element(path: Path, k: int, element: dict) -> dict[str, str]:
     """Element ``k``'s numbers as the deck's parameters."""
     where = f"element {k}"
     kind = element.get("kind")
@@ -221,9 +221,6 @@ def _element(path: Path, k: int, element: dict, last: bool) -> dict[str, str]:
     if k > 1 and not KINDS[kind].later:
         raise _fail(path, f"{where}: kind = {_toml(kind)}: a {kind} is the first element (the supply's "
                           "store); elements after it are its exit line")
-    if kind == "mesh" and not last:
-        raise _fail(path, f"{where}: kind = \"mesh\": a mesh element is the last element in this "
-                          "version (its path's end is the outlet edge)")
     known, names = KINDS[kind].keys(k)
     singles = [key[0] for key in known if len(key) == 1]
     tables = sorted({key[0] for key in known if len(key) == 2})
@@ -232,6 +229,8 @@ def _element(path: Path, k: int, element: dict, last: bool) -> dict[str, str]:
     for key, value in element.items():
         if key == "kind":
             continue
+        if kind == "mesh" and key in mesh_element.NOT_HERE:
+            raise _fail(path, f"{where}: {key}: {mesh_element.NOT_HERE[key]}")
         if isinstance(value, dict):
             if key not in tables:
                 raise _unknown(path, where, key, singles + tables)

@@ -141,6 +141,22 @@ class Feeder:
         return b.length + b.chute_length - b.outlet_x if b is not None else 0.0
 
     @property
+    def offsets(self) -> list[float]:
+        """What each element's path coordinate adds to an x of the line's frame [m], in
+        conveying order: 0 for a bowl (its path coordinate is its own), then :attr:`path_shift`,
+        grown past each mesh element by how much longer its path is than its run along x (its
+        path turns: the elements after it lie that much further along the path than along x)."""
+        out, shift = [], self.path_shift
+        for e in self.elements:
+            if isinstance(e, BowlElement):
+                out.append(0.0)
+                continue
+            out.append(shift)
+            if isinstance(e, MeshElement):
+                shift += e.path_length - (e.x1 - e.x0)
+        return out
+
+    @property
     def sections(self) -> int:
         """How many sections the path has (a line's elements; a bowl's helix and chute)."""
         return len(self.bounds)
@@ -151,8 +167,7 @@ class Feeder:
         the track's frame, a bowl's path coordinate (vibrofeed.bowl.path_coordinate), then an
         exit line's x shifted on from the bowl's path end (:attr:`path_shift`)."""
         out = []
-        for e in self.elements:
-            shift = 0.0 if isinstance(e, BowlElement) else self.path_shift
+        for e, shift in zip(self.elements, self.offsets):
             out.extend((a + shift, b + shift) for a, b in e.bounds)
         return out
 
@@ -183,27 +198,49 @@ class Feeder:
 
     def line_coordinate(self, points) -> np.ndarray:
         """Where points (..., 3) of the deck's frame are along the path over the elements after
-        a bowl (its exit line): x plus :attr:`path_shift` over one of them (between its
-        entry and its end, within its walls, above its floor by less than its walls' height
-        and a part), NaN elsewhere; over a mesh element (after a bowl or not) its path
-        coordinate (MeshElement.coordinate), NaN farther from its path than half its width
-        and a part. A line's coordinate over its straight elements is its x
-        (vibrofeed.postproc.path): NaN there for a feeder without a bowl."""
+        a bowl (its exit line) or from a line's first mesh element on: over a straight one, x
+        plus its :attr:`offsets` (between its entry and its end, within its walls, above its
+        floor by less than its walls' height and a part); over a mesh element its path
+        coordinate (MeshElement.coordinate; past its end, the last one's only) plus its
+        offset, NaN farther from its path than half its width and a part; NaN elsewhere. A
+        line's coordinate over its straight elements before any mesh is its x
+        (vibrofeed.postproc.path): NaN there."""
         p = np.asarray(points, dtype=float)
         out = np.full(p.shape[:-1], np.nan)
         ox, oy, oz = self.line_origin
         x, y, z = p[..., 0] - ox, p[..., 1] - oy, p[..., 2] - oz
-        for e in self.elements[1:]:
+        curved = self.bowl is not None
+        for e, shift in zip(self.elements[1:], self.offsets[1:]):
             if isinstance(e, MeshElement):
+                curved = True
                 at = e.coordinate(np.stack([x, y, z], axis=-1), e.width / 2 + self.part.size)
-                out = np.where(np.isnan(out), at + self.path_shift, out)
+                if e is not self.elements[-1]:  # (past its end: over the next element, which says)
+                    at = np.where(at > e.x0 + e.path_length, np.nan, at)
+                out = np.where(np.isnan(out), at + shift, out)
                 continue
-            if self.bowl is None:
+            if not curved:
                 continue
             over = (x >= e.x0) & (x <= e.x1) & (np.abs(y) <= e.width / 2)
             floor = e.floor_at(x, y)
             over &= (z >= floor - self.part.tallest) & (z < floor + e.wall_height + self.part.size)
-            out = np.where(over & np.isnan(out), x + self.path_shift, out)
+            out = np.where(over & np.isnan(out), x + shift, out)
+        return out
+
+    def path_at_x(self, x) -> np.ndarray:
+        """The path coordinate [m] of the deck's ``x`` [m] over the elements after the first
+        (where a reject fell, as far as its x tells): x plus the offset of the element holding
+        it (:meth:`element_at_x`; before the second, the second's), along a mesh element's
+        path where it first reaches x (MeshElement.arc_at_x)."""
+        x = np.asarray(x, dtype=float)
+        if len(self.elements) < 2:
+            return x + self.path_shift
+        ox = self.line_origin[0]
+        which = np.clip(self.element_at_x(x), 1, len(self.elements) - 1)
+        out = np.empty(x.shape)
+        for i in np.unique(which):
+            e, shift, on = self.elements[i], self.offsets[i], which == i
+            out[on] = (e.x0 + e.arc_at_x(x[on] - ox) if isinstance(e, MeshElement)
+                       else x[on] - ox) + shift
         return out
 
     @property
@@ -308,8 +345,8 @@ class Feeder:
         block (from its sensing point by its offset, its length); a gate spans its 45-degree
         narrowing from its element's width to its own."""
         out = []
-        shift, margin = self.path_shift, self.part.size
-        for e in self.elements:
+        margin = self.part.size
+        for e, shift in zip(self.elements, self.offsets):
             if isinstance(e, BowlElement):
                 b = e.bowl
                 for kind, span in (("side_drop", b.drop), ("wiper", b.wiper)):
@@ -330,7 +367,7 @@ class Feeder:
                     a = e.x0 + tool.at * e.length
                     z = a + float(getattr(tool, "length", 0.0) or 0.0)
                     if attr == "gate":  # its walls narrow at 45 degrees to its width
-                        z = min(a + max(getattr(e, "width", 0.0) - tool.width, 0.0) / 2, e.x1)
+                        z = min(a + max(getattr(e, "width", 0.0) - tool.width, 0.0) / 2, e.x0 + e.length)
                 kind = getattr(tool, "kind", attr)
                 out.append(Station(k, kind, a + shift, z + shift, element=e.number,
                                    name=f"s{e.number}.{kind}", margin=margin))

@@ -58,7 +58,7 @@ def _chute(values, k, x0, level, part):
 
 
 def _mesh(values, k, x0, level, part):
-    return mesh_element.MeshElement.from_values(values, k, x0, level)
+    return mesh_element.MeshElement.from_values(values, k, x0, level, part)
 
 
 def _mesh_keys(k: int) -> tuple[dict, dict]:

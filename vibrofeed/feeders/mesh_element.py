@@ -1,5 +1,5 @@
 """A mesh element: a track the designer drew in CAD and exported as an STL, with the path parts
-follow along it; the last element of a line.
+follow along it; anywhere in a line after its first element.
 
 The STL is read with trimesh in its own frame and unit (``unit``: metres per unit of the STL,
 0.001 for millimetres as CAD exports them); ``path`` is the polyline parts follow, points on the
@@ -9,11 +9,26 @@ the path's start lies at the joint, ``step`` below the element before it at its 
 (x0, 0, -level). The path coordinate over it is x0 plus the arc length along the placed path
 to a part's nearest point on it.
 
-Why it is last, and what is checked for it: the outlet counts a part as out when it is beyond
-the line's farthest x (``outlet_x``), so the mesh must end at its path's end, nothing of it
-beyond and nothing before its joint; its floor must lie under the whole path, with no hole a
-part falls through, its triangles wound alike, the floor's normals up (towards the parts), and
-its size a feeder's (1 mm to 1 m: a 100 m track is a millimetre STL read as metres).
+What is checked for it: the line's elements follow one another along x (the outlet counts a
+part as out beyond the line's farthest x, ``outlet_x``; a reject is caught by the element over
+whose x it fell), so the mesh must end at its path's end, nothing of it beyond and nothing
+before its joint; its floor must lie under the whole path, with no hole a part falls through,
+its triangles wound alike, the floor's normals up (towards the parts), and its size a feeder's
+(1 mm to 1 m: a 100 m track is a millimetre STL read as metres). An element after it is placed
+as after a straight section, on along +x from its path's end, centred on y = 0: so a mesh that
+is not the last must end its path where it started across (y = 0 placed), heading along +x
+(an S-bend and back, a detour; :data:`ALIGN`). Its path coordinate runs on from there: the
+elements after it are ``path_length - (x1 - x0)`` further along the path than along x
+(vibrofeed.feeders.Feeder.offsets).
+
+Its tooling is what can stand on a floor it does not own: a **gate** (two walls centred on
+the path close in at 45 degrees from ``gate.at`` to ``gate.width`` and follow the path to its
+end, as a linear section's gate) and a **wiper** (a bar across the track at ``wiper.at``,
+``wiper.height`` above the floor's centre line, one part long along the path, its upstream face
+up to the tools' top): both built along the placed path, :data:`TOOL_TOP` above its floor, and
+moved with the mesh. A side drop and a slot cut the floor, which is the STL's: the designer
+draws them in CAD; an air jet senses along x on a straight section (a linear section after
+the mesh carries one).
 
 Its drive is a linear section's: a sine along x (the path's start direction) and along z (the
 deck's wiggle and viblin), whatever the path's turns: on a bend, part of the stroke along x is
@@ -33,8 +48,10 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import ParameterError
+from ..line import WIPER_LENGTH
+from ..mesh import MeshBuilder
 from .linear import sine_commands
-from .records import Drive, Part, number
+from .records import Drive, Gate, Part, Wiper, number
 
 KIND_CODE = 2  # s<k>_kind: 0 a linear section, 1 a chute, 2 a mesh
 UNITS = {"mm": 1e-3, "m": 1.0}
@@ -49,6 +66,17 @@ KEYS: dict[tuple[str, ...], tuple[str, str, str]] = {
     ("drive", "amp_t"): ("amp_t", "m", "mesh: displacement amplitude along x, its path's start"),
     ("drive", "amp_n"): ("amp_n", "m", "mesh: displacement amplitude along z"),
     ("drive", "phase"): ("phase", "deg", "mesh: lead of its motion along z over the one along x"),
+    ("gate", "width"): ("gate_width", "m", "mesh: its gate's walls close in to this, on the path (0: none)"),
+    ("gate", "at"): ("gate_at", "-", "mesh: its gate's taper starts at this fraction of the path's length"),
+    ("wiper", "height"): ("wiper_height", "m", "mesh: a bar across this high above the floor (0: none)"),
+    ("wiper", "at"): ("wiper_at", "-", "mesh: the wiper's bar starts at this fraction of the path's length"),
+}
+# The tools a mesh element does not build, and why (module docstring).
+NOT_HERE = {
+    "side_drop": "a side drop cuts the floor, which is the STL's: draw it in CAD",
+    "slot": "a slot cuts the floor, which is the STL's: draw it in CAD",
+    "jet": "an air jet senses along a straight section in this version: put it on a linear section "
+           "after the mesh",
 }
 WORDS = ("file", "path")  # not numbers: the deck holds them as words
 NEEDED = ("file", "unit", "path", "width")
@@ -57,6 +85,12 @@ SIZES = (1e-3, 1.0)
 # How far the mesh may reach past its path's end or before its joint [m] (an STL holds
 # single-precision coordinates: 1e-7 of 10 cm is 1e-8 m).
 REACH = 1e-6
+# A mesh followed by another element ends its path on y = 0 and heading along +x to within
+# this [m] across and this [rad] (CAD's single-precision coordinates hold both far closer).
+ALIGN = (1e-6, 1e-4)
+# The tools' walls and faces reach this many part sizes above the floor's centre line, and
+# their walls this many part thicknesses below it (into a floor tilted across).
+TOOL_TOP, TOOL_SINK = 2.0, 0.5
 # The floor is looked for under the path at these fractions of the width across it.
 ACROSS = (-0.4, -0.2, 0.0, 0.2, 0.4)
 
@@ -72,7 +106,7 @@ def path_text(points) -> str:
 
 @dataclass(frozen=True)
 class MeshElement:
-    """Element ``number`` (>= 2, the last): a track from CAD (module docstring). ``path`` is
+    """Element ``number`` (>= 2): a track from CAD (module docstring). ``path`` is
     the polyline in the STL's frame and unit, ``unit`` metres per unit of it."""
 
     kind = "mesh"
@@ -86,14 +120,24 @@ class MeshElement:
     drive: Drive
     step: float = 0.0
     level: float = 0.0  # below the first section's floor at the joint: the steps summed
+    gate: Gate | None = None
+    wiper: Wiper | None = None
+    part_size: float = 0.0  # (the tools' height and the wiper's length: module docstring)
     side_drop = None
-    wiper = None
-    gate = None
 
     @classmethod
-    def from_values(cls, values: Mapping, k: int, x0: float = 0.0, level: float = 0.0) -> MeshElement:
+    def from_values(cls, values: Mapping, k: int, x0: float = 0.0, level: float = 0.0,
+                    part: Part | None = None) -> MeshElement:
         def get(key, default=None):
             return number(values, deck_name(k, key), default)
+
+        size = part.size if part else number(values, "part_size")
+        gate = wiper = None
+        if get(("gate", "width"), 0.0) > 0:
+            gate = Gate(width=get(("gate", "width")), at=get(("gate", "at"), 0.7))
+        if get(("wiper", "height"), 0.0) > 0:
+            wiper = Wiper(height=get(("wiper", "height")), at=get(("wiper", "at"), 0.5),
+                          length=WIPER_LENGTH * size)
 
         name = deck_name(k, ("path",))
         try:
@@ -109,7 +153,8 @@ class MeshElement:
         drive = Drive(freq=get(("drive", "freq")), amp_t=get(("drive", "amp_t")),
                       amp_n=get(("drive", "amp_n")), phase=get(("drive", "phase"), 0.0))
         return cls(number=k, x0=x0, file=str(values[deck_name(k, ("file",))]), unit=get(("unit",)),
-                   path=tuple(flat), width=get(("width",)), drive=drive, step=step, level=level + step)
+                   path=tuple(flat), width=get(("width",)), drive=drive, step=step, level=level + step,
+                   gate=gate, wiper=wiper, part_size=size)
 
     # ---------------------------------------------------------------- the path
     @cached_property
@@ -141,6 +186,11 @@ class MeshElement:
         return float(self._arc[-1])
 
     @property
+    def length(self) -> float:
+        """Its length along the path [m] (its tools are placed at fractions of it)."""
+        return self.path_length
+
+    @property
     def x1(self) -> float:
         """Where its path ends along x (the outlet edge) [m]."""
         return float(self.points[-1, 0])
@@ -152,7 +202,68 @@ class MeshElement:
 
     @property
     def exit_width(self) -> float:
-        return self.width
+        """The width parts leave it through (the gate's, if it has one)."""
+        return self.gate.width if self.gate else self.width
+
+    def along(self, s) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(point (n, 3), unit tangent in plan (n, 2), unit normal to its left in plan (n, 2)) of
+        the placed path at arc lengths ``s`` (n,) [m] from its start (on the segment a point
+        lies on; a path's corner belongs to the segment after it)."""
+        s = np.atleast_1d(np.asarray(s, dtype=float))
+        p, arc = self.points, self._arc
+        i = np.clip(np.searchsorted(arc, s, side="right") - 1, 0, len(p) - 2)
+        d = p[i + 1] - p[i]
+        at = p[i] + ((s - arc[i]) / np.linalg.norm(d, axis=1))[:, None] * d
+        t = d[:, :2] / np.linalg.norm(d[:, :2], axis=1)[:, None]
+        return at, t, np.column_stack([-t[:, 1], t[:, 0]])
+
+    def _stretch(self, a: float, b: float) -> np.ndarray:
+        """Arc lengths from ``a`` to ``b`` [m]: both and every corner of the path between."""
+        inner = self._arc[(self._arc > a) & (self._arc < b)]
+        return np.concatenate([[a], inner, [b]])
+
+    def _offset(self, s, half) -> tuple[np.ndarray, np.ndarray]:
+        """The points ``half`` [m] (n,) to either side of the path at arc lengths ``s`` (n,), mitred
+        at its corners (the two segments' normals averaged, scaled to keep the distance):
+        (left (n, 3), right (n, 3))."""
+        at, _, n = self.along(s)
+        corner = np.isin(s, self._arc[1:-1])
+        if corner.any():  # (the segment before a corner: its normal joins the one after)
+            _, _, before = self.along(np.asarray(s)[corner] - 1e-12)
+            m = before + n[corner]
+            m /= np.einsum("ij,ij->i", m, n[corner])[:, None]
+            n = n.copy()
+            n[corner] = m
+        shift = np.column_stack([n * np.asarray(half, dtype=float)[:, None], np.zeros(len(at))])
+        return at + shift, at - shift
+
+    def tools_mesh(self) -> tuple[np.ndarray, np.ndarray]:
+        """Its gate's walls and its wiper's bar at rest in the deck's frame (module docstring):
+        (vertices (V, 3), triangles (T, 3)), empty without tools."""
+        b = MeshBuilder()
+        top, sink = TOOL_TOP * self.part_size, TOOL_SINK * self.part_size
+        g, w = self.gate, self.wiper
+        if g is not None:
+            start = g.at * self.length
+            taper = (self.width - g.width) / 2
+            s = np.unique(np.concatenate([self._stretch(start, start + taper),
+                                          self._stretch(start + taper, self.length)]))
+            half = np.interp(s, [start, start + taper], [self.width / 2, g.width / 2])
+            left, right = self._offset(s, half)
+            for i in range(len(s) - 1):
+                for side, wound in ((left, False), (right, True)):
+                    q = [side[i] - [0, 0, sink], side[i + 1] - [0, 0, sink],
+                         side[i + 1] + [0, 0, top], side[i] + [0, 0, top]]
+                    b.quad(*(q[::-1] if wound else q))
+        if w is not None:
+            a = w.at * self.length
+            s = self._stretch(a, a + w.length)
+            left, right = self._offset(s, np.full(len(s), self.width / 2))
+            up = np.array([0.0, 0.0, w.height])
+            for i in range(len(s) - 1):  # underside (normal down), at the height over the path
+                b.quad(right[i] + up, left[i] + up, left[i + 1] + up, right[i + 1] + up)
+            b.quad(left[0] + up, right[0] + up, right[0] + [0, 0, top], left[0] + [0, 0, top])
+        return b.mesh()
 
     @property
     def exit_level(self) -> float:
@@ -218,8 +329,11 @@ class MeshElement:
         return trimesh.Trimesh(self.place(self.stl.vertices), np.asarray(self.stl.faces), process=False)
 
     def mesh(self):
-        """The mesh at rest in the deck's frame (vertices (V, 3) [m], triangles (T, 3))."""
-        return np.asarray(self.placed.vertices, dtype=float), np.asarray(self.placed.faces, dtype=np.int32)
+        """The mesh at rest in the deck's frame with its tools (:meth:`tools_mesh`): vertices
+        (V, 3) [m], triangles (T, 3)."""
+        v, t = np.asarray(self.placed.vertices, dtype=float), np.asarray(self.placed.faces, dtype=np.int32)
+        tv, tt = self.tools_mesh()
+        return np.concatenate([v, tv]), np.concatenate([t, tt + len(v)]).astype(np.int32)
 
     @property
     def lowest(self) -> float:
@@ -260,6 +374,21 @@ class MeshElement:
         z, _ = self.floor_under(xy, start[2] + self.width / 2)
         return z.reshape(y.shape) if y.shape else float(z[0])
 
+    def exit_z(self, y):
+        """The floor's height at rest just before its path's end at ``y`` [m] (within the walls):
+        where an element after it steps down from."""
+        y = np.clip(np.asarray(y, dtype=float), -0.49 * self.width, 0.49 * self.width)
+        end = self.points[-1]
+        xy = np.column_stack([np.broadcast_to(self.x1 - self.width / 100, y.shape).ravel(), y.ravel()])
+        z, _ = self.floor_under(xy, end[2] + self.width / 2)
+        return z.reshape(y.shape) if y.shape else float(z[0])
+
+    def arc_at_x(self, x) -> np.ndarray:
+        """The arc length from its start [m] where its path first reaches the deck's ``x`` [m]
+        (clipped to the path): where a part that fell from it at x left it, as far as x tells."""
+        reach = np.maximum.accumulate(self.points[:, 0])  # (a path that turns back: first reached)
+        return np.interp(np.asarray(x, dtype=float), reach, self._arc)
+
     # ---------------------------------------------------------------- the deck
     def name(self, key) -> str:
         key = (key,) if isinstance(key, str) else tuple(key)
@@ -282,9 +411,6 @@ class MeshElement:
     def check(self, part: Part, last: bool = True) -> None:
         """The element on its own, judged on its placed mesh with trimesh (module docstring):
         a one-line ParameterError naming the element and its key."""
-        if not last:
-            raise self._fail(("file",), "a mesh element is the line's last element in this version "
-                                        "(its path's end is the outlet edge)")
         if self.width < part.widest:
             raise self._fail(("width",), f"{self.width:g} m is narrower than a part ({part.widest:g} m "
                                          "across)")
@@ -314,6 +440,48 @@ class MeshElement:
                                         "path's end along x: the outlet (beyond the path's end) would "
                                         "take parts still on it; end the path at the mesh's farthest x")
         self._check_floor(part)
+        self._check_tools(part)
+        if not last:
+            self._check_end()
+
+    def _check_tools(self, part: Part) -> None:
+        """Its gate and its wiper: a part passes them and they lie on its path."""
+        g, w = self.gate, self.wiper
+        if g is not None:
+            if g.width < part.abreast:
+                riding = " riding lengthwise" if part.abreast < part.widest else ""
+                raise self._fail(("gate", "width"), f"{g.width:g} m is narrower than a part "
+                                                    f"({part.abreast:g} m across{riding})")
+            if g.width >= self.width:
+                raise self._fail(("gate", "width"), f"{g.width:g} m must be narrower than its width "
+                                                    f"({self.width:g} m; 0: no gate)")
+            taper = (self.width - g.width) / 2
+            if not 0 <= g.at or g.at * self.length + taper > self.length:
+                raise self._fail(("gate", "at"), f"{g.at:g}: the gate's 45 degree taper ({taper:g} m "
+                                                 f"long) runs past its path's end ({self.length:.4g} m)")
+        if w is not None:
+            if w.height < part.tallest:
+                raise self._fail(("wiper", "height"), f"{w.height:g} m is lower than a part's thickness "
+                                                      f"({part.tallest:g} m): no part would pass the wiper")
+            if w.height >= TOOL_TOP * part.size:
+                raise self._fail(("wiper", "height"), f"{w.height:g} m: the tools stand {TOOL_TOP:g} part "
+                                                      f"sizes ({TOOL_TOP * part.size:g} m) above the floor; "
+                                                      "a bar that high sweeps nothing")
+            if not 0 <= w.at or w.at * self.length + w.length > self.length:
+                raise self._fail(("wiper", "at"), f"{w.at:g}: the wiper's bar ({w.length:g} m long) runs "
+                                                  f"past its path's end ({self.length:.4g} m)")
+
+    def _check_end(self) -> None:
+        """A mesh with an element after it ends on the line's centre line, heading along +x
+        (module docstring): the next element starts there."""
+        end, d = self.points[-1], np.asarray(self.exit_direction)
+        turn = math.degrees(math.atan2(abs(d[1]), d[0]))
+        if abs(end[1]) > ALIGN[0] or math.radians(turn) > ALIGN[1]:
+            raise self._fail(("path",), f"an element follows it, so its path must end where it started "
+                                        f"across, heading as it started (the next element starts "
+                                        f"there, along it); it ends {end[1] * 1e3:+.4g} mm across, "
+                                        f"turned {turn:.3g} deg: bend it back (an S-bend and back) or "
+                                        "make it the last element")
 
     def _check_floor(self, part: Part) -> None:
         """The floor under the path: found (the path on the mesh), facing up, whole (no hole a

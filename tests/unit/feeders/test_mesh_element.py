@@ -167,8 +167,6 @@ def _description(file, unit, path, kinds=("mesh",)):
     ('"s.stl"', '"mm"', [[0, 0, 0]], ("mesh",), "element 2: path must be a list of at least two points"),
     ('"s.stl"', '"mm"', [[0, 0], [1, 0]], ("mesh",), "element 2: path must be a list of at least two points"),
     ('"a b/s.stl"', '"mm"', [[0, 0, 0], [1, 0, 0]], ("mesh",), "element 2: file: "),
-    ('"s.stl"', '"mm"', [[0, 0, 0], [1, 0, 0]], ("mesh", "linear"),
-     'element 2: kind = "mesh": a mesh element is the last element in this version'),
 ])
 def test_a_description_slip_on_a_mesh_element_is_one_line(tmp_path, file, unit, path, kinds, words):
     (tmp_path / "f.toml").write_text(_description(file, unit, path, kinds))
@@ -253,10 +251,13 @@ def test_an_stl_that_cannot_be_read_is_refused(tmp_path, stl):
         Feeder.from_values(values(stl, s2_path="1,2,3"))
 
 
-def test_a_mesh_element_is_the_last(stl):
+def test_a_mesh_element_followed_by_another_ends_where_it_started_across(stl):
+    # the S-bend ends 3 mm across: the next element would start beside the line
     more = {"sections": 3, "s3_length": 2e-3, "s3_width": 1.2e-3, "s3_wall_height": 1e-3, "s3_step": 5e-5,
             "s3_freq": 100, "s3_amp_t": 1e-4, "s3_amp_n": 5e-5}
-    _refused(stl, "element 2's file (s2_file): a mesh element is the line's last element", **more)
+    _refused(stl, "element 2's path (s2_path): an element follows it, so its path must end where it "
+                  "started across, heading as it started (the next element starts there, along it); it "
+                  "ends +3 mm across, turned 0 deg", **more)
 
 
 def test_the_example_cad_feeder_describes_its_s_bend():
