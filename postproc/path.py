@@ -8,8 +8,9 @@ arc length along the helical track's centre line from its start, then along the 
 recorded lift and rotation undone), then on along its exit line, if it has one
 (:meth:`vibrofeed.feeders.Feeder.line_coordinate`); NaN for a part that is not on the
 track (in the pile on the bottom, falling). The outlet edge is then the path's end. Over a
-line's mesh element (a track from CAD, its last), from its joint on: the arc length along its
-path (the same method), NaN off it; its path's end is the outlet edge.
+line's first mesh element (a track from CAD) on: the arc length along its path (the same
+method), NaN off it, then on along the elements after it (their x plus how much longer the
+mesh's path is than its run along x); the last element's end is the outlet edge.
 
 :func:`along` gives both the coordinate and what a speed is measured on: a linear track's
 raw x (over whole periods the surface's displacement cancels), a bowl's path coordinate.

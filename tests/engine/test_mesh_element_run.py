@@ -1,9 +1,15 @@
-"""A line whose last element is a track from CAD (a mesh element) through the driver, on 1 and 2
-ranks: a short S-bend channel in millimetres after a 4 mm section; the mass balance is exact at
-every frame (inserted = on_track + exited + rejected, nothing lost), the outlet is the path's
-end along x (4 + 4.6 mm), the mesh is stored placed after section 1 with its vertices told
-apart, its recorded motion is its own sine drive, and the parts over it have their path
-coordinate along the bend (the legs of 1.5, 2 and 1.5 mm: 5 mm of path from the joint)."""
+"""A line whose last element is a track from CAD (a mesh element), and one with a detour from CAD
+between two linear sections, through the driver, on 1 and 2 ranks.
+
+The first: a short S-bend channel in millimetres after a 4 mm section; the mass balance is
+exact at every frame (inserted = on_track + exited + rejected, nothing lost), the outlet is the
+path's end along x (4 + 4.6 mm), the mesh is stored placed after section 1 with its vertices
+told apart, its recorded motion is its own sine drive, and the parts over it have their path
+coordinate along the bend (the legs of 1.5, 2 and 1.5 mm: 5 mm of path from the joint).
+
+The second: the detour (8.5 mm of path for 7.7 mm along x) with a wiper and a gate, then a 2 mm
+section; the outlet is past the third element, its tools are in its stored mesh, and over the
+third element the path coordinate is x plus the detour's 0.8 mm."""
 
 import math
 

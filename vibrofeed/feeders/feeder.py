@@ -259,9 +259,12 @@ class Feeder:
             return None
         s = np.asarray(s, dtype=float)
         h = b.height_at(np.minimum(s, b.length + b.chute_length))
-        oz, shift = self.line_origin[2], self.path_shift
-        for e in self.elements[1:]:
-            h = np.where(s >= e.x0 + shift, oz + e.floor_at(s - shift, 0.0), h)
+        oz = self.line_origin[2]
+        for e, shift in zip(self.elements[1:], self.offsets[1:]):
+            start = e.x0 + shift
+            floor = (e.height_along(s - start) if isinstance(e, MeshElement)
+                     else e.floor_at(s - shift, 0.0))
+            h = np.where(s >= start, oz + floor, h)
         return h
 
     @property

@@ -383,6 +383,11 @@ class MeshElement:
         z, _ = self.floor_under(xy, end[2] + self.width / 2)
         return z.reshape(y.shape) if y.shape else float(z[0])
 
+    def height_along(self, arc) -> np.ndarray:
+        """The floor's height at rest on its centre line [m] at arc lengths ``arc`` from its start
+        (its path's points lie there; level past its ends)."""
+        return np.interp(np.asarray(arc, dtype=float), self._arc, self.points[:, 2])
+
     def arc_at_x(self, x) -> np.ndarray:
         """The arc length from its start [m] where its path first reaches the deck's ``x`` [m]
         (clipped to the path): where a part that fell from it at x left it, as far as x tells."""

@@ -224,3 +224,33 @@ def test_a_further_number_its_deck_does_not_declare_is_refused_not_dropped(tmp_p
     with pytest.raises(ParameterError, match=r"^g.toml: element.2.gate.width: a feeder whose first element "
                                              r"is a bowl has no such number in this version"):
         deck_text(described, lacking, Deck.parse_variables(lacking))
+
+
+def test_a_cad_detour_after_the_bowl_runs_on_along_its_path_then_on_along_x(tmp_path):
+    """The bowl's exit line a detour from CAD (legs of 2, 2.5, 2, 2.5 and 2 mm: 11 mm of path for
+    10 mm along x, 1.5 mm wide, 0.1 mm below the chute's end), then a 4 mm section 50 um below
+    it: the path, the floor's height along it and the rejects' places run on over both."""
+    from helpers import channel
+    from vibrofeed.feeders.mesh_element import path_text
+    from vibrofeed.mesh import write_stl
+
+    plan = [(0, 0, 0), (2, 0, 0), (4, 1.5, 0), (6, 1.5, 0), (8, 0, 0), (10, 0, 0)]
+    write_stl(*channel(plan, 1.5, 1.0), tmp_path / "detour.stl", "detour")
+    values = {k: v for k, v in BOWL_LINE.items() if not k.startswith("s2_")}
+    values.update({"sections": 3, "s2_kind": 2, "s2_file": str(tmp_path / "detour.stl"), "s2_unit": 1e-3,
+                   "s2_path": path_text(plan), "s2_width": 1.5e-3, "s2_step": 1e-4, "s2_freq": 75,
+                   "s2_amp_t": 4e-4, "s2_amp_n": 4e-5, "s2_phase": -60, "s3_length": 4e-3,
+                   "s3_width": 1.5e-3, "s3_wall_height": 1e-3, "s3_step": 5e-5, "s3_freq": 75,
+                   "s3_amp_t": 4e-4, "s3_amp_n": 4e-5, "s3_phase": -60})
+    f = Feeder.from_values(values)
+    f.check()
+    c1 = HELIX_LENGTH + CHUTE
+    want = [c1, c1 + 11e-3, c1 + 15e-3]
+    assert np.abs(np.array([b for _, b in f.bounds[1:]]) - want).max() <= 1e-12
+    # the floor on the centre line, from the exit line's frame (the chute's end, high edge):
+    # 0.1 mm down over the detour, 0.15 mm down over the section after it
+    oz = f.line_origin[2]
+    h = f.height_at([c1 + 5e-3, c1 + 13e-3])
+    assert np.abs(h - [oz - 1e-4, oz - 1.5e-4]).max() <= 1e-12
+    # a reject that fell at the deck's x 1 mm past the detour's end: 1 mm into the section after it
+    assert f.path_at_x([OUTLET_X + 11e-3])[0] == pytest.approx(c1 + 12e-3, abs=1e-12)
