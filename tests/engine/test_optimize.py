@@ -172,6 +172,35 @@ def test_sigkill_then_resume_finishes_without_running_a_finished_run_again(tmp_p
     assert not list((out / "runs").glob(".vibrofeed-*")) and not list((out / "runs").glob("*.part"))
 
 
+def test_retry_failed_runs_the_failed_runs_again_and_keeps_the_others(tmp_path):
+    """A study whose runs failed for a cause since mended (here the deck's failing line removed)
+    runs them again with --retry-failed: their settings are asked again first, the finished
+    runs are kept as they are (their files untouched), and the budget is met by done runs."""
+    spec, out = study(tmp_path, runs=3), tmp_path / "out"
+    first = vibrofeed("optimize", spec, "-o", out, "-q")
+    assert first.returncode == 0, first.stderr
+    before = [r for r in S.read(out, stem="study")[0] if r["stage"] == "search"]
+    failed = [r["phase"] for r in before if r["status"] == S.FAILED]
+    kept = {r["file"]: stamp(out / r["file"]) for r in before if r["status"] == S.DONE}
+    assert failed and kept  # the seeded run beyond 60 deg failed, another did not
+    deck = tmp_path / "decks" / "single_part.liggghts"
+    deck.write_text(deck.read_text().replace(FAILING + "\n", ""))
+    again = vibrofeed("optimize", spec, "-o", out, "--retry-failed")
+    assert again.returncode == 0, again.stderr
+    assert f"retry: {len(failed)} failed run(s) again" in again.stderr
+    rows = S.read(out, stem="study")[0]
+    search = [r for r in rows if r["stage"] == "search"]
+    assert len(search) == 3 and all(r["status"] == S.DONE for r in rows)
+    assert sorted(failed) == sorted(r["phase"] for r in search if r["file"] not in kept)
+    for file, mark in kept.items():  # a finished run is not run again
+        assert stamp(out / file) == mark
+    for row in search:  # and each row is its file's analysis
+        with Result(out / row["file"]) as r:
+            assert r.run_id == row["run_id"]
+            assert row["objective"] == pytest.approx(float(Transport(r).run().results.mean_velocity),
+                                                     rel=1e-12, abs=1e-15)
+
+
 def test_under_mpirun_two_groups_share_the_runs(tmp_path):
     mpirun = shutil.which("mpirun")
     assert mpirun, "mpirun is part of the project's setup (bootstrap.sh)"

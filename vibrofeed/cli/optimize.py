@@ -14,7 +14,7 @@ DESCRIPTION = ("Search a study file's design variables (bounds, choices) for the
                "proposes the DEM runs (-j at a time, or across the ranks of mpirun); the best few "
                "are confirmed with fresh seeds and the best re-run over the [robustness] values. "
                "Writes DIR/study.csv, DIR/study.h5, DIR/study.json; killed, it continues with "
-               "--resume without repeating a finished run.")
+               "--resume without repeating a finished run; --retry-failed runs its failed runs again.")
 
 
 def add_arguments(p) -> None:
@@ -27,6 +27,9 @@ def add_arguments(p) -> None:
                    help="DEM runs of the search (default: the study file's budget.runs)")
     p.add_argument("--resume", action="store_true",
                    help="continue the study in DIR (finished runs are not repeated)")
+    p.add_argument("--retry-failed", action="store_true",
+                   help="continue the study in DIR and run its failed runs again (a run whose DEM "
+                        "finished and whose analysis failed is analysed again, not rerun)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
 
 
@@ -37,4 +40,4 @@ def run(args) -> int:
 
     return dispatched(args, serve, lambda comm: optimize(
         args.study, args.output, workers=args.jobs, budget=args.budget, resume=args.resume,
-        quiet=args.quiet, comm=comm, out=sys.stdout))
+        quiet=args.quiet, comm=comm, out=sys.stdout, retry_failed=args.retry_failed))

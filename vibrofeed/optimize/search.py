@@ -426,8 +426,10 @@ def _mean_and_error(values: list[float], errors: list[float | None]) -> tuple[fl
 
 # ------------------------------------------------------------------ the command
 def optimize(spec_path, output=None, workers: int = 1, budget: int | None = None, resume: bool = False,
-             quiet: bool = False, comm=None, out=None) -> int:
-    """``vibrofeed optimize``: the exit status (or a VibrofeedError)."""
+             quiet: bool = False, comm=None, out=None, retry_failed: bool = False) -> int:
+    """``vibrofeed optimize``: the exit status (or a VibrofeedError). ``retry_failed``: resume
+    the study and run its failed runs again (:func:`_retry`)."""
+    resume = resume or retry_failed
     out = out or sys.stdout
     spec = load(spec_path)
     deck = find_deck(spec)
@@ -466,7 +468,7 @@ def optimize(spec_path, output=None, workers: int = 1, budget: int | None = None
     lock = F.lock(folder, "study")
     try:
         F.clear_leftovers(folder, "runs")
-        done = _run(spec, deck, folder, runs, workers, quiet, comm, out, spec_path)
+        done = _run(spec, deck, folder, runs, workers, quiet, comm, out, spec_path, retry_failed)
         if comm is None:  # again at the end: a worker whose parent was killed may have ended
             F.clear_leftovers(folder, "runs")  # after the start (under mpirun a group may still run)
         return done
@@ -587,7 +589,21 @@ def _write_json(folder: Path, doc: dict) -> None:
     S.replace_atomically(folder / STUDY_JSON, lambda tmp: tmp.write_text(text))
 
 
-def _run(spec, deck, folder, runs, workers, quiet, comm, out, spec_path) -> int:
+def _retry(st: Study, spec: StudySpec, kept: list[dict]) -> list[dict]:
+    """The rows to keep when a study's failed runs run again: all but the failed. A failed
+    search run's setting is asked again first (the same setting is the same seed and run id:
+    a run whose DEM finished before its analysis failed is analysed again, not rerun); the
+    confirmation and robustness runs are asked anew by their stages."""
+    failed = [r for r in kept if r.get("status") == S.FAILED]
+    for row in failed:
+        if row.get("stage") == "search":
+            st.study.enqueue_trial({n: row[n] for n in spec.names}, user_attrs={"again": row["trial"]})
+    if failed:
+        st.say(f"retry: {len(failed)} failed run(s) again (a run whose DEM finished is analysed again)")
+    return [r for r in kept if r.get("status") != S.FAILED]
+
+
+def _run(spec, deck, folder, runs, workers, quiet, comm, out, spec_path, retry_failed=False) -> int:
     command = shlex.join(["vibrofeed", "optimize", str(spec_path), "-o", str(folder)])
     st = Study(spec, deck, folder, runs, quiet, command)
     doc = json.loads((folder / STUDY_JSON).read_text()) if (folder / STUDY_JSON).is_file() else {}
@@ -599,6 +615,8 @@ def _run(spec, deck, folder, runs, workers, quiet, comm, out, spec_path) -> int:
             "objectives": json.dumps(spec.maximize), "units": json.dumps(units), "spec": spec.text}
     parameters = [p for p in spec.parameters if p != "seed"] + list(spec.robustness)
     kept = S.read(folder, stem=STEM)[0] if (folder / STUDY_JSON).is_file() else []
+    if retry_failed:
+        kept = _retry(st, spec, kept)
     ledger = S.Ledger(folder, parameters, meta, rows=kept, stem=STEM)
     if not st.study.trials:  # a new study: the screen seeds it
         seeds, counts = screen_space(spec, deck)
