@@ -89,7 +89,7 @@ REACH = 1e-6
 # this [m] across and this [rad] (CAD's single-precision coordinates hold both far closer).
 ALIGN = (1e-6, 1e-4)
 # The tools' walls and faces reach this many part sizes above the floor's centre line, and
-# their walls this many part thicknesses below it (into a floor tilted across).
+# their walls this many below it (into a floor tilted across).
 TOOL_TOP, TOOL_SINK = 2.0, 0.5
 # The floor is looked for under the path at these fractions of the width across it.
 ACROSS = (-0.4, -0.2, 0.0, 0.2, 0.4)
