@@ -370,7 +370,7 @@ class Feeder:
                     a = e.x0 + tool.at * e.length
                     z = a + float(getattr(tool, "length", 0.0) or 0.0)
                     if attr == "gate":  # its walls narrow at 45 degrees to its width
-                        z = min(a + max(getattr(e, "width", 0.0) - tool.width, 0.0) / 2, e.x0 + e.length)
+                        z = min(a + max(tool.taper(getattr(e, "width", 0.0)), 0.0), e.x0 + e.length)
                 kind = getattr(tool, "kind", attr)
                 out.append(Station(k, kind, a + shift, z + shift, element=e.number,
                                    name=f"s{e.number}.{kind}", margin=margin))

@@ -371,7 +371,7 @@ class LinearSection:
         if g.width >= self.width:
             raise ParameterError(f"{wide}={g.width:g} m must be narrower than {n(('width',))}="
                                  f"{self.width:g} m ({wide}=0: no gate)")
-        taper = (self.width - g.width) / 2
+        taper = g.taper(self.width)
         if not 0 <= g.at or g.at * self.length + taper > self.length:
             raise ParameterError(f"{at}={g.at:g}: the gate's 45 degree taper ({taper:g} m "
                                  f"long) runs past {end}; lower {at}")

@@ -209,13 +209,18 @@ class MeshElement:
         """(point (n, 3), unit tangent in plan (n, 2), unit normal to its left in plan (n, 2)) of
         the placed path at arc lengths ``s`` (n,) [m] from its start (on the segment a point
         lies on; a path's corner belongs to the segment after it)."""
+        _, d, at = self._on_path(s)
+        t = d[:, :2] / np.linalg.norm(d[:, :2], axis=1)[:, None]
+        return at, t, np.column_stack([-t[:, 1], t[:, 0]])
+
+    def _on_path(self, s) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(segment index (n,), the segment (n, 3), the point (n, 3)) of the placed path at arc
+        lengths ``s`` (n,) [m] (:meth:`along`)."""
         s = np.atleast_1d(np.asarray(s, dtype=float))
         p, arc = self.points, self._arc
         i = np.clip(np.searchsorted(arc, s, side="right") - 1, 0, len(p) - 2)
         d = p[i + 1] - p[i]
-        at = p[i] + ((s - arc[i]) / np.linalg.norm(d, axis=1))[:, None] * d
-        t = d[:, :2] / np.linalg.norm(d[:, :2], axis=1)[:, None]
-        return at, t, np.column_stack([-t[:, 1], t[:, 0]])
+        return i, d, p[i] + ((s - arc[i]) / np.linalg.norm(d, axis=1))[:, None] * d
 
     def _stretch(self, a: float, b: float) -> np.ndarray:
         """Arc lengths from ``a`` to ``b`` [m]: both and every corner of the path between."""
@@ -245,7 +250,7 @@ class MeshElement:
         g, w = self.gate, self.wiper
         if g is not None:
             start = g.at * self.length
-            taper = (self.width - g.width) / 2
+            taper = g.taper(self.width)
             s = np.unique(np.concatenate([self._stretch(start, start + taper),
                                           self._stretch(start + taper, self.length)]))
             half = np.interp(s, [start, start + taper], [self.width / 2, g.width / 2])
@@ -368,20 +373,20 @@ class MeshElement:
 
     def entry_z(self, y):
         """The floor's height at rest just after the joint at ``y`` [m] (within the walls)."""
-        y = np.clip(np.asarray(y, dtype=float), -0.49 * self.width, 0.49 * self.width)
-        start = self.points[0]
-        xy = np.column_stack([np.broadcast_to(self.x0 + self.width / 100, y.shape).ravel(), y.ravel()])
-        z, _ = self.floor_under(xy, start[2] + self.width / 2)
-        return z.reshape(y.shape) if y.shape else float(z[0])
+        return self._floor_across(self.x0 + self.width / 100, self.points[0, 2], y)
 
     def exit_z(self, y):
         """The floor's height at rest just before its path's end at ``y`` [m] (within the walls):
         where an element after it steps down from."""
+        return self._floor_across(self.x1 - self.width / 100, self.points[-1, 2], y)
+
+    def _floor_across(self, x: float, z: float, y):
+        """The floor's height at rest at ``x`` and ``y`` [m] (``y`` kept within the walls),
+        looked for down from half the width above the path's height ``z`` there."""
         y = np.clip(np.asarray(y, dtype=float), -0.49 * self.width, 0.49 * self.width)
-        end = self.points[-1]
-        xy = np.column_stack([np.broadcast_to(self.x1 - self.width / 100, y.shape).ravel(), y.ravel()])
-        z, _ = self.floor_under(xy, end[2] + self.width / 2)
-        return z.reshape(y.shape) if y.shape else float(z[0])
+        xy = np.column_stack([np.broadcast_to(x, y.shape).ravel(), y.ravel()])
+        got, _ = self.floor_under(xy, z + self.width / 2)
+        return got.reshape(y.shape) if y.shape else float(got[0])
 
     def height_along(self, arc) -> np.ndarray:
         """The floor's height at rest on its centre line [m] at arc lengths ``arc`` from its start
@@ -460,7 +465,7 @@ class MeshElement:
             if g.width >= self.width:
                 raise self._fail(("gate", "width"), f"{g.width:g} m must be narrower than its width "
                                                     f"({self.width:g} m; 0: no gate)")
-            taper = (self.width - g.width) / 2
+            taper = g.taper(self.width)
             if not 0 <= g.at or g.at * self.length + taper > self.length:
                 raise self._fail(("gate", "at"), f"{g.at:g}: the gate's 45 degree taper ({taper:g} m "
                                                  f"long) runs past its path's end ({self.length:.4g} m)")
@@ -491,13 +496,11 @@ class MeshElement:
     def _check_floor(self, part: Part) -> None:
         """The floor under the path: found (the path on the mesh), facing up, whole (no hole a
         part falls through), at points along it at most half a part apart."""
-        p, arc = self.points, self._arc
+        arc = self._arc
         n = max(2, math.ceil(self.path_length / (part.size / 2)))
         s = (np.arange(n) + 0.5) * self.path_length / n  # (clear of the open ends)
-        i = np.clip(np.searchsorted(arc, s, side="right") - 1, 0, len(p) - 2)
-        d = p[i + 1] - p[i]
-        at = p[i] + ((s - arc[i]) / np.linalg.norm(d, axis=1))[:, None] * d
-        across = np.column_stack([-d[:, 1], d[:, 0]]) / np.hypot(d[:, 0], d[:, 1])[:, None]
+        i, d, _ = self._on_path(s)
+        at, _, across = self.along(s)
         top = at[:, 2] + self.width / 2  # above the floor, below the walls' tops
         shown = np.asarray(self.path, dtype=float).reshape(-1, 3)  # (in the STL's frame for messages)
 

@@ -176,6 +176,10 @@ class Gate:
     width: float
     at: float = 0.7
 
+    def taper(self, width: float) -> float:
+        """How long its 45-degree taper is along the path [m], from an element ``width`` wide."""
+        return (width - self.width) / 2
+
 
 @dataclass(frozen=True)
 class SideDrop:
