@@ -145,7 +145,7 @@ class MeshElement:
         except ValueError:
             flat = []
         if len(flat) < 6 or len(flat) % 3 or not all(math.isfinite(c) for c in flat):
-            raise ParameterError(f"element {k}'s path ({name}): give at least two points of three "
+            raise ParameterError(f"{name}: give at least two points of three "
                                  "coordinates each, x, y, z in the STL's unit")
         if deck_name(k, ("file",)) not in values:
             raise ParameterError(f"the feeder needs the parameter {deck_name(k, ('file',))}")
@@ -306,8 +306,7 @@ class MeshElement:
 
     # ---------------------------------------------------------------- the mesh
     def _fail(self, key: tuple[str, ...], message: str) -> ParameterError:
-        return ParameterError(f"element {self.number}'s {'.'.join(key)} ({deck_name(self.number, key)}): "
-                              f"{message}")
+        return ParameterError(f"{deck_name(self.number, key)}: {message}")
 
     @cached_property
     def stl(self):

@@ -124,15 +124,15 @@ def test_a_mesh_elements_wiper_and_gate_are_built_along_its_path(stl):
 
 @pytest.mark.parametrize("change, words", [
     ({"s2_path": path_text(PLAN[:-1])},
-     "element 2's path (s2_path): the mesh reaches 4 mm beyond its path's end along x"),
-    ({"s2_gate_width": 2e-4}, "element 2's gate.width (s2_gate_width): 0.0002 m is narrower than a part"),
-    ({"s2_gate_width": 1.2e-3}, "element 2's gate.width (s2_gate_width): 0.0012 m must be narrower than"),
+     "s2_path: the mesh reaches 4 mm beyond its path's end along x"),
+    ({"s2_gate_width": 2e-4}, "s2_gate_width: 0.0002 m is narrower than a part"),
+    ({"s2_gate_width": 1.2e-3}, "s2_gate_width: 0.0012 m must be narrower than"),
     ({"s2_gate_width": 8e-4, "s2_gate_at": 0.995},
-     "element 2's gate.at (s2_gate_at): 0.995: the gate's 45 degree taper (0.0002 m long) runs past"),
-    ({"s2_wiper_height": 2e-4}, "element 2's wiper.height (s2_wiper_height): 0.0002 m is lower than a part"),
-    ({"s2_wiper_height": 7e-4}, "element 2's wiper.height (s2_wiper_height): 0.0007 m: the tools stand 2"),
+     "s2_gate_at: 0.995: the gate's 45 degree taper (0.0002 m long) runs past"),
+    ({"s2_wiper_height": 2e-4}, "s2_wiper_height: 0.0002 m is lower than a part"),
+    ({"s2_wiper_height": 7e-4}, "s2_wiper_height: 0.0007 m: the tools stand 2"),
     ({"s2_wiper_height": 4e-4, "s2_wiper_at": 0.99},
-     "element 2's wiper.at (s2_wiper_at): 0.99: the wiper's bar (0.0003 m long) runs past its path's end"),
+     "s2_wiper_at: 0.99: the wiper's bar (0.0003 m long) runs past its path's end"),
 ])
 def test_a_mesh_elements_slips_are_one_line_naming_the_key(stl, change, words):
     with pytest.raises(ParameterError) as err:

@@ -197,14 +197,14 @@ def test_an_stl_open_where_parts_would_fall_through_is_refused(tmp_path):
     for holes in ([(1, 1)], [(1, -1), (1, 1)]):
         path = tmp_path / "holed.stl"
         write_stl(*channel(PATH, 1.2, 1.0, holes=holes), path, "holed")
-        _refused(path, "element 2's file (s2_file): the floor has a hole at 3.96 mm along the path (near "
+        _refused(path, "s2_file: the floor has a hole at 3.96 mm along the path (near "
                        "10, 23.96, 5 in the STL), +0.24 mm across: parts would fall through")
 
 
 def test_an_stl_with_inconsistent_normals_is_refused(tmp_path):
     path = tmp_path / "mixed.stl"
     write_stl(*channel(PATH, 1.2, 1.0, flipped=[5]), path, "mixed")
-    _refused(path, "element 2's file (s2_file): the mesh's triangles are not wound alike (inconsistent "
+    _refused(path, "s2_file: the mesh's triangles are not wound alike (inconsistent "
                    "normals)")
 
 
@@ -212,42 +212,42 @@ def test_an_stl_whose_floor_faces_down_is_refused(tmp_path):
     v, t = channel(PATH, 1.2, 1.0)
     path = tmp_path / "down.stl"
     write_stl(v, t[:, ::-1], path, "down")  # every face wound the other way: consistent, but down
-    _refused(path, "element 2's file (s2_file): the floor's normals face down under the path at 0.")
+    _refused(path, "s2_file: the floor's normals face down under the path at 0.")
 
 
 def test_an_stl_in_the_wrong_unit_is_refused(stl):
     # millimetres read as metres: a 13 m path, a mesh 12 m across (its run along x)
-    m = _refused(stl, "element 2's unit (s2_unit): the mesh is 12 m across and its path 13 m long at 1 m "
+    m = _refused(stl, "s2_unit: the mesh is 12 m across and its path 13 m long at 1 m "
                       "per unit; a feeder's track is 1 mm to 1 m: is the unit mm?", s2_unit=1.0)
-    assert m.startswith("element 2's unit")
-    _refused(stl, "element 2's unit (s2_unit): 0.01 m per unit", s2_unit=0.01)
+    assert m.startswith("s2_unit: ")
+    _refused(stl, "s2_unit: 0.01 m per unit", s2_unit=0.01)
 
 
 def test_a_path_that_leaves_the_mesh_is_refused(stl):
     # the last leg swerves 3 mm off to the left: past the wall, over nothing
     off = cad([(0, 0, 0), (4, 0, 0), (8, 3, 0), (12, 6, 0)])
-    _refused(stl, "element 2's path (s2_path): the path leaves the mesh at ", s2_path=path_text(off))
+    _refused(stl, "s2_path: the path leaves the mesh at ", s2_path=path_text(off))
     # above the floor: the path's points 0.4 mm up (more than half a part)
-    _refused(stl, "element 2's path (s2_path): the path lies +0.4 mm above the floor at ",
+    _refused(stl, "s2_path: the path lies +0.4 mm above the floor at ",
              s2_path=path_text(PATH + [0, 0, 0.4]))
 
 
 def test_a_mesh_beyond_its_path_or_before_its_joint_is_refused(stl):
     short = cad([(0, 0, 0), (4, 0, 0), (8, 3, 0), (10, 3, 0)])
-    _refused(stl, "element 2's path (s2_path): the mesh reaches 2 mm beyond its path's end along x",
+    _refused(stl, "s2_path: the mesh reaches 2 mm beyond its path's end along x",
              s2_path=path_text(short))
     late = cad([(1, 0, 0), (4, 0, 0), (8, 3, 0), (12, 3, 0)])
-    _refused(stl, "element 2's path (s2_path): the mesh reaches 1 mm back past its joint",
+    _refused(stl, "s2_path: the mesh reaches 1 mm back past its joint",
              s2_path=path_text(late))
 
 
 def test_an_stl_that_cannot_be_read_is_refused(tmp_path, stl):
-    _refused(stl, f"element 2's file (s2_file): no such file: {tmp_path / 'none.stl'}",
+    _refused(stl, f"s2_file: no such file: {tmp_path / 'none.stl'}",
              s2_file=str(tmp_path / "none.stl"))
     bad = tmp_path / "bad.stl"
     bad.write_bytes(b"\x00\x01 not an STL")
-    _refused(stl, f"element 2's file (s2_file): {bad} holds no triangles", s2_file=str(bad))
-    with pytest.raises(ParameterError, match=r"^element 2's path \(s2_path\): give at least two points"):
+    _refused(stl, f"s2_file: {bad} holds no triangles", s2_file=str(bad))
+    with pytest.raises(ParameterError, match=r"^s2_path: give at least two points"):
         Feeder.from_values(values(stl, s2_path="1,2,3"))
 
 
@@ -255,7 +255,7 @@ def test_a_mesh_element_followed_by_another_ends_where_it_started_across(stl):
     # the S-bend ends 3 mm across: the next element would start beside the line
     more = {"sections": 3, "s3_length": 2e-3, "s3_width": 1.2e-3, "s3_wall_height": 1e-3, "s3_step": 5e-5,
             "s3_freq": 100, "s3_amp_t": 1e-4, "s3_amp_n": 5e-5}
-    _refused(stl, "element 2's path (s2_path): an element follows it, so its path must end where it "
+    _refused(stl, "s2_path: an element follows it, so its path must end where it "
                   "started across, heading as it started (the next element starts there, along it); it "
                   "ends +3 mm across, turned 0 deg", **more)
 
