@@ -534,7 +534,8 @@ class FeedRate(AnalysisBase):
     downstream end: the joint, or the outlet for the last section),
     ``reject_rate``, ``reject_rate_error`` [1/s], ``rejects_in_window``,
     ``speed``, ``speed_error`` [m/s], ``hold_up``, ``hold_up_error`` [parts],
-    ``line_density`` [1/m]; and ``rejects_by_tooling``: for ``side_drop``,
+    ``line_density`` [1/m], ``along`` ("x": ``x_from`` and ``x_to`` are the deck's x; "path":
+    path coordinates, a bowl's or a mesh element's); and ``rejects_by_tooling``: for ``side_drop``,
     ``wiper``, ``jet`` (only a line with a jet), ``slot`` (only a line with a slot trap),
     ``other``, ``per_s``, ``per_s_error`` (in the window), ``in_window``, ``total`` (in the
     run analysed), or None for a tool the line does not have.
@@ -750,6 +751,9 @@ class FeedRate(AnalysisBase):
                  "joint_crossings": crossings}
         r.bed_trends = trends
         r.unsteady = unsteady(trends)
+        along = "x" if feeder is None or feeder.path_is_x else "path"
+        for sec in sections:
+            sec["along"] = along
         if bowl:  # named: the helix, the chute, then its exit line's elements (their s<k>_*)
             names = BOWL_SECTIONS + tuple(f"s{e.number}" for e in feeder.elements[1:])
             for sec, name in zip(sections, names):

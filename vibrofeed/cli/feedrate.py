@@ -79,7 +79,7 @@ def section_table(s: dict) -> list[str]:
     # a bowl alone: its rejects fall back into it; with an exit line, some are the line's
     returns = bowl and len(sections) == 2
     widths = (22, 22, 22, 20, 15) if bowl else (15, 22, 22, 20, 15)
-    head = ("path [mm]" if bowl else "x [mm]", "out [parts/s]", "speed [mm/s]", "hold-up [parts]",
+    head = (f"{sections[0].get('along', 'x')} [mm]", "out [parts/s]", "speed [mm/s]", "hold-up [parts]",
             "density [/mm]")
     rejects_head = "fell back [/s]" if returns else "rejects [/s]"
     lines = ["sections       " + _columns(head, widths) + rejects_head]

@@ -157,6 +157,12 @@ class Feeder:
         return out
 
     @property
+    def path_is_x(self) -> bool:
+        """Whether the path coordinate is the deck's x all along (straight sections only): a
+        bowl's helix and a mesh element's path are not."""
+        return not any(isinstance(e, (BowlElement, MeshElement)) for e in self.elements)
+
+    @property
     def sections(self) -> int:
         """How many sections the path has (a line's elements; a bowl's helix and chute)."""
         return len(self.bounds)

@@ -114,12 +114,12 @@ LINE_CONTINUITY = [
 def bowl():
     """A bowl: its helix and chute along the path, falls back into the bowl, chips."""
     sections = [
-        {"section": 1, "name": "helix", "x_from": 0.0, "x_to": 0.15, "joint_flux": 12.0,
+        {"section": 1, "name": "helix", "along": "path", "x_from": 0.0, "x_to": 0.15, "joint_flux": 12.0,
          "joint_flux_error": 0.6,
          "reject_rate": 3.0, "reject_rate_error": 0.4, "rejects_in_window": 12, "speed": 0.0105,
          "speed_error": 3e-4, "hold_up": 20.0, "hold_up_error": 1.5, "line_density": 133.3,
          "model_speed": 0.01502, "model_note": "", "speed_ratio": 0.6991},
-        {"section": 2, "name": "chute", "x_from": 0.15, "x_to": 0.18, "joint_flux": 8.0,
+        {"section": 2, "name": "chute", "along": "path", "x_from": 0.15, "x_to": 0.18, "joint_flux": 8.0,
          "joint_flux_error": 0.5,
          "reject_rate": 1.0, "reject_rate_error": 0.2, "rejects_in_window": 4, "speed": 0.02,
          "speed_error": 1e-3, "hold_up": 3.0, "hold_up_error": 0.2, "line_density": 100.0,

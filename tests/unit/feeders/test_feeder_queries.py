@@ -15,14 +15,15 @@ from vibrofeed.feeders.bowl import TURN_NAMES, Turn
 from vibrofeed.feeders.feeder import inserts_between_walls, side_tools_unprefixed, starts_with_bowl
 
 
-@pytest.mark.parametrize("values, elements, several, rotates, rejects", [
-    (TRACK, 1, False, False, False),
-    (LINE, 2, True, False, True),
-    (BOWL, 1, True, True, False),        # its path: the helix, then the chute
-    (BOWL_LINE, 2, True, True, True),
+@pytest.mark.parametrize("values, elements, several, rotates, rejects, path_is_x", [
+    (TRACK, 1, False, False, False, True),
+    (LINE, 2, True, False, True, True),
+    (BOWL, 1, True, True, False, False),        # its path: the helix, then the chute
+    (BOWL_LINE, 2, True, True, True, False),
 ])
-def test_each_feeder_says_what_it_has(values, elements, several, rotates, rejects):
+def test_each_feeder_says_what_it_has(values, elements, several, rotates, rejects, path_is_x):
     f = Feeder.from_values(values)
+    assert f.path_is_x is path_is_x
     assert f.n_elements == elements and f.further_elements == f.elements[1:]
     assert len(f.further_elements) == elements - 1
     assert f.several_sections is several

@@ -50,6 +50,7 @@ def test_the_element_after_a_mesh_lies_further_along_the_path_than_along_x(stl):
     assert (third.x0, third.x1) == (pytest.approx(24e-3, abs=1e-15), pytest.approx(26e-3, abs=1e-15))
     assert third.level == pytest.approx(1e-4, abs=1e-18)  # two steps of 50 um
     assert f.offsets == [0.0, 0.0, pytest.approx(2e-3, abs=1e-15)]
+    assert f.path_is_x is False  # (the feed-rate table's sections: along the path, not x)
     want = [(0.0, 4e-3), (4e-3, 26e-3), (26e-3, 28e-3)]
     assert np.abs(np.array(f.bounds) - want).max() <= 1e-15
     assert f.path_end == pytest.approx(28e-3, abs=1e-15)

@@ -320,6 +320,7 @@ def test_a_bowls_sections_are_its_helix_and_its_chute(tmp_path):
     assert [sec["name"] for sec in s["sections"]] == list(BOWL_SECTIONS) == ["helix", "chute"]
     assert (helix_s["x_from"], chute_s["x_to"]) == (0.0, pytest.approx(b.length + b.chute_length, rel=1e-12))
     assert helix_s["x_to"] == chute_s["x_from"] == pytest.approx(b.length, rel=1e-12, abs=0)
+    assert helix_s["along"] == chute_s["along"] == "path"  # along the helix, then the chute
     assert helix_s["speed"] == pytest.approx(rate * b.r_mid / math.cos(a), rel=1e-9, abs=0)
     assert chute_s["speed"] == pytest.approx(v, rel=1e-9, abs=0)
     assert helix_s["hold_up"] == pytest.approx((41 + 21 + 13) / 41, rel=1e-12, abs=0)

@@ -188,6 +188,7 @@ def test_each_section_has_its_speed_hold_up_and_line_density(tmp_path):
         ids = [r.read("id", frames=k) for k in range(len(FRAMES))]
     s1, s2 = fr.sections
     assert (s1["x_from"], s1["x_to"], s2["x_from"], s2["x_to"]) == (0.0, JOINT, JOINT, EDGE)
+    assert s1["along"] == s2["along"] == "x"  # a line of straight sections: the deck's x
     # whole periods on one section at both ends: its own speed (the track swings 30 um)
     assert s1["speed"] == pytest.approx(V1, rel=1e-9) and s2["speed"] == pytest.approx(V2, rel=1e-9)
     assert s1["speed_error"] < 1e-9 * V1 and s2["speed_error"] < 1e-9 * V2
