@@ -524,7 +524,7 @@ class FeedRate(AnalysisBase):
 
     The bed (module docstring): ``unsteady`` (why the bed is not steady over
     the window, else None; also the ``reason`` when there are enough exits),
-    ``bed_trends`` (per section and quantity judged: ``section``, ``quantity``
+    ``bed_trends`` (per section and quantity judged: ``section`` (and a bowl's ``name``), ``quantity``
     "conveying speed" [m/s] or "hold-up" [parts], ``first``, ``last`` (means of
     the first and last thirds), ``error``, ``drifts``), ``bed`` (``batch_edges``,
     ``speed`` and ``hold_up`` per section and batch, ``joint_crossings``: per
@@ -729,7 +729,10 @@ class FeedRate(AnalysisBase):
         fed = is_fed(result.parameters)
         store = store_sections(result.parameters)
         sections, speeds, held, trends = [], [], [], []
+        # a bowl's sections are named: the helix, the chute, then its exit line's elements (s<k>)
+        names = BOWL_SECTIONS + tuple(f"s{e.number}" for e in feeder.elements[1:]) if bowl else ()
         for k, (lo, hi) in enumerate(bounds):
+            name = names[k] if k < len(names) else None
             last = k == len(bounds) - 1
             # Section 1 takes everything upstream of the joint, the last one up to the edge.
             x_min = -math.inf if k == 0 else lo
@@ -744,9 +747,9 @@ class FeedRate(AnalysisBase):
             sections.append(self._section(k, lo, hi, v, interval, window_t, n, flux, rejects, span))
             speeds.append(batch_means(mid_t, v, cuts))
             held.append(batch_means(window_t, n, cuts))
-            trends += trend(k + 1, "conveying speed", speeds[-1])
+            trends += trend(k + 1, "conveying speed", speeds[-1], name)
             if k >= store or fed:
-                trends += trend(k + 1, "hold-up", held[-1])
+                trends += trend(k + 1, "hold-up", held[-1], name)
         r.bed = {"batch_edges": cuts, "speed": np.array(speeds), "hold_up": np.array(held),
                  "joint_crossings": crossings}
         r.bed_trends = trends
@@ -754,10 +757,8 @@ class FeedRate(AnalysisBase):
         along = "x" if feeder is None or feeder.path_is_x else "path"
         for sec in sections:
             sec["along"] = along
-        if bowl:  # named: the helix, the chute, then its exit line's elements (their s<k>_*)
-            names = BOWL_SECTIONS + tuple(f"s{e.number}" for e in feeder.elements[1:])
-            for sec, name in zip(sections, names):
-                sec["name"] = name
+        for sec, name in zip(sections, names):
+            sec["name"] = name
         if feeder is not None and feeder.several_sections:  # (a line; a bowl's helix and chute)
             r.sections = sections
             r.rejects_by_tooling = self._rejects_by_tooling(rejects, span)

@@ -239,14 +239,17 @@ def drifts(first: float, last: float, error: float) -> bool:
     return change > DRIFT_SIGMAS * error and change > 1e-9 * max(abs(first), abs(last))
 
 
-def trend(section: int, quantity: str, series) -> list[dict]:
+def trend(section: int, quantity: str, series, name: str | None = None) -> list[dict]:
     """[{section, quantity, first, last, error, drifts}] of a bed's batch series (SI units),
-    as :func:`drift` finds it; [] when there are too few batches to judge."""
+    as :func:`drift` finds it, and the section's ``name`` where it has one (a bowl's helix and
+    chute, its exit line's s<k>: as the feed-rate table names them); [] when there are too few
+    batches to judge."""
     found = drift(series)
     if found is None:
         return []
     first, last, error = found
-    return [{"section": section, "quantity": quantity, "first": first, "last": last,
+    named = {"name": name} if name else {}
+    return [{"section": section, **named, "quantity": quantity, "first": first, "last": last,
              "error": error, "drifts": drifts(first, last, error)}]
 
 
@@ -265,7 +268,9 @@ def unsteady(trends) -> str | None:
         name, scale, unit = _SAID[t["quantity"]]
         way = "rises" if t["last"] > t["first"] else "falls"
         limit = DRIFT_SIGMAS * t["error"] * scale
-        said.append(f"{name} on section {t['section']} {way} {t['first'] * scale:.1f} -> "
+        where = (f"the {t['name']}" if t["name"] in ("helix", "chute") else t["name"]) if t.get("name") \
+            else f"section {t['section']}"
+        said.append(f"{name} on {where} {way} {t['first'] * scale:.1f} -> "
                     f"{t['last'] * scale:.1f} {unit} over the window (more than {DRIFT_SIGMAS:g} "
                     f"standard errors: {limit:.2g} {unit})")
     return "not steady: " + "; ".join(said) if said else None

@@ -13,7 +13,7 @@ from bulk_synthetic import JOINT, OUTLET_X, RADIUS, S2_LENGTH, bed, feeder, line
 from helpers import parts, write_bulk_result
 from vibrofeed.postproc import FeedRate
 from vibrofeed.postproc.feedrate import BOWL_KEYS, LINE_KEYS, SUMMARY_KEYS, period_velocities
-from vibrofeed.postproc.line import TOOLING, batch_cuts, bed_pass, drift, drifts, tooling, unsteady
+from vibrofeed.postproc.line import TOOLING, batch_cuts, bed_pass, drift, drifts, tooling, trend, unsteady
 from vibrofeed.results.reader import Result
 
 FREQ = 100.0
@@ -407,6 +407,17 @@ def test_unsteady_says_every_drift():
         "(more than 3 standard errors: 3 mm/s); the hold-up on section 2 falls 6.0 -> 2.5 parts over "
         "the window (more than 3 standard errors: 0.6 parts)")
     assert unsteady(trends[1:2]) is None and unsteady([]) is None
+
+
+def test_unsteady_names_a_bowls_sections_as_its_table_does():
+    # a bowl with an exit line: its third section is the exit line's element 2, s2
+    said = [{"section": k, "name": name, "quantity": "hold-up", "first": 6.0, "last": 2.5,
+             "error": 0.2, "drifts": True} for k, name in ((1, "helix"), (2, "chute"), (3, "s2"))]
+    text = unsteady(said)
+    assert "the hold-up on the helix falls" in text and "on the chute falls" in text
+    assert "the hold-up on s2 falls" in text and "section" not in text
+    assert [t["name"] for t in trend(3, "hold-up", [1.0, 1.0, 2.0, 2.0, 3.0, 3.0], "s2")] == ["s2"]
+    assert "name" not in trend(3, "hold-up", [1.0, 1.0, 2.0, 2.0, 3.0, 3.0])[0]  # a line's: numbered
 
 
 def test_a_window_shorter_than_two_periods_is_one_batch():
