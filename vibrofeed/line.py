@@ -14,7 +14,10 @@ wall at y = -w/2 (parts are kept against that wall, the reference wall):
 the wall at +w/2 is missing over the side drop, where the floor narrows to
 ``drop_width`` from the reference wall and parts not against it fall off the open
 side. The wiper is a bar across the track whose underside follows the floor at
-``wiper_height``: a part taller than that (stacked, on edge) is swept back. A slot is a
+``wiper_height``: a part taller than that (stacked, on edge) is swept back; turned
+``wiper_skew`` degrees from straight across, the bar runs downstream from the reference wall
+(where its upstream face stands at ``wiper_at``) to the far wall, and pushes such a part
+towards the far wall as the track conveys it against the bar. A slot is a
 hole in the floor, ``slot_width`` across, its centre ``slot_offset`` from the reference wall,
 from ``slot_from`` to ``slot_to``: the floor is split into strips along its edges and the
 strips over it are left out, so a part narrower than the slot where it rides falls through
@@ -40,6 +43,9 @@ from .mesh import MeshBuilder
 # The wiper's bar along x, in part sizes: long enough that a part cannot wedge under it
 # tilted, short enough to stay a bar.
 WIPER_LENGTH = 1.0
+# A skewed wiper's largest turn from straight across [deg]: at 75 its upstream face runs 3.7
+# track widths along the track; towards 90 it would lie along the track, a wall.
+MAX_SKEW = 75.0
 # The slot's default place: along the reference wall (its centre half its width from it, no
 # floor between wall and slot). A part riding the wall falls through it only if its footprint
 # lies wholly over it: past a ledge, a part on its side tips over about the ledge's edge and
@@ -72,6 +78,7 @@ class Section:
     wiper_height: float = 0.0
     wiper_at: float = 0.5
     wiper_length: float = 0.0
+    wiper_skew: float = 0.0  # deg from straight across (vibrofeed.feeders.records.Wiper)
     slot_from: float = 0.0
     slot_to: float = 0.0
     slot_width: float = 0.0
@@ -128,8 +135,18 @@ class Section:
 
     @property
     def wiper_x(self) -> tuple[float, float]:
+        """The wiper's footprint along x: its upstream face at the reference wall, and the end
+        of its bar at the far wall (a skewed bar's run across included)."""
         a = self.x0 + self.wiper_at * self.length
-        return a, a + self.wiper_length
+        return a, a + self.wiper_length + self.wiper_run
+
+    @property
+    def wiper_run(self) -> float:
+        """How far downstream a skewed bar's upstream face runs from wall to wall [m]."""
+        if self.wiper_skew == 0:
+            return 0.0
+        return 2 * float(self.half_width(self.x0 + self.wiper_at * self.length)) * math.tan(
+            math.radians(self.wiper_skew))
 
     @property
     def slot_x(self) -> tuple[float, float]:
@@ -207,13 +224,15 @@ def section_mesh(s: Section, spacing: float | None = None) -> tuple[np.ndarray, 
     if s.has_wiper:
         w0, w1 = s.wiper_x
         half = float(s.half_width(w1))  # between the walls (a gate narrows them along x)
-        ys = np.linspace(-half, half, 2)
+        y0, y1 = -half, half
         h = s.wiper_height
-        for y0, y1 in zip(ys[:-1], ys[1:]):
-            # underside (normal -z), parallel to the floor at height h
-            b_.quad((w0, y0, z(y0) + h), (w0, y1, z(y1) + h), (w1, y1, z(y1) + h), (w1, y0, z(y0) + h))
-            # upstream face (normal -x), from the underside to the wall tops
-            b_.quad((w0, y1, z(y1) + h), (w0, y0, z(y0) + h), (w0, y0, top), (w0, y1, top))
+        run = s.wiper_run  # (a skewed bar lies before or past a gate's taper: the check's)
+        u0, u1 = w0, w0 + run  # its upstream face at either wall
+        e0, e1 = w1 - run, w1  # its bar's end at either wall
+        # underside (normal -z), parallel to the floor at height h
+        b_.quad((u0, y0, z(y0) + h), (u1, y1, z(y1) + h), (e1, y1, z(y1) + h), (e0, y0, z(y0) + h))
+        # upstream face (normal upstream), from the underside to the wall tops
+        b_.quad((u1, y1, z(y1) + h), (u0, y0, z(y0) + h), (u0, y0, top), (u1, y1, top))
     return b_.mesh()
 
 

@@ -22,6 +22,7 @@ from .feeders.feeder import Feeder, inserts_between_walls, starts_with_bowl
 from .feeders.linear import MAX_SECTIONS, LinearSection, keep_word
 from .feeders.records import Part
 from .limits import JET_THROW, MIN_SPEED_LIMIT, SPEED_FACTOR
+from .line import MAX_SKEW
 from .models.constants import G
 from .models.deck import mass as part_mass
 from .orientation import correct_word
@@ -181,6 +182,8 @@ RULES: dict[str, Callable[[float], str | None]] = {
     "s2_drop_width": _non_negative,
     "s2_wiper_height": _non_negative,
     "s2_wiper_at": _between(0, 1, lo_open=False),
+    "s2_wiper_skew": _between(0, MAX_SKEW, lo_open=False, hi_open=False,
+                              why="0: straight across; towards 90 the bar would run along the track"),
     # the bowl feeder (decks/bowl_feeder.liggghts; vibrofeed.bowl)
     "n_track": _integer(lo=0),
     "bowl_diameter": _positive_up_to(0.5, "a micro-part bowl is cm across; lengths are in metres"),

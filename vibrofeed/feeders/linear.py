@@ -58,6 +58,7 @@ KEYS: dict[tuple[str, ...], tuple[str | None, str | None]] = {
     ("slot", "offset"): (None, "slot_offset"),
     ("wiper", "height"): (None, "wiper_height"),
     ("wiper", "at"): (None, "wiper_at"),
+    ("wiper", "skew"): (None, "wiper_skew"),
     ("jet", "at"): (None, "jet_at"),
     ("jet", "keep"): (None, "jet_keep"),
     ("jet", "delay"): (None, "jet_delay"),
@@ -145,7 +146,8 @@ class LinearSection:
                 slot = Slot(start=start, end=end, width=width, offset=offset)
             if get(("wiper", "height"), 0.0) > 0:
                 wiper = Wiper(height=get(("wiper", "height")), at=get(("wiper", "at"), 0.5),
-                              length=WIPER_LENGTH * (part.size if part else number(values, "part_size")))
+                              length=WIPER_LENGTH * (part.size if part else number(values, "part_size")),
+                              skew=get(("wiper", "skew"), 0.0))
             jet = _jet(values, k, get, part)
         return cls(number=k, x0=x0, length=get(("length",)), width=get(("width",)),
                    wall_height=get(("wall_height",)), drive=drive, cross_tilt=get(("cross_tilt",), 0.0),
@@ -162,6 +164,11 @@ class LinearSection:
     def exit_width(self) -> float:
         """The width parts leave the section through (the gate's, if it has one)."""
         return self.gate.width if self.gate else self.width
+
+    def width_at(self, at: float) -> float:
+        """The width between its walls at ``at`` (a fraction of its length) [m]: a gate's taper
+        narrows them."""
+        return 2 * float(self.mesh_section().half_width(self.x0 + at * self.length))
 
     def floor_z(self, y):
         """Height of the floor at rest at ``y`` [m] (module docstring)."""
@@ -260,7 +267,8 @@ class LinearSection:
             step=self.level, cross_tilt=self.cross_tilt, drop_from=drop.start if drop else 0.0,
             drop_to=drop.end if drop else 0.0, drop_width=drop.width if drop else 0.0,
             wiper_height=wiper.height if wiper else 0.0, wiper_at=wiper.at if wiper else 0.5,
-            wiper_length=wiper.length if wiper else 0.0, **slotted, **gated)
+            wiper_length=wiper.length if wiper else 0.0, wiper_skew=wiper.skew if wiper else 0.0,
+            **slotted, **gated)
 
     def mesh(self):
         """The mesh at rest of a further section (vertices (V, 3) [m], triangles (T, 3))."""
@@ -336,9 +344,16 @@ class LinearSection:
                 raise ParameterError(f"{n(('wiper', 'height'))}={w.height:g} m is not below the walls "
                                      f"({n(('wall_height',))}={self.wall_height:g} m): the wiper would "
                                      "not exist")
-            if not 0 <= w.at or w.at * self.length + w.length > self.length:
-                raise ParameterError(f"{n(('wiper', 'at'))}={w.at:g}: the wiper's bar ({w.length:g} m "
-                                     f"long) runs past {end}; lower {n(('wiper', 'at'))}")
+            reach = w.reach(self.width_at(w.at))
+            if not 0 <= w.at or w.at * self.length + reach > self.length:
+                raise ParameterError(f"{n(('wiper', 'at'))}={w.at:g}: the wiper's bar ({reach:g} m "
+                                     f"along the track) runs past {end}; lower {n(('wiper', 'at'))}")
+            if w.skew and self.gate is not None:
+                a, z = self.gate.at * self.length, self.gate.at * self.length + self.gate.taper(self.width)
+                if w.at * self.length < z and a < w.at * self.length + reach:
+                    raise ParameterError(f"{n(('wiper', 'skew'))}={w.skew:g}: the skewed bar meets the "
+                                         f"gate's taper ({n(('gate', 'at'))}={self.gate.at:g}), where the "
+                                         "walls close in: put it before the taper or past it")
         d = self.side_drop
         if d is not None:
             if not 0 <= d.start < d.end <= 1:
@@ -407,7 +422,7 @@ class LinearSection:
                           self.side_drop.end * self.length))
         if self.wiper is not None:
             w0 = self.wiper.at * self.length
-            spans.append(("wiper", ("wiper", "at"), w0, w0 + self.wiper.length))
+            spans.append(("wiper", ("wiper", "at"), w0, w0 + self.wiper.reach(self.width_at(self.wiper.at))))
         for tool, key, t0, t1 in spans:
             if a < self.x0 + t1 and self.x0 + t0 < b:
                 raise ParameterError(f"{frm}={s.start:g}, {to}={s.end:g}: the slot overlaps the {tool} "

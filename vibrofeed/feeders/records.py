@@ -210,12 +210,22 @@ class Slot:
 @dataclass(frozen=True)
 class Wiper:
     """A wiper: a bar across the element at ``at`` (a fraction of its length), ``length`` long,
-    whose underside follows the floor ``height`` above it; a taller part is swept off."""
+    whose underside follows the floor ``height`` above it; a taller part is swept off.
+    ``skew`` [deg] turns the bar from straight across: from the reference wall, where its
+    upstream face stands at ``at``, it runs downstream to the far wall, so that a part taller
+    than ``height`` conveyed against it is pushed towards the far wall: a box on a long side
+    tips over onto a broad face there (docs/orientation.md, "The tipping rail")."""
 
     kind = "wiper"
     height: float
     at: float = 0.5
     length: float = 0.0
+    skew: float = 0.0
+
+    def reach(self, width: float) -> float:
+        """How far along the path the bar reaches from its upstream face at the reference wall
+        [m], across a track ``width`` wide: its length, and its skew's run across."""
+        return self.length + width * math.tan(math.radians(self.skew))
 
 
 JET_MODES = ("region", "ideal")

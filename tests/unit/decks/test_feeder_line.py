@@ -389,7 +389,7 @@ def test_a_wiper_just_past_the_outlet_edge_is_refused():
     with pytest.raises(ParameterError) as err:
         resolve(Deck(DECKS / "bulk_feeder.liggghts"), line_values(**given))
     # the bar is one part size long
-    assert f"the wiper's bar ({2**-12:g} m long) runs past the outlet edge" in str(err.value)
+    assert f"the wiper's bar ({2**-12:g} m along the track) runs past the outlet edge" in str(err.value)
 
 
 def minimal_line(**kw):

@@ -114,6 +114,7 @@ BULK = {
     "s2_drop_width": (0, True, INF, False, None),
     "s2_wiper_height": (0, True, INF, False, None),
     "s2_wiper_at": (0, True, 1, False, None),
+    "s2_wiper_skew": (0, True, 75, True, None),
     # the bowl feeder (vibrofeed.bowl)
     "n_track": (0, True, INF, False, "integers"),
     "bowl_diameter": (0, False, 0.5, True, None),
