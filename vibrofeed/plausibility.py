@@ -177,6 +177,8 @@ def _without_effect(p: Mapping[str, float], given: Collection[str]) -> list[str]
     for s in tooled:
         if p.get(f"{s}wiper_height", 1.0) == 0:
             idle[f"{s}wiper_at"] = f"places the wiper: {s}wiper_height=0 has none"
+            if s:  # (a bowl's wiper is not skewed)
+                idle[f"{s}wiper_skew"] = f"turns the wiper: {s}wiper_height=0 has none"
         drop_to = p.get(f"{s}drop_to", 1.0 if s else 0.0)  # (the bowl's drop_to=0: no side drop)
         if drop_to <= p.get(f"{s}drop_from", 0.0):  # (vibrofeed.line: no side drop)
             for name in (f"{s}drop_width", f"{s}drop_from", f"{s}drop_to"):

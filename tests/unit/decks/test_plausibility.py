@@ -70,6 +70,8 @@ def said(deck, given) -> list[str]:
     (BULK, {"s2_wiper_at": "0.3"}, "s2_wiper_at has no effect: it shapes a feeder line's section 2"),
     (BULK, {**LINE, "s2_wiper_at": "0.3"}, "s2_wiper_at has no effect: it places the wiper: "
                                            "s2_wiper_height=0 has none"),
+    (BULK, {**LINE, "s2_wiper_skew": "60"}, "s2_wiper_skew has no effect: it turns the wiper: "
+                                             "s2_wiper_height=0 has none"),
     (BULK, {**LINE, "s2_drop_width": "1e-3"}, "s2_drop_width has no effect: it shapes the side drop: "
                                               "s2_drop_to <= s2_drop_from has none"),
     (BULK, {**LINE, "s2_drop_from": "0.2"}, "s2_drop_from has no effect: it shapes the side drop"),
@@ -178,6 +180,8 @@ def test_a_parameter_the_deck_does_not_declare_takes_its_neutral_value(p, name, 
     # a described line's sections past 2 as section 2: its tooling, and its absence
     ({"sections": 3.0, "s3_wiper_height": 0.0, "s3_wiper_at": 0.3}, "s3_wiper_at",
      "places the wiper: s3_wiper_height=0 has none"),
+    ({"sections": 3.0, "s3_wiper_height": 0.0, "s3_wiper_skew": 60.0}, "s3_wiper_skew",
+     "turns the wiper: s3_wiper_height=0 has none"),
     ({"sections": 3.0, "s3_drop_from": 0.5, "s3_drop_to": 0.2}, "s3_drop_from",
      "shapes the side drop: s3_drop_to <= s3_drop_from has none"),
     ({"sections": 2.0, "s3_freq": 80.0}, "s3_freq", "shapes a feeder line's section 3: sections=2 has none"),
