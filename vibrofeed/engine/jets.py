@@ -2,16 +2,18 @@
 in a wrong state (vibrofeed.feeders.records.Jet).
 
 The deck holds each jet's block and force (``fix addforce`` on the spheres in the block,
-``region s<k>_jet``), switched by the variable ``s<k>_jet_on``, 0 as the deck leaves it
-(vibrofeed.feeders.linear.LinearSection.jet_commands): a run by hand never fires. Here the
-driver senses and fires, at every frame, on rank 0, which has the bodies' positions and
-orientations:
+``region s<k>_jet``), switched by the variable ``s<k>_jet_on``, 0 as the deck leaves it (the
+elements' ``jet_commands``, vibrofeed.feeders.linear and .mesh_element): a run by hand never
+fires. Here the driver senses and fires, at every frame, on rank 0, which has the bodies'
+positions and orientations:
 
-* a part is **sensed** when its centre crossed the sensing point's x between the last frame
-  and this one (each part once; a part first seen past it is not); the crossing's time is
-  interpolated linearly between the two frames, its state classified
+* a part is **sensed** when its centre crossed the sensing point between the last frame and
+  this one (along x on a straight section, along the path on a mesh element; each part once,
+  a part first seen past it not); the crossing's time is interpolated linearly between the
+  two frames, its state classified
   (vibrofeed.orientation.turned_states: the body frame of the run's clump template, as the
-  analyses read it; tangent +x, up the floor's normal) at the frame nearer the crossing;
+  analyses read it; tangent the path's direction there, up the floor's normal) at the
+  frame nearer the crossing;
 * a part sensed **not** in the state the jet keeps gets a **firing window** [t + delay,
   t + delay + duration] (t its crossing). The frame interval limits when a crossing is
   seen: a window that would start before the frame that sensed it starts at that frame
@@ -47,9 +49,10 @@ from ..orientation import axes_quaternion, turned_states
 
 
 def crossings(x_sense: float, t0: float, ids0, x0, t1: float, ids1, x1):
-    """The parts present at both frames whose x went from below ``x_sense`` (at ``t0``) to at or
-    beyond it (at ``t1``): (indices into the second frame's, crossing times interpolated
-    linearly, whether the first frame is the nearer one)."""
+    """The parts present at both frames whose coordinate (``x0``, ``x1``: x, or along the path;
+    NaN: off it) went from below ``x_sense`` (at ``t0``) to at or beyond it (at ``t1``):
+    (indices into the second frame's, crossing times interpolated linearly, whether the first
+    frame is the nearer one)."""
     ids0, ids1 = np.asarray(ids0, dtype=np.int64), np.asarray(ids1, dtype=np.int64)
     x0, x1 = np.asarray(x0, dtype=float), np.asarray(x1, dtype=float)
     empty = np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0, dtype=bool)
@@ -97,9 +100,11 @@ def atom_expression(targets) -> str:
 
 @dataclass
 class Station:
-    """One jet (section ``section``): where it senses (``x_sense`` in the deck's frame), what it
-    keeps, its delay, duration and mode, the floor's ``up`` and the path's ``tangent``, and
-    the part's lowest centre over the section (``z_floor``: below it a part is falling)."""
+    """One jet (section ``section``): where it senses (``x_sense``: along the coordinate ``along``
+    gives a point of the deck's frame, its x if None; an element's
+    vibrofeed.feeders.records.Camera), what it keeps, its delay, duration and mode, the floor's
+    ``up`` and the path's ``tangent``, and the part's lowest centre over the section
+    (``z_floor``: below it a part is falling)."""
 
     section: int
     x_sense: float
@@ -113,6 +118,12 @@ class Station:
     axes_q: tuple = (1.0, 0.0, 0.0, 0.0)  # the template's axes (vibrofeed.orientation.axes_quaternion)
     windows: list = field(default_factory=list)  # (start, end, body id, first atom, last atom)
     sensed: set = field(default_factory=set)
+    along: object = None  # (n, 3) points -> (n,) coordinates [m]; None: x
+
+    def coordinate(self, points) -> np.ndarray:
+        """Where ``points`` (n, 3) of the deck's frame are along what the camera senses [m]."""
+        p = np.asarray(points, dtype=float).reshape(-1, 3)
+        return p[:, 0] if self.along is None else np.asarray(self.along(p), dtype=float)
 
     def sense(self, t0: float, prev: dict | None, t1: float, parts: dict, atoms=None) -> list[tuple]:
         """The firings of the parts that crossed between the frames ``prev`` (at ``t0``) and
@@ -121,8 +132,8 @@ class Station:
         if prev is None or not len(parts["id"]):
             return []
         x1 = np.asarray(parts["position"], dtype=float).reshape(-1, 3)
-        hit, when, nearer_first = crossings(self.x_sense, t0, prev["id"], prev["position"][:, 0],
-                                            t1, parts["id"], x1[:, 0])
+        hit, when, nearer_first = crossings(self.x_sense, t0, prev["id"], self.coordinate(prev["position"]),
+                                            t1, parts["id"], self.coordinate(x1))
         ids = np.asarray(parts["id"], dtype=np.int64)
         q1 = np.asarray(parts["orientation"], dtype=float).reshape(-1, 4)
         firings = []
@@ -192,16 +203,15 @@ class Jets:
     and, on rank 0, the new firings' table."""
 
     def __init__(self, feeder, template=None):
-        ox, oy, oz = feeder.line_origin
         self.stations = []
-        for e in feeder.linear_sections:
+        for e in feeder.further_elements:
             j = getattr(e, "jet", None)
             if j is None:
                 continue
+            cam = e.camera(feeder.part, feeder.line_origin)
             self.stations.append(Station(
-                section=e.number, x_sense=ox + e.sensing_x, keep=j.keep, delay=j.delay,
-                duration=j.duration, mode=j.mode, up=e.floor_normal(),
-                z_floor=oz + e.lowest - feeder.part.size))
+                section=e.number, x_sense=cam.at, keep=j.keep, delay=j.delay, duration=j.duration,
+                mode=j.mode, up=cam.up, tangent=cam.tangent, z_floor=cam.z_floor, along=cam.along))
         self.ideal = any(s.mode == "ideal" for s in self.stations)
         self.use_template(template)
         self._prev = None  # (time, {"id", "position", "orientation"}) of the last frame, rank 0

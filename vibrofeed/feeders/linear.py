@@ -28,7 +28,7 @@ import numpy as np
 from ..errors import ParameterError, ParameterWarning
 from ..line import WIPER_LENGTH, Section, section_mesh, slot_offset
 from ..orientation import STATES, correct_word, parse_correct, run_correct
-from .records import JET_MODES, Drive, Gate, Jet, Part, SideDrop, Slot, Wiper, number
+from .records import JET_MODES, Camera, Drive, Gate, Jet, Part, SideDrop, Slot, Wiper, number
 
 # description key (table, key) -> (section 1's deck name, later sections' suffix); None:
 # that section has no such number (a step, side drop, slot and wiper on later sections only:
@@ -209,16 +209,19 @@ class LinearSection:
         return 0.0 if j is None else j.length
 
     @property
-    def sensing_x(self) -> float:
-        """Where the jet's camera senses the parts, along x [m]."""
+    def sensing(self) -> float:
+        """Where the jet's camera senses the parts along the path [m] (here its x)."""
         return self.x0 + self.jet.at * self.length
 
     def jet_span(self, size: float) -> tuple[float, float]:
-        """The jet's block along x [m] (its length 0: one part ``size``)."""
-        j = self.jet
-        length = j.length if j.length > 0 else size
-        centre = self.sensing_x + j.offset
-        return centre - length / 2, centre + length / 2
+        """The jet's block along the path [m] (here along x; its length 0: one part ``size``)."""
+        return jet_span(self.jet, self.sensing, size)
+
+    def camera(self, part: Part, origin=(0.0, 0.0, 0.0)) -> Camera:
+        """Where the driver senses parts for the jet (the section shifted by ``origin``): the
+        deck's x, along +x, its floor's normal; below its lowest floor by a part: falling."""
+        return Camera(at=origin[0] + self.sensing, tangent=(1.0, 0.0, 0.0), up=self.floor_normal(),
+                      z_floor=origin[2] + self.lowest - part.size)
 
     def floor_normal(self) -> tuple[float, float, float]:
         """The floor's unit normal (up, tilted towards -y by the cross tilt)."""
@@ -457,44 +460,8 @@ class LinearSection:
 
 
     def check_jet(self, part: Part) -> None:
-        """The jet (one-line ParameterError naming the parameter; a ParameterWarning for a
-        delay after which a part would be past the section's end)."""
-        j, n = self.jet, self.name
-        if j.force < 0:
-            raise ParameterError(f"{n(('jet', 'force'))}={j.force:g} N must be > 0 (0: no jet)")
-        if part.shape == 0:
-            raise ParameterError(f"{n(('jet', 'force'))}={j.force:g} N: a jet sorts parts by their "
-                                 "orientation, and spheres (shape 0) have none")
-        k = j.keep
-        if set(k.states) == set(STATES) and not k.lengthwise and not k.lead:
-            if j.keeps_correct:
-                raise ParameterError(f"correct=\"{keep_word(str(k))}\" counts every state correct, and "
-                                     f"the jet of section {self.number} keeps it: the jet would never "
-                                     f"fire; give it a keep of its own ({n(('jet', 'keep'))}), e.g. \"up\"")
-            raise ParameterError(f"{n(('jet', 'keep'))}=\"{keep_word(str(k))}\" keeps every state: "
-                                 "the jet would never fire; name the state(s) to keep, e.g. \"up\"")
-        for key, value in (("delay", j.delay), ("offset", j.offset), ("length", j.length)):
-            if key != "offset" and value < 0:
-                raise ParameterError(f"{n(('jet', key))}={value:g} must be >= 0")
-        if not j.duration > 0:
-            raise ParameterError(f"{n(('jet', 'duration'))}={j.duration:g} s must be > 0")
-        if not 0 <= j.at <= 1:
-            raise ParameterError(f"{n(('jet', 'at'))}={j.at:g}: the sensing point lies outside section "
-                                 f"{self.number} (0 <= at <= 1)")
-        if not 0 <= j.angle <= 90:
-            raise ParameterError(f"{n(('jet', 'angle'))}={j.angle:g} deg must be in [0, 90] (up from "
-                                 "the floor, across towards +y)")
-        lo, hi = self.jet_span(part.size)
-        if lo < self.x0 - 1e-12 or hi > self.x1 + 1e-12:
-            raise ParameterError(f"{n(('jet', 'offset'))}={j.offset:g} m, {n(('jet', 'length'))}="
-                                 f"{hi - lo:g} m: the jet's block ({lo - self.x0:g} to {hi - self.x0:g} m "
-                                 f"along section {self.number}) lies past its ends (0 to {self.length:g} m)")
-        speed = 2 * math.pi * self.drive.freq * self.drive.amp_t  # no part conveys faster
-        reach = self.sensing_x + speed * j.delay
-        if reach > self.x1:
-            warnings.warn(f"{n(('jet', 'delay'))}={j.delay:g} s: a part conveyed at the surface's peak "
-                          f"speed along ({speed:.3g} m/s) is {reach - self.x1:.3g} m past section "
-                          f"{self.number}'s end when the jet fires", ParameterWarning, stacklevel=2)
+        """The jet (:func:`check_jet`)."""
+        check_jet(self, part)
 
 
 class SlotWarning(UserWarning):
@@ -503,6 +470,58 @@ class SlotWarning(UserWarning):
 
 def warn(text: str) -> None:
     warnings.warn(text, SlotWarning, stacklevel=3)
+
+
+def check_jet(e, part: Part) -> None:
+    """The jet of element ``e`` (a linear section or a mesh element: its ``jet``, ``name(key)``,
+    ``number``, ``x0`` and ``length`` along the path, ``sensing``, ``jet_span`` and ``drive``):
+    one-line ParameterError naming the parameter; a ParameterWarning for a delay after which a
+    part would be past the element's end."""
+    j, n = e.jet, e.name
+    if j.force < 0:
+        raise ParameterError(f"{n(('jet', 'force'))}={j.force:g} N must be > 0 (0: no jet)")
+    if part.shape == 0:
+        raise ParameterError(f"{n(('jet', 'force'))}={j.force:g} N: a jet sorts parts by their "
+                             "orientation, and spheres (shape 0) have none")
+    k = j.keep
+    if set(k.states) == set(STATES) and not k.lengthwise and not k.lead:
+        if j.keeps_correct:
+            raise ParameterError(f"correct=\"{keep_word(str(k))}\" counts every state correct, and "
+                                 f"the jet of section {e.number} keeps it: the jet would never "
+                                 f"fire; give it a keep of its own ({n(('jet', 'keep'))}), e.g. \"up\"")
+        raise ParameterError(f"{n(('jet', 'keep'))}=\"{keep_word(str(k))}\" keeps every state: "
+                             "the jet would never fire; name the state(s) to keep, e.g. \"up\"")
+    for key, value in (("delay", j.delay), ("offset", j.offset), ("length", j.length)):
+        if key != "offset" and value < 0:
+            raise ParameterError(f"{n(('jet', key))}={value:g} must be >= 0")
+    if not j.duration > 0:
+        raise ParameterError(f"{n(('jet', 'duration'))}={j.duration:g} s must be > 0")
+    if not 0 <= j.at <= 1:
+        raise ParameterError(f"{n(('jet', 'at'))}={j.at:g}: the sensing point lies outside section "
+                             f"{e.number} (0 <= at <= 1)")
+    if not 0 <= j.angle <= 90:
+        raise ParameterError(f"{n(('jet', 'angle'))}={j.angle:g} deg must be in [0, 90] (up from "
+                             "the floor, across towards +y)")
+    lo, hi = e.jet_span(part.size)
+    end = e.x0 + e.length
+    if lo < e.x0 - 1e-12 or hi > end + 1e-12:
+        raise ParameterError(f"{n(('jet', 'offset'))}={j.offset:g} m, {n(('jet', 'length'))}="
+                             f"{hi - lo:g} m: the jet's block ({lo - e.x0:g} to {hi - e.x0:g} m "
+                             f"along section {e.number}) lies past its ends (0 to {e.length:g} m)")
+    speed = 2 * math.pi * e.drive.freq * e.drive.amp_t  # no part conveys faster
+    reach = e.sensing + speed * j.delay
+    if reach > end:
+        warnings.warn(f"{n(('jet', 'delay'))}={j.delay:g} s: a part conveyed at the surface's peak "
+                      f"speed along ({speed:.3g} m/s) is {reach - end:.3g} m past section "
+                      f"{e.number}'s end when the jet fires", ParameterWarning, stacklevel=2)
+
+
+def jet_span(jet: Jet, sensing: float, size: float) -> tuple[float, float]:
+    """A jet's block along the path [m]: ``length`` (0: one part ``size``) centred ``offset``
+    past the sensing point ``sensing``."""
+    length = jet.length if jet.length > 0 else size
+    centre = sensing + jet.offset
+    return centre - length / 2, centre + length / 2
 
 
 def thinnest(part: Part) -> float:

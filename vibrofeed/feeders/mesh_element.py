@@ -26,9 +26,12 @@ the path close in at 45 degrees from ``gate.at`` to ``gate.width`` and follow th
 end, as a linear section's gate) and a **wiper** (a bar across the track at ``wiper.at``,
 ``wiper.height`` above the floor's centre line, one part long along the path, its upstream face
 up to the tools' top): both built along the placed path, :data:`TOOL_TOP` above its floor, and
-moved with the mesh. A side drop and a slot cut the floor, which is the STL's: the designer
-draws them in CAD; an air jet senses along x on a straight section (a linear section after
-the mesh carries one).
+moved with the mesh; and an **air jet** (a linear section's: vibrofeed.feeders.records.Jet):
+its camera senses parts crossing ``jet.at`` along the path (the driver measures their path
+coordinate), its block lies along the path's direction at the camera (six planes: LIGGGHTS'
+blocks are axis-aligned) and it blows ``jet.angle`` up and across to the path's left (+y where
+the path heads along +x). A side drop and a slot cut the floor, which is the STL's: the
+designer draws them in CAD (and the open side a jet blows parts over).
 
 Its drive is a linear section's: a sine along x (the path's start direction) and along z (the
 deck's wiggle and viblin), whatever the path's turns: on a bend, part of the stroke along x is
@@ -50,8 +53,8 @@ import numpy as np
 from ..errors import ParameterError
 from ..line import WIPER_LENGTH
 from ..mesh import MeshBuilder
-from .linear import sine_commands
-from .records import Drive, Gate, Part, Wiper, number
+from .linear import _jet, check_jet, jet_span, sine_commands
+from .records import Camera, Drive, Gate, Jet, Part, Wiper, number
 
 KIND_CODE = 2  # s<k>_kind: 0 a linear section, 1 a chute, 2 a mesh
 UNITS = {"mm": 1e-3, "m": 1.0}
@@ -70,15 +73,22 @@ KEYS: dict[tuple[str, ...], tuple[str, str, str]] = {
     ("gate", "at"): ("gate_at", "-", "mesh: its gate's taper starts at this fraction of the path's length"),
     ("wiper", "height"): ("wiper_height", "m", "mesh: a bar across this high above the floor (0: none)"),
     ("wiper", "at"): ("wiper_at", "-", "mesh: the wiper's bar starts at this fraction of the path's length"),
+    ("jet", "force"): ("jet_force", "N", "mesh: air jet's force on a part wholly in its block (0: no jet)"),
+    ("jet", "at"): ("jet_at", "-", "mesh: air jet's camera at this fraction of the path's length"),
+    ("jet", "keep"): ("jet_keep", "-", "mesh: the state the air jet passes (correct: as correct)"),
+    ("jet", "delay"): ("jet_delay", "s", "mesh: air jet: from sensing a part to firing"),
+    ("jet", "duration"): ("jet_duration", "s", "mesh: air jet: how long it fires"),
+    ("jet", "offset"): ("jet_offset", "m", "mesh: air jet's block's centre along the path past the camera"),
+    ("jet", "length"): ("jet_length", "m", "mesh: air jet's block along the path (0: one part size)"),
+    ("jet", "angle"): ("jet_angle", "deg", "mesh: air jet's blow up, across to the path's left"),
+    ("jet", "mode"): ("jet_mode", "-", "mesh: air jet: region (all in its block) or ideal (the sensed part)"),
 }
 # The tools a mesh element does not build, and why (module docstring).
 NOT_HERE = {
     "side_drop": "a side drop cuts the floor, which is the STL's: draw it in CAD",
     "slot": "a slot cuts the floor, which is the STL's: draw it in CAD",
-    "jet": "an air jet senses along a straight section in this version: put it on a linear section "
-           "after the mesh",
 }
-WORDS = ("file", "path")  # not numbers: the deck holds them as words
+WORDS = ("file", "path", "jet_keep", "jet_mode")  # not numbers: the deck holds them as words
 NEEDED = ("file", "unit", "path", "width")
 # A feeder's track is 1 mm to 1 m long and across (after the unit).
 SIZES = (1e-3, 1.0)
@@ -122,6 +132,7 @@ class MeshElement:
     level: float = 0.0  # below the first section's floor at the joint: the steps summed
     gate: Gate | None = None
     wiper: Wiper | None = None
+    jet: Jet | None = None
     part_size: float = 0.0  # (the tools' height and the wiper's length: module docstring)
     side_drop = None
 
@@ -154,7 +165,7 @@ class MeshElement:
                       amp_n=get(("drive", "amp_n")), phase=get(("drive", "phase"), 0.0))
         return cls(number=k, x0=x0, file=str(values[deck_name(k, ("file",))]), unit=get(("unit",)),
                    path=tuple(flat), width=get(("width",)), drive=drive, step=step, level=level + step,
-                   gate=gate, wiper=wiper, part_size=size)
+                   gate=gate, wiper=wiper, jet=_jet(values, k, get, part), part_size=size)
 
     # ---------------------------------------------------------------- the path
     @cached_property
@@ -398,6 +409,86 @@ class MeshElement:
         reach = np.maximum.accumulate(self.points[:, 0])  # (a path that turns back: first reached)
         return np.interp(np.asarray(x, dtype=float), reach, self._arc)
 
+    # ---------------------------------------------------------------- the air jet
+    @property
+    def sensing(self) -> float:
+        """Where the jet's camera senses the parts: its path coordinate [m]."""
+        return self.x0 + self.jet.at * self.length
+
+    def jet_span(self, size: float) -> tuple[float, float]:
+        """The jet's block along the path [m] (its length 0: one part ``size``)."""
+        return jet_span(self.jet, self.sensing, size)
+
+    def jet_frame(self, size: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(the path's point at the block's centre (3,), its direction there (3,), its left
+        (3,), all level): the block lies along that direction, straight (a bend within it is
+        not followed)."""
+        lo, hi = self.jet_span(size)
+        at, t, n = self.along([(lo + hi) / 2 - self.x0])
+        return at[0], np.array([t[0, 0], t[0, 1], 0.0]), np.array([n[0, 0], n[0, 1], 0.0])
+
+    def jet_direction(self) -> tuple[float, float, float]:
+        """The jet's unit direction: ``angle`` up from the horizontal, across to the path's left
+        (+y where it heads along +x)."""
+        _, _, left = self.jet_frame(self.part_size)
+        a = math.radians(self.jet.angle)
+        d = math.cos(a) * left + [0.0, 0.0, math.sin(a)]
+        return tuple(float(c) for c in d)
+
+    def jet_planes(self, part: Part) -> list[tuple[np.ndarray, np.ndarray]]:
+        """The jet's block as six half-spaces (a point on each plane, its normal into the block)
+        in the element's frame: along the path over :meth:`jet_span`, across the track and two
+        parts beyond each wall, from below the path's floor there (by the normal amplitude and a
+        part) to a part above the tools' top (LIGGGHTS' blocks are axis-aligned: this one is
+        turned with the path)."""
+        lo, hi = self.jet_span(part.size)
+        c, t, n = self.jet_frame(part.size)
+        half_l, half_w = (hi - lo) / 2, self.width / 2 + 2 * part.widest
+        up = np.array([0.0, 0.0, 1.0])
+        bottom = c[2] - self.drive.amp_n - part.widest
+        top = c[2] + TOOL_TOP * self.part_size + self.drive.amp_n + part.widest
+        return [(c - half_l * t, t), (c + half_l * t, -t), (c - half_w * n, n), (c + half_w * n, -n),
+                (np.array([c[0], c[1], bottom]), up), (np.array([c[0], c[1], top]), -up)]
+
+    def camera(self, part: Part, origin=(0.0, 0.0, 0.0)) -> Camera:
+        """Where the driver senses parts for the jet (the element shifted by ``origin``): along
+        its path (:meth:`coordinate`, within half its width and a part of it), the path's
+        direction at the camera, up; below its lowest point by a part: falling."""
+        o = np.asarray(origin, dtype=float)
+        _, t, _ = self.along([self.sensing - self.x0])
+        reach = self.width / 2 + part.size
+        return Camera(at=self.sensing, tangent=(float(t[0, 0]), float(t[0, 1]), 0.0), up=(0.0, 0.0, 1.0),
+                      z_floor=float(o[2]) + self.lowest - part.size,
+                      along=lambda points: self.coordinate(np.asarray(points, dtype=float) - o, reach))
+
+    def jet_commands(self, part: Part, origin=(0.0, 0.0, 0.0)) -> list[str]:
+        """The jet's commands (none without one), as a linear section's
+        (vibrofeed.feeders.linear.LinearSection.jet_commands) but for its block, the
+        intersection of :meth:`jet_planes` (``s<k>_jet``, shifted by ``origin``), and its
+        direction, across to the path's left at the camera."""
+        if self.jet is None:
+            return []
+        s, o = f"s{self.number}", np.asarray(origin, dtype=float)
+        planes = []
+        for i, (point, normal) in enumerate(self.jet_planes(part), 1):
+            numbers = " ".join(repr(float(v)) for v in (*(point + o), *normal))
+            planes.append(f"region {s}_jet_{i} plane {numbers} units box")
+        _, _, left = self.jet_frame(part.size)
+        style = "atom" if self.jet.mode == "ideal" else "equal"
+        share = f"v_{s}_jet_force/v_body_spheres"
+        angle = f"v_{s}_jet_angle*PI/180"
+        return [
+            f"# element {self.number}'s air jet ({self.jet.mode}): fired by vibrofeed run only",
+            *planes,
+            f"region {s}_jet intersect 6 " + " ".join(f"{s}_jet_{i}" for i in range(1, 7)),
+            f"variable {s}_jet_on {style} 0",
+            f"variable {s}_jet_fx {style} v_{s}_jet_on*$({share}*cos({angle})*{float(left[0])!r})",
+            f"variable {s}_jet_fy {style} v_{s}_jet_on*$({share}*cos({angle})*{float(left[1])!r})",
+            f"variable {s}_jet_fz {style} v_{s}_jet_on*$({share}*sin({angle}))",
+            f"fix {s}_jet all addforce v_{s}_jet_fx v_{s}_jet_fy v_{s}_jet_fz region {s}_jet",
+            f'if "${{driver}} == 0" then "print \'WARNING: the air jet of element {self.number} is '
+            "inactive in a run by hand: only vibrofeed run senses the parts it fires at'\""]
+
     # ---------------------------------------------------------------- the deck
     def name(self, key) -> str:
         key = (key,) if isinstance(key, str) else tuple(key)
@@ -450,6 +541,8 @@ class MeshElement:
                                         "take parts still on it; end the path at the mesh's farthest x")
         self._check_floor(part)
         self._check_tools(part)
+        if self.jet is not None:
+            check_jet(self, part)
         if not last:
             self._check_end()
 

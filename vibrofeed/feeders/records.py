@@ -254,3 +254,18 @@ class Jet:
     angle: float = 60.0
     mode: str = "region"
     keeps_correct: bool = False
+
+
+@dataclass(frozen=True)
+class Camera:
+    """Where and how a jet's camera looks, as the driver senses (vibrofeed.engine.jets): a part
+    is sensed as the coordinate ``along`` gives its centre ((n, 3) points of the deck's frame
+    -> (n,) [m]; None: their x) crosses ``at``; its state is classified along ``tangent`` with
+    ``up`` the floor's normal; a part whose centre lies below ``z_floor`` [m] is falling, not
+    sensed."""
+
+    at: float
+    tangent: tuple
+    up: tuple
+    z_floor: float
+    along: object = None  # Callable[[np.ndarray], np.ndarray] | None

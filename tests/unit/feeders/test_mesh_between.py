@@ -156,7 +156,6 @@ def test_a_path_that_ends_turned_is_refused_when_an_element_follows(tmp_path):
 @pytest.mark.parametrize("tool, words", [
     ("side_drop = { from = 0.2, to = 0.5, width = 5e-4 }", "a side drop cuts the floor, which is the STL's"),
     ("slot = { from = 0.2, to = 0.5, width = 2e-4 }", "a slot cuts the floor, which is the STL's"),
-    ("jet = { force = 1e-5 }", "put it on a linear section after the mesh"),
 ])
 def test_a_tool_a_mesh_element_does_not_build_is_refused_in_one_line(tmp_path, stl, tool, words):
     text = ('[parts]\nsize = 3e-4\n[[element]]\nkind = "linear"\nlength = 0.004\nwidth = 1.2e-3\n'
