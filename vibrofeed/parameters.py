@@ -525,7 +525,7 @@ def _check_feeder(p: Mapping[str, float]) -> None:
 def _check_jet_throw(p: Mapping[str, float]) -> None:
     """A warning for an air jet strong enough to throw the part it blows off faster or farther
     than ``vibrofeed check`` accepts of any part (vibrofeed.limits): the run would fail its
-    check. Judged on the throw's upper bound (LinearSection.jet_throw): a warning, not a
+    check. Judged on the throw's upper bound (the elements' jet_throw): a warning, not a
     refusal, as friction and the part's weight take some of it."""
     if not any(p.get(f"s{k}_jet_force", 0.0) > 0 for k in range(2, MAX_SECTIONS + 1)) \
             or "part_size" not in p or "density" not in p:
@@ -535,11 +535,11 @@ def _check_jet_throw(p: Mapping[str, float]) -> None:
         mass = part_mass(p)
     except (ValueError, OSError):  # an stl part's STL: its own check names what is wrong
         return
-    sections = feeder.linear_sections
+    sections = [e for e in feeder.elements if hasattr(e, "jet_throw")]  # (those that may carry one)
     fastest = max(MIN_SPEED_LIMIT, SPEED_FACTOR * max(s.drive.peak_speed for s in sections))
     farthest = JET_THROW * max(s.x1 for s in sections)
     for s in sections:
-        if s.jet is None:
+        if getattr(s, "jet", None) is None:
             continue
         speed, reach = s.jet_throw(feeder.part, mass, G)
         if speed > fastest or reach > farthest:

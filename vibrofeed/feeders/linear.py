@@ -250,14 +250,8 @@ class LinearSection:
         (no weight, no friction) for its duration or until the part has crossed its block
         along the blow, then a free flight from the block's top to a part below its bottom."""
         xlo, xhi, ylo, yhi, zlo, zhi = self.jet_block(part)
-        a = math.radians(self.jet.angle + self.cross_tilt)
-        across, height = yhi + self.width / 2, zhi - zlo  # from the far wall to the block's side
-        path = min(across / max(math.cos(a), 1e-12), height / max(math.sin(a), 1e-12))
-        push = self.jet.force / mass
-        v = min(push * self.jet.duration, math.sqrt(2 * push * path))
-        up, out = v * math.sin(a), v * math.cos(a)
-        flight = (up + math.sqrt(up * up + 2 * g * (height + part.widest))) / g
-        return v, yhi - self.width / 2 + out * flight
+        return jet_throw(self.jet, mass, self.jet.angle + self.cross_tilt, yhi + self.width / 2,
+                         zhi - zlo, yhi - self.width / 2, part.widest, g)
 
     def mesh_section(self) -> Section:
         """The section as vibrofeed.line meshes it (a further section of a line)."""
@@ -514,6 +508,23 @@ def check_jet(e, part: Part) -> None:
         warnings.warn(f"{n(('jet', 'delay'))}={j.delay:g} s: a part conveyed at the surface's peak "
                       f"speed along ({speed:.3g} m/s) is {reach - end:.3g} m past section "
                       f"{e.number}'s end when the jet fires", ParameterWarning, stacklevel=2)
+
+
+def jet_throw(jet: Jet, mass: float, angle: float, across: float, height: float, beyond: float,
+              widest: float, g: float) -> tuple[float, float]:
+    """How fast [m/s] and how far [m] beyond the track's open side a jet can throw a part of
+    ``mass`` [kg] at most: its whole force on the part and nothing against it (no weight, no
+    friction) for its duration or until the part has crossed its block along the blow (``across``
+    from the far wall to the block's side, ``height`` its height [m]; the blow ``angle`` [deg]
+    up from horizontal), then a free flight from the block's top to a part below its bottom,
+    from the block's side ``beyond`` the open side."""
+    a = math.radians(angle)
+    path = min(across / max(math.cos(a), 1e-12), height / max(math.sin(a), 1e-12))
+    push = jet.force / mass
+    v = min(push * jet.duration, math.sqrt(2 * push * path))
+    up, out = v * math.sin(a), v * math.cos(a)
+    flight = (up + math.sqrt(up * up + 2 * g * (height + widest))) / g
+    return v, beyond + out * flight
 
 
 def jet_span(jet: Jet, sensing: float, size: float) -> tuple[float, float]:

@@ -53,7 +53,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..line import WIPER_LENGTH
 from ..mesh import MeshBuilder
-from .linear import _jet, check_jet, jet_span, sine_commands
+from .linear import _jet, check_jet, jet_span, jet_throw, sine_commands
 from .records import Camera, Drive, Gate, Jet, Part, Wiper, number
 
 KIND_CODE = 2  # s<k>_kind: 0 a linear section, 1 a chute, 2 a mesh
@@ -449,6 +449,16 @@ class MeshElement:
         top = c[2] + TOOL_TOP * self.part_size + self.drive.amp_n + part.widest
         return [(c - half_l * t, t), (c + half_l * t, -t), (c - half_w * n, n), (c + half_w * n, -n),
                 (np.array([c[0], c[1], bottom]), up), (np.array([c[0], c[1], top]), -up)]
+
+    def jet_throw(self, part: Part, mass: float, g: float = 9.81) -> tuple[float, float]:
+        """How fast [m/s] and how far beyond the track's side [m] the jet can throw a part of
+        ``mass`` [kg] at most (vibrofeed.feeders.linear.jet_throw), across its block from the
+        path's right wall."""
+        planes = self.jet_planes(part)
+        half = self.width / 2 + 2 * part.widest
+        height = float(planes[5][0][2] - planes[4][0][2])
+        return jet_throw(self.jet, mass, self.jet.angle, half + self.width / 2, height,
+                         half - self.width / 2, part.widest, g)
 
     def camera(self, part: Part, origin=(0.0, 0.0, 0.0)) -> Camera:
         """Where the driver senses parts for the jet (the element shifted by ``origin``): along

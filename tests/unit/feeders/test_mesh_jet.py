@@ -143,3 +143,47 @@ def test_a_mesh_jets_slips_are_one_line_naming_the_key(stl, change, words):
     with pytest.raises(ParameterError) as err:
         Feeder.from_values(values(stl, **change)).check()
     assert words in str(err.value) and "\n" not in str(err.value)
+
+
+def test_its_throw_is_bounded_by_its_block_and_duration(stl):
+    """Blowing straight across (angle 0) the bound is hand-computable, as a linear section's: the
+    whole force for the duration or across the block (the right wall to two part sizes past the
+    left one), then a fall from the block's top to a part below its bottom."""
+    from vibrofeed.feeders.mesh_element import TOOL_TOP
+
+    f = Feeder.from_values(values(stl, s2_jet_angle=0, s2_jet_duration=0.02))
+    e, part = f.elements[1], f.part
+    mass, g, w = 1e-8, 9.81, part.widest
+    across = 1.2e-3 + 2 * w
+    height = TOOL_TOP * part.size + 2 * 2e-5 + 2 * w  # the tools' top, the normal stroke both ways
+    push = 2e-6 / mass
+    speed = min(push * 0.02, (2 * push * across) ** 0.5)
+    fall = (2 * g * (height + w)) ** 0.5 / g
+    got = e.jet_throw(part, mass, g)
+    assert got[0] == pytest.approx(speed, rel=1e-12)
+    assert got[1] == pytest.approx(2 * w + speed * fall, rel=1e-12)
+
+
+def test_a_mesh_jet_that_would_throw_parts_past_what_check_accepts_is_warned_of(tmp_path, stl,
+                                                                                monkeypatch):
+    from vibrofeed.decks import Deck
+    from vibrofeed.errors import ParameterWarning
+    from vibrofeed.parameters import resolve
+
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    text = ('[parts]\nshape = "box"\nsize = 4e-4\nwidth = 3e-4\nthickness = 1e-4\n[supply]\nn_parts = 5\n'
+            '[[element]]\nkind = "linear"\nlength = 0.004\nwidth = 1.2e-3\n'
+            'drive = { freq = 100, amp_t = 3.5e-5, amp_n = 5e-5 }\n'
+            f'[[element]]\nkind = "mesh"\nfile = "{stl.name}"\nunit = "mm"\npath = {PLAN.tolist()}\n'
+            'width = 1.2e-3\nstep = 5e-5\ndrive = { freq = 100, amp_t = 1e-4, amp_n = 2e-5 }\n'
+            'jet = { force = FORCE, at = 0.3, keep = "up" }\n')
+    path = tmp_path / "f.toml"
+    path.write_text(text.replace("FORCE", "1e-3"))  # hundreds of weights
+    with pytest.warns(ParameterWarning, match=r"element\.2\.jet\.force=0\.001 N .* may throw"):
+        resolve(Deck.find(path), {})
+    import warnings
+
+    path.write_text(text.replace("FORCE", "1e-6"))  # a few weights: no word
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ParameterWarning)
+        resolve(Deck.find(path), {})
