@@ -2,13 +2,14 @@
 `vibrofeed run` against plain `liggghts -in` of the generated deck, side by side.
 
     .venv/bin/python benchmarks/bench_feeders.py [--feeder demo-line|bowl-line|orient-line]
-                                                 [--pairs 5] [--t-end 0.3]
+                                                 [--pairs 5] [--t-end 0.3] [--without-jet]
 
 The feeder is the demo line (feeders/demo_line.toml, the parameters of `vibrofeed demo`),
 the bowl with its exit line (feeders/bowl_line.toml, `vibrofeed demo --case bowl-line`) or
 the orientation line (feeders/orient_line.toml, `vibrofeed demo --case orient`: by hand its
-jet never fires and its rejects are not returned, `-var recirculate 0`), run for --t-end
-seconds of vibration on one rank. Each comparison runs its two commands in
+jet never fires and its rejects are not returned, `-var recirculate 0`; --without-jet: both
+runs without its jet and its returns, `s2_jet_force=0` and `recirculate=0`, the same physics),
+run for --t-end seconds of vibration on one rank. Each comparison runs its two commands in
 turn, A B A B ..., after one warm-up pair, as whole processes; it prints each command's
 median wall time and the median of the pairs' ratios A/B (a ratio pair by pair holds when
 the machine's speed drifts), as a Markdown table for BENCHMARKS.md:
@@ -74,6 +75,8 @@ def main() -> None:
     ap.add_argument("--pairs", type=int, default=5)
     ap.add_argument("--t-end", type=float, default=0.3)
     ap.add_argument("--feeder", choices=("demo-line", "bowl-line", "orient-line"), default="demo-line")
+    ap.add_argument("--without-jet", action="store_true",
+                    help="the orientation line without its jet and returns in both runs: the same physics")
     args = ap.parse_args()
     toml = ROOT / "feeders" / f"{args.feeder.replace('-', '_')}.toml"
     sys.path.insert(0, str(ROOT))
@@ -95,18 +98,20 @@ def main() -> None:
                     by_deck += ["-p", f"{name}={value}"]
             rows.append(("`vibrofeed run feeders/demo_line.toml` / `vibrofeed run bulk_feeder -p ...`",
                          paired(described, by_deck, args.pairs, tmp)))
+        same = ["-p", "s2_jet_force=0", "-p", "recirculate=0"] if args.without_jet else []
         line = subprocess.run(VIBROFEED + ["prepare", str(toml), "-o",
-                                           str(tmp / "prep"), "-p", t_end],
+                                           str(tmp / "prep"), "-p", t_end, *same],
                               check=True, capture_output=True, text=True).stdout.strip().splitlines()[-1]
         generated = shlex.split(line)[2]
         hand = shlex.split(line) + ["-log", "none", "-nocite", "-var", "dump_file",
                                     str(tmp / "d.dump")]
         if args.feeder == "orient-line":  # (the deck refuses recirculate=1 by hand)
             hand += ["-var", "recirculate", "0"]
-        driver = VIBROFEED + ["run", generated, "-q", "-o", "c.h5", "-p", t_end]
+        driver = VIBROFEED + ["run", generated, "-q", "-o", "c.h5", "-p", t_end, *same]
         rows.append(("`vibrofeed run` / `liggghts -in` of the generated deck",
                      paired(driver, hand, args.pairs, tmp / "prep")))
-    print(f"Machine: {machine()}; {toml.name}, {args.t_end:g} s of vibration, 1 rank, "
+    print(f"Machine: {machine()}; {toml.name}{' without its jet' if args.without_jet else ''}, "
+          f"{args.t_end:g} s of vibration, 1 rank, "
           f"{args.pairs} alternated pairs after a warm-up pair\n")
     print("| A / B | time | A (median) | B (median) | A/B median (min .. max) |")
     print("|---|---|---|---|---|")

@@ -18,6 +18,11 @@ positions and orientations:
   t + delay + duration] (t its crossing). The frame interval limits when a crossing is
   seen: a window that would start before the frame that sensed it starts at that frame
   instead, lasts ``duration`` and is counted **late**;
+* the jet's ``fix addforce`` is in place only while a window is pending: the driver removes
+  it (``unfix``) at the first frame and whenever every window is over, and gives the deck's
+  own line again with the next window. Its variables are evaluated at every step while it
+  is there, for every atom in ideal mode: idle, it would cost the run as much as the rest of
+  it (BENCHMARKS.md, "The orientation demo");
 * when there are new windows, the driver redefines ``s<k>_jet_on`` before the next run
   segment (the same commands on every rank: collective), pruning the windows already over:
   ``region`` mode, an equal-style sum of the windows merged where they overlap,
@@ -119,6 +124,8 @@ class Station:
     windows: list = field(default_factory=list)  # (start, end, body id, first atom, last atom)
     sensed: set = field(default_factory=set)
     along: object = None  # (n, 3) points -> (n,) coordinates [m]; None: x
+    fix: str = ""  # the deck's ``fix s<k>_jet ... addforce`` line ("": left as the deck has it)
+    placed: bool = True  # whether the fix is in place (the deck places it)
 
     def coordinate(self, points) -> np.ndarray:
         """Where ``points`` (n, 3) of the deck's frame are along what the camera senses [m]."""
@@ -159,15 +166,34 @@ class Station:
         return firings
 
     def commands(self, now: float) -> list[str]:
-        """The redefinition of ``s<k>_jet_on`` for the windows not over at ``now`` (pruned)."""
+        """The redefinition of ``s<k>_jet_on`` for the windows not over at ``now`` (pruned), and
+        the jet's fix placed again if it was removed; with no window left, the fix removed."""
         self.windows = [w for w in self.windows if w[1] > now]
+        if not self.windows and self.fix:
+            return self.idle()
         name = f"s{self.section}_jet_on"
         if self.mode == "ideal":
             bodies: dict[int, list] = {}
             for start, end, _, lo, hi in self.windows:
                 bodies.setdefault((lo, hi), []).append((start, end))
-            return [f"variable {name} atom {atom_expression((lo, hi, w) for (lo, hi), w in bodies.items())}"]
-        return [f"variable {name} equal {window_expression((s, e) for s, e, *_ in self.windows)}"]
+            out = [f"variable {name} atom {atom_expression((lo, hi, w) for (lo, hi), w in bodies.items())}"]
+        else:
+            out = [f"variable {name} equal {window_expression((s, e) for s, e, *_ in self.windows)}"]
+        if self.fix and not self.placed:
+            out.append(self.fix)
+            self.placed = True
+        return out
+
+    def idle(self) -> list[str]:
+        """The jet's fix removed if it is in place and no window is pending (none otherwise)."""
+        if not self.fix or not self.placed or self.windows:
+            return []
+        self.placed = False
+        return [f"unfix s{self.section}_jet"]
+
+    def over(self, now: float) -> bool:
+        """Whether the fix is in place with every window over at ``now``."""
+        return self.placed and all(w[1] <= now for w in self.windows)
 
 
 FIRING_COLUMNS = ("time", "id", "section", "state", "start", "end", "late")
@@ -209,9 +235,12 @@ class Jets:
             if j is None:
                 continue
             cam = e.camera(feeder.part, feeder.line_origin)
+            fix = next(line for line in e.jet_commands(feeder.part, feeder.line_origin)
+                       if line.startswith(f"fix s{e.number}_jet "))
             self.stations.append(Station(
                 section=e.number, x_sense=cam.at, keep=j.keep, delay=j.delay, duration=j.duration,
-                mode=j.mode, up=cam.up, tangent=cam.tangent, z_floor=cam.z_floor, along=cam.along))
+                mode=j.mode, up=cam.up, tangent=cam.tangent, z_floor=cam.z_floor, along=cam.along,
+                fix=fix))
         self.ideal = any(s.mode == "ideal" for s in self.stations)
         self.use_template(template)
         self._prev = None  # (time, {"id", "position", "orientation"}) of the last frame, rank 0
@@ -232,7 +261,7 @@ class Jets:
             for s in self.stations:
                 new = s.sense(prev[0], prev[1], t, parts, atoms) if prev is not None else []
                 firings += new
-                if new:
+                if new or s.over(t):  # (new windows; or every window over: the fix removed)
                     commands += s.commands(t)
             ids = np.asarray(parts["id"], dtype=np.int64)
             x = np.asarray(parts["position"], dtype=float).reshape(-1, 3)

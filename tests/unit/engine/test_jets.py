@@ -117,17 +117,24 @@ class OneRank:
     size = 1
 
 
-def test_the_line_s_jets_give_commands_only_when_a_firing_is_new():
-    jets = Jets(Feeder.from_values(LINE))
+def test_the_line_s_jets_give_commands_only_when_a_firing_is_new_and_place_the_fix_only_then():
+    feeder = Feeder.from_values(LINE)
+    jets = Jets(feeder)
     (s,) = jets.stations
     assert s.x_sense == pytest.approx(2e-3 + 0.3 * 3e-3, rel=0, abs=1e-15) and s.section == 2
+    # the deck's own fix line, which the driver removes while no window is pending
+    fix = next(line for line in feeder.elements[1].jet_commands(feeder.part) if line.startswith("fix "))
+    assert s.fix == fix == "fix s2_jet all addforce 0 v_s2_jet_fy v_s2_jet_fz region s2_jet"
     x = s.x_sense
-    assert jets.step(OneRank(), 0.0, frame([1], [x - 1e-4], [DOWN])) == ([], None)
+    assert jets.step(OneRank(), 0.0, frame([1], [x - 1e-4], [DOWN])) == (["unfix s2_jet"], None)
     commands, table = jets.step(OneRank(), 0.005, frame([1], [x + 1e-4], [DOWN]))
     # crossed at 2.5 ms, due at once (delay 0): late, it fires from the frame that saw it
-    assert commands == ["variable s2_jet_on equal (time>=0.005)*(time<0.015)"]
+    assert commands == ["variable s2_jet_on equal (time>=0.005)*(time<0.015)", fix]
     assert table["id"].tolist() == [1] and table["state"].tolist() == [1] and table["late"].tolist() == [1]
-    assert jets.step(OneRank(), 0.01, frame([1], [x + 2e-4], [DOWN])) == ([], None)
+    assert jets.step(OneRank(), 0.01, frame([1], [x + 2e-4], [DOWN])) == ([], None)  # still firing
+    # its window over at 15 ms: removed at the frame that sees it so, once
+    assert jets.step(OneRank(), 0.015, frame([1], [x + 3e-4], [DOWN])) == (["unfix s2_jet"], None)
+    assert jets.step(OneRank(), 0.02, frame([1], [x + 4e-4], [DOWN])) == ([], None)
 
 
 def jet(**kw):

@@ -119,13 +119,14 @@ def test_the_driver_senses_a_part_crossing_the_camera_along_the_path(stl):
         return {"id": np.asarray(ids), "position": start + np.outer(arcs, leg),
                 "orientation": np.asarray(q, dtype=float).reshape(len(ids), 4)}
 
-    assert jets.step(None, 0.0, frame([1, 2], [2.5e-3, 2.4e-3], [DOWN, UP])) == ([], None)
+    assert jets.step(None, 0.0, frame([1, 2], [2.5e-3, 2.4e-3], [DOWN, UP])) == (["unfix s2_jet"], None)
     # both cross 2.6 mm down the leg between 0 and 10 ms, lengthwise along it: the face-down one
     # is fired at, at its crossing (2.5 -> 2.7 mm: halfway, 5 ms), the face-up one is not (its
     # long axis 37 degrees off x: judged along the path, not along x)
     commands, table = jets.step(None, 0.01, frame([1, 2], [2.7e-3, 2.8e-3], [DOWN, UP]))
     assert table["id"].tolist() == [1] and table["time"] == pytest.approx([0.005], abs=1e-12)
-    assert commands and commands[0].startswith("variable s2_jet_on atom")
+    assert commands[0].startswith("variable s2_jet_on atom")
+    assert commands[1] == "fix s2_jet all addforce v_s2_jet_fx v_s2_jet_fy v_s2_jet_fz region s2_jet"
     # their x (10.0 -> 10.16 mm) never reaches the camera's path coordinate (10.6 mm): sensed
     # along x, as on a straight section, neither would have crossed
     assert start[0] + 2.8e-3 * 0.8 < s.x_sense
