@@ -148,7 +148,7 @@ class LinearSection:
                 wiper = Wiper(height=get(("wiper", "height")), at=get(("wiper", "at"), 0.5),
                               length=WIPER_LENGTH * (part.size if part else number(values, "part_size")),
                               skew=get(("wiper", "skew"), 0.0))
-            jet = _jet(values, k, get, part)
+            jet = read_jet(values, k, get, part)
         return cls(number=k, x0=x0, length=get(("length",)), width=get(("width",)),
                    wall_height=get(("wall_height",)), drive=drive, cross_tilt=get(("cross_tilt",), 0.0),
                    step=step, level=level + step, gate=gate, side_drop=side_drop, wiper=wiper,
@@ -540,9 +540,10 @@ def thinnest(part: Part) -> float:
     return part.size * (1 - part.size_spread) if part.shape == 0 else part.thickness
 
 
-def _jet(values: Mapping, k: int, get, part: Part | None = None) -> Jet | None:
-    """Section ``k``'s jet from the deck's parameters (none where ``s<k>_jet_force`` is 0 or
-    absent); its words read here (one-line ParameterError naming the parameter). A keep of
+def read_jet(values: Mapping, k: int, get, part: Part | None = None) -> Jet | None:
+    """Element ``k``'s jet (a linear section's or a mesh element's) from the deck's parameters
+    (none where ``s<k>_jet_force`` is 0 or absent); its words read here (one-line ParameterError
+    naming the parameter). A keep of
     :data:`KEEP_CORRECT` (the deck's default) is the part's correct state (``part.correct``,
     else the parameter ``correct`` read here); an explicit keep wins over it."""
     force = get(("jet", "force"), 0.0)

@@ -53,7 +53,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..line import WIPER_LENGTH
 from ..mesh import MeshBuilder
-from .linear import _jet, check_jet, jet_span, jet_throw, sine_commands
+from .linear import check_jet, jet_span, jet_throw, read_jet, sine_commands
 from .records import Camera, Drive, Gate, Jet, Part, Wiper, number
 
 KIND_CODE = 2  # s<k>_kind: 0 a linear section, 1 a chute, 2 a mesh
@@ -165,7 +165,7 @@ class MeshElement:
                       amp_n=get(("drive", "amp_n")), phase=get(("drive", "phase"), 0.0))
         return cls(number=k, x0=x0, file=str(values[deck_name(k, ("file",))]), unit=get(("unit",)),
                    path=tuple(flat), width=get(("width",)), drive=drive, step=step, level=level + step,
-                   gate=gate, wiper=wiper, jet=_jet(values, k, get, part), part_size=size)
+                   gate=gate, wiper=wiper, jet=read_jet(values, k, get, part), part_size=size)
 
     # ---------------------------------------------------------------- the path
     @cached_property
