@@ -281,6 +281,20 @@ def write_trial(path, n=300, sigma=5e-6, seed=0, placeholder=PLACEHOLDER, mutate
     return path
 
 
+# A detour from CAD, in millimetres: its floor's centre line with legs of 4, 5, 4, 5 and 4 mm, 22
+# mm of path for 20 along x, ending where it started across, heading +x.
+DETOUR = np.array([(0, 0, 0), (4, 0, 0), (8, 3, 0), (12, 3, 0), (16, 0, 0), (20, 0, 0)], dtype=float)
+
+
+def detour_stl(folder) -> Path:
+    """The :data:`DETOUR` channel, 1.2 mm wide with walls 1 mm high, as folder/detour.stl."""
+    from vibrofeed.mesh import write_stl
+
+    path = Path(folder) / "detour.stl"
+    write_stl(*channel(DETOUR, 1.2, 1.0), path, "detour")
+    return path
+
+
 def channel(points, width, wall, holes=(), flipped=()):
     """An open channel along a polyline in plan (points (N, 3), any unit): its floor, two strips
     either side of the path, and two walls ``wall`` high, mitred at the corners, open at both

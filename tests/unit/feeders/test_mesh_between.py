@@ -12,7 +12,7 @@ import math
 import numpy as np
 import pytest
 
-from helpers import channel
+from helpers import DETOUR, channel, detour_stl
 from vibrofeed.errors import ParameterError
 from vibrofeed.feeders import Feeder
 from vibrofeed.feeders.deck import line_files
@@ -20,16 +20,14 @@ from vibrofeed.feeders.description import read
 from vibrofeed.feeders.mesh_element import TOOL_SINK, TOOL_TOP, path_text
 from vibrofeed.mesh import write_stl
 
-PLAN = np.array([(0, 0, 0), (4, 0, 0), (8, 3, 0), (12, 3, 0), (16, 0, 0), (20, 0, 0)], dtype=float)
+PLAN = DETOUR
 FLOOR = -5e-5  # the detour's floor [m]
 SIZE = 3e-4  # the parts' size [m]
 
 
 @pytest.fixture
 def stl(tmp_path):
-    path = tmp_path / "detour.stl"
-    write_stl(*channel(PLAN, 1.2, 1.0), path, "detour")
-    return path
+    return detour_stl(tmp_path)
 
 
 def values(stl, **more):

@@ -13,14 +13,13 @@ import math
 import numpy as np
 import pytest
 
-from helpers import channel
+from helpers import DETOUR, detour_stl
 from vibrofeed.engine.jets import Jets
 from vibrofeed.errors import ParameterError
 from vibrofeed.feeders import Feeder
 from vibrofeed.feeders.mesh_element import KEYS, deck_name, path_text
-from vibrofeed.mesh import write_stl
 
-PLAN = np.array([(0, 0, 0), (4, 0, 0), (8, 3, 0), (12, 3, 0), (16, 0, 0), (20, 0, 0)], dtype=float)
+PLAN = DETOUR
 FLOOR = -5e-5
 BOX = {"shape": 3, "part_size": 4e-4, "part_width": 3e-4, "part_thickness": 1e-4}
 # lengthwise on the leg (4, 3)/5, turned 36.87 degrees about z: marked face (+z) up, or turned
@@ -33,9 +32,7 @@ TOL = 1e-12
 
 @pytest.fixture
 def stl(tmp_path):
-    path = tmp_path / "detour.stl"
-    write_stl(*channel(PLAN, 1.2, 1.0), path, "detour")
-    return path
+    return detour_stl(tmp_path)
 
 
 def values(stl, **more):
