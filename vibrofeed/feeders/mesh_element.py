@@ -439,14 +439,15 @@ class MeshElement:
         """The jet's block as six half-spaces (a point on each plane, its normal into the block)
         in the element's frame: along the path over :meth:`jet_span`, across the track and two
         parts beyond each wall, from below the path's floor there (by the normal amplitude and a
-        part) to a part above the tools' top (LIGGGHTS' blocks are axis-aligned: this one is
-        turned with the path)."""
+        part) to a part above its walls' top there or the tools' top, the higher (LIGGGHTS'
+        blocks are axis-aligned: this one is turned with the path)."""
         lo, hi = self.jet_span(part.size)
         c, t, n = self.jet_frame(part.size)
         half_l, half_w = (hi - lo) / 2, self.width / 2 + 2 * part.widest
         up = np.array([0.0, 0.0, 1.0])
         bottom = c[2] - self.drive.amp_n - part.widest
-        top = c[2] + TOOL_TOP * self.part_size + self.drive.amp_n + part.widest
+        top = max(c[2] + TOOL_TOP * self.part_size, self.height_across(c, t, half_w)) \
+            + self.drive.amp_n + part.widest
         return [(c - half_l * t, t), (c + half_l * t, -t), (c - half_w * n, n), (c + half_w * n, -n),
                 (np.array([c[0], c[1], bottom]), up), (np.array([c[0], c[1], top]), -up)]
 
@@ -459,6 +460,19 @@ class MeshElement:
         height = float(planes[5][0][2] - planes[4][0][2])
         return jet_throw(self.jet, mass, self.jet.angle, half + self.width / 2, height,
                          half - self.width / 2, part.widest, g)
+
+    def height_across(self, point, tangent, half: float) -> float:
+        """The highest point of the placed mesh [m] in the vertical plane across the path through
+        ``point`` (normal ``tangent``), within ``half`` [m] of it across: its walls' top there
+        (the plane's height at ``point`` where nothing of the mesh is cut)."""
+        import trimesh
+
+        cut = trimesh.intersections.mesh_plane(self.placed, plane_normal=tangent, plane_origin=point)
+        if not len(cut):
+            return float(point[2])
+        q = cut.reshape(-1, 3)
+        near = np.abs((q - point) @ np.array([-tangent[1], tangent[0], 0.0])) <= half
+        return float(q[near, 2].max()) if near.any() else float(point[2])
 
     def camera(self, part: Part, origin=(0.0, 0.0, 0.0)) -> Camera:
         """Where the driver senses parts for the jet (the element shifted by ``origin``): along

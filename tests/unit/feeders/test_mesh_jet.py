@@ -80,6 +80,12 @@ def test_its_block_is_turned_with_the_path_at_the_camera(stl):
         assert not within(face + 1e-6 * way + [0, 0, 1e-4]), name
     bottom = c[2] - e.drive.amp_n - part.widest
     assert within(np.array([c[0], c[1], bottom + 1e-7])) and not within(np.array([c[0], c[1], bottom - 1e-7]))
+    # its top a part above the channel's walls (1 mm: higher than the tools' two part sizes,
+    # 0.8 mm), so that a part blown up is pushed until it clears them
+    top = FLOOR + 1e-3 + e.drive.amp_n + part.widest
+    assert planes[5][0][2] == pytest.approx(top, abs=1e-12)
+    assert e.height_across(c, t, 0.6e-3) == pytest.approx(FLOOR + 1e-3, abs=1e-12)
+    assert e.height_across(c, t, 0.5e-3) == pytest.approx(FLOOR, abs=1e-12)  # the floor only
     a = math.radians(60)
     assert np.allclose(e.jet_direction(), [-0.6 * math.cos(a), 0.8 * math.cos(a), math.sin(a)], rtol=0,
                        atol=1e-15)
@@ -147,13 +153,11 @@ def test_its_throw_is_bounded_by_its_block_and_duration(stl):
     """Blowing straight across (angle 0) the bound is hand-computable, as a linear section's: the
     whole force for the duration or across the block (the right wall to two part sizes past the
     left one), then a fall from the block's top to a part below its bottom."""
-    from vibrofeed.feeders.mesh_element import TOOL_TOP
-
     f = Feeder.from_values(values(stl, s2_jet_angle=0, s2_jet_duration=0.02))
     e, part = f.elements[1], f.part
     mass, g, w = 1e-8, 9.81, part.widest
     across = 1.2e-3 + 2 * w
-    height = TOOL_TOP * part.size + 2 * 2e-5 + 2 * w  # the tools' top, the normal stroke both ways
+    height = 1e-3 + 2 * 2e-5 + 2 * w  # the walls (1 mm), the normal stroke both ways, a part
     push = 2e-6 / mass
     speed = min(push * 0.02, (2 * push * across) ** 0.5)
     fall = (2 * g * (height + w)) ** 0.5 / g
