@@ -386,16 +386,20 @@ def _prepare_output(output) -> tuple[Path, Path, Path]:
 
 
 def _frames_in(path: Path) -> tuple[int, int | None, float | None]:
-    """(frames, last step, last time) held by a result file; (0, None, None) if unreadable."""
+    """(frames, last step, last time) held by a result file; (0, None, None) if unreadable. A
+    frame counts once its step, its time and its positions are all written: a disk that filled
+    up between them leaves the datasets a frame apart."""
     try:
         import h5py
 
         # No lock: a rank that outlived its group's kill may still hold the file open.
         with h5py.File(path, "r", locking=False) as f:
-            step = f[f"{L.PARTS}/position/step"]
-            if len(step) == 0:
+            position = f[f"{L.PARTS}/position"]
+            step, time = position["step"], position["time"]
+            n = min(len(step), len(time), len(position["value"]))
+            if n == 0:
                 return 0, None, None
-            return len(step), int(step[-1]), float(f[f"{L.PARTS}/position/time"][-1])
+            return n, int(step[n - 1]), float(time[n - 1])
     except (OSError, KeyError):
         return 0, None, None
 
