@@ -138,7 +138,13 @@ class Section:
         """The wiper's footprint along x: its upstream face at the reference wall, and the end
         of its bar at the far wall (a skewed bar's run across included)."""
         a = self.x0 + self.wiper_at * self.length
-        return a, a + self.wiper_length + self.wiper_run
+        return a, a + self.wiper_reach
+
+    @property
+    def wiper_reach(self) -> float:
+        """How far along x the wiper reaches from its upstream face at the reference wall [m]: its
+        bar's length and a skewed bar's run across."""
+        return self.wiper_length + self.wiper_run
 
     @property
     def wiper_run(self) -> float:

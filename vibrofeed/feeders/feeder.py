@@ -376,7 +376,7 @@ class Feeder:
                     a = e.x0 + tool.at * e.length
                     z = a + float(getattr(tool, "length", 0.0) or 0.0)
                     if attr == "wiper" and tool.skew:  # its bar runs on across the track
-                        z = a + tool.reach(e.width_at(tool.at))
+                        z = a + e.wiper_reach
                     if attr == "gate":  # its walls narrow at 45 degrees to its width
                         z = min(a + max(tool.taper(getattr(e, "width", 0.0)), 0.0), e.x0 + e.length)
                 kind = getattr(tool, "kind", attr)

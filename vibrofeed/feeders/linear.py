@@ -165,10 +165,11 @@ class LinearSection:
         """The width parts leave the section through (the gate's, if it has one)."""
         return self.gate.width if self.gate else self.width
 
-    def width_at(self, at: float) -> float:
-        """The width between its walls at ``at`` (a fraction of its length) [m]: a gate's taper
-        narrows them."""
-        return 2 * float(self.mesh_section().half_width(self.x0 + at * self.length))
+    @property
+    def wiper_reach(self) -> float:
+        """How far along the track its wiper reaches from its upstream face at the reference wall
+        [m]: its bar's length, and a skewed bar's run across (vibrofeed.line.Section)."""
+        return self.mesh_section().wiper_reach
 
     def floor_z(self, y):
         """Height of the floor at rest at ``y`` [m] (module docstring)."""
@@ -341,7 +342,7 @@ class LinearSection:
                 raise ParameterError(f"{n(('wiper', 'height'))}={w.height:g} m is not below the walls "
                                      f"({n(('wall_height',))}={self.wall_height:g} m): the wiper would "
                                      "not exist")
-            reach = w.reach(self.width_at(w.at))
+            reach = self.wiper_reach
             if not 0 <= w.at or w.at * self.length + reach > self.length:
                 raise ParameterError(f"{n(('wiper', 'at'))}={w.at:g}: the wiper's bar ({reach:g} m "
                                      f"along the track) runs past {end}; lower {n(('wiper', 'at'))}")
@@ -368,7 +369,7 @@ class LinearSection:
         if self.slot is not None:
             self._check_slot(part)
         if self.jet is not None:
-            self.check_jet(part)
+            check_jet(self, part)
 
     def check_gate(self, part: Part, end: str) -> None:
         """The section's gate, on any section: a part passes it (a box riding lengthwise), its
@@ -419,7 +420,7 @@ class LinearSection:
                           self.side_drop.end * self.length))
         if self.wiper is not None:
             w0 = self.wiper.at * self.length
-            spans.append(("wiper", ("wiper", "at"), w0, w0 + self.wiper.reach(self.width_at(self.wiper.at))))
+            spans.append(("wiper", ("wiper", "at"), w0, w0 + self.wiper_reach))
         for tool, key, t0, t1 in spans:
             if a < self.x0 + t1 and self.x0 + t0 < b:
                 raise ParameterError(f"{frm}={s.start:g}, {to}={s.end:g}: the slot overlaps the {tool} "
@@ -452,10 +453,6 @@ class LinearSection:
                  "part lying flat against the wall has its centre over the slot and tips in; "
                  "lying flat, only a part crosswise bridges it (keep it below half the width)")
 
-
-    def check_jet(self, part: Part) -> None:
-        """The jet (:func:`check_jet`)."""
-        check_jet(self, part)
 
 
 class SlotWarning(UserWarning):

@@ -222,11 +222,6 @@ class Wiper:
     length: float = 0.0
     skew: float = 0.0
 
-    def reach(self, width: float) -> float:
-        """How far along the path the bar reaches from its upstream face at the reference wall
-        [m], across a track ``width`` wide: its length, and its skew's run across."""
-        return self.length + width * math.tan(math.radians(self.skew))
-
 
 JET_MODES = ("region", "ideal")
 

@@ -85,7 +85,8 @@ def test_the_key_its_deck_name_and_its_station():
     f = Feeder.from_values(LINE)
     f.check()
     w = f.elements[1].wiper
-    assert w.skew == 60.0 and w.reach(1e-3) == pytest.approx(1e-3 + 1e-3 * math.sqrt(3), rel=1e-15)
+    assert w.skew == 60.0
+    assert f.elements[1].wiper_reach == pytest.approx(1e-3 + 1e-3 * math.sqrt(3), rel=1e-15)
     (station,) = [st for st in f.stations if st.kind == "wiper"]
     start = 5e-3 + 0.25 * 4e-3
     assert station.start == pytest.approx(start, rel=0, abs=TOL)
