@@ -235,12 +235,10 @@ class Jets:
             if j is None:
                 continue
             cam = e.camera(feeder.part, feeder.line_origin)
-            fix = next(line for line in e.jet_commands(feeder.part, feeder.line_origin)
-                       if line.startswith(f"fix s{e.number}_jet "))
             self.stations.append(Station(
                 section=e.number, x_sense=cam.at, keep=j.keep, delay=j.delay, duration=j.duration,
                 mode=j.mode, up=cam.up, tangent=cam.tangent, z_floor=cam.z_floor, along=cam.along,
-                fix=fix))
+                fix=e.jet_fix()))
         self.ideal = any(s.mode == "ideal" for s in self.stations)
         self.use_template(template)
         self._prev = None  # (time, {"id", "position", "orientation"}) of the last frame, rank 0

@@ -307,9 +307,15 @@ class LinearSection:
             f"variable {s}_jet_on {style} 0",
             f"variable {s}_jet_fy {style} v_{s}_jet_on*$({share}*cos({angle}))",
             f"variable {s}_jet_fz {style} v_{s}_jet_on*$({share}*sin({angle}))",
-            f"fix {s}_jet all addforce 0 v_{s}_jet_fy v_{s}_jet_fz region {s}_jet",
+            self.jet_fix(),
             f'if "${{driver}} == 0" then "print \'WARNING: the air jet of section {self.number} is '
             "inactive in a run by hand: only vibrofeed run senses the parts it fires at'\""]
+
+    def jet_fix(self) -> str:
+        """The jet's ``fix addforce`` (:meth:`jet_commands`; the driver removes and places it again,
+        vibrofeed.engine.jets)."""
+        s = f"s{self.number}"
+        return f"fix {s}_jet all addforce 0 v_{s}_jet_fy v_{s}_jet_fz region {s}_jet"
 
     def name(self, key: tuple[str, ...]) -> str:
         """The deck name of ``key`` on this section (for messages)."""

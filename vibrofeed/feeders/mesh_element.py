@@ -509,9 +509,15 @@ class MeshElement:
             f"variable {s}_jet_fx {style} v_{s}_jet_on*$({share}*cos({angle})*{float(left[0])!r})",
             f"variable {s}_jet_fy {style} v_{s}_jet_on*$({share}*cos({angle})*{float(left[1])!r})",
             f"variable {s}_jet_fz {style} v_{s}_jet_on*$({share}*sin({angle}))",
-            f"fix {s}_jet all addforce v_{s}_jet_fx v_{s}_jet_fy v_{s}_jet_fz region {s}_jet",
+            self.jet_fix(),
             f'if "${{driver}} == 0" then "print \'WARNING: the air jet of element {self.number} is '
             "inactive in a run by hand: only vibrofeed run senses the parts it fires at'\""]
+
+    def jet_fix(self) -> str:
+        """The jet's ``fix addforce`` (:meth:`jet_commands`; the driver removes and places it again,
+        vibrofeed.engine.jets)."""
+        s = f"s{self.number}"
+        return f"fix {s}_jet all addforce v_{s}_jet_fx v_{s}_jet_fy v_{s}_jet_fz region {s}_jet"
 
     # ---------------------------------------------------------------- the deck
     def name(self, key) -> str:
