@@ -97,6 +97,7 @@ from ..errors import InputError, ParameterError
 from ..results import layout as L
 from .base import AnalysisBase
 from .line import (
+    BOWL_SECTIONS,
     DRIFT_MIN_BATCHES,
     TOOLING,
     batch_cuts,
@@ -138,8 +139,6 @@ SUMMARY_KEYS = ("parts_per_s", "parts_per_s_err", "mass_per_s", "mass_per_s_err"
 LINE_KEYS = ("rejected", "returned", "sections", "rejects_by_tooling")
 # Summary keys of bowls, not of a single track (sections: also a line's).
 BOWL_KEYS = ("sections", "rejects_by_tooling", "fell", "fell_per_s", "fell_per_s_err")
-# A bowl's two sections along its path (its summary's ``sections``, each with a ``name``).
-BOWL_SECTIONS = ("helix", "chute")
 
 # Parameters the single-part model needs from the deck (the rest have defaults).
 MODEL_NEEDS = ("freq", "mu", "restitution")

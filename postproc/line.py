@@ -239,6 +239,11 @@ def drifts(first: float, last: float, error: float) -> bool:
     return change > DRIFT_SIGMAS * error and change > 1e-9 * max(abs(first), abs(last))
 
 
+# A bowl's two sections along its path (the feed-rate summary's ``sections``, each with a
+# ``name``; its exit line's elements after them are named s<k>).
+BOWL_SECTIONS = ("helix", "chute")
+
+
 def trend(section: int, quantity: str, series, name: str | None = None) -> list[dict]:
     """[{section, quantity, first, last, error, drifts}] of a bed's batch series (SI units),
     as :func:`drift` finds it, and the section's ``name`` where it has one (a bowl's helix and
@@ -268,7 +273,7 @@ def unsteady(trends) -> str | None:
         name, scale, unit = _SAID[t["quantity"]]
         way = "rises" if t["last"] > t["first"] else "falls"
         limit = DRIFT_SIGMAS * t["error"] * scale
-        where = (f"the {t['name']}" if t["name"] in ("helix", "chute") else t["name"]) if t.get("name") \
+        where = (f"the {t['name']}" if t["name"] in BOWL_SECTIONS else t["name"]) if t.get("name") \
             else f"section {t['section']}"
         said.append(f"{name} on {where} {way} {t['first'] * scale:.1f} -> "
                     f"{t['last'] * scale:.1f} {unit} over the window (more than {DRIFT_SIGMAS:g} "

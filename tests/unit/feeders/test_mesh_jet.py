@@ -87,8 +87,8 @@ def test_its_block_is_turned_with_the_path_at_the_camera(stl):
     assert e.height_across(c, t, 0.6e-3) == pytest.approx(FLOOR + 1e-3, abs=1e-12)
     assert e.height_across(c, t, 0.5e-3) == pytest.approx(FLOOR, abs=1e-12)  # the floor only
     a = math.radians(60)
-    assert np.allclose(e.jet_direction(), [-0.6 * math.cos(a), 0.8 * math.cos(a), math.sin(a)], rtol=0,
-                       atol=1e-15)
+    want = [-0.6 * math.cos(a), 0.8 * math.cos(a), math.sin(a)]  # a unit vector, to 1e-15
+    assert np.allclose(e.jet_direction(), want, rtol=0, atol=1e-15)
 
 
 def test_its_deck_commands_are_six_planes_their_intersection_and_the_turned_force(stl):
