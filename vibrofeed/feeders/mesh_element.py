@@ -435,6 +435,11 @@ class MeshElement:
         d = math.cos(a) * left + [0.0, 0.0, math.sin(a)]
         return tuple(float(c) for c in d)
 
+    def jet_half_across(self, part: Part) -> float:
+        """How far the jet's block reaches to either side of the path [m]: the walls and two parts
+        beyond each."""
+        return self.width / 2 + 2 * part.widest
+
     def jet_planes(self, part: Part) -> list[tuple[np.ndarray, np.ndarray]]:
         """The jet's block as six half-spaces (a point on each plane, its normal into the block)
         in the element's frame: along the path over :meth:`jet_span`, across the track and two
@@ -443,7 +448,7 @@ class MeshElement:
         blocks are axis-aligned: this one is turned with the path)."""
         lo, hi = self.jet_span(part.size)
         c, t, n = self.jet_frame(part.size)
-        half_l, half_w = (hi - lo) / 2, self.width / 2 + 2 * part.widest
+        half_l, half_w = (hi - lo) / 2, self.jet_half_across(part)
         up = np.array([0.0, 0.0, 1.0])
         bottom = c[2] - self.drive.amp_n - part.widest
         top = max(c[2] + TOOL_TOP * self.part_size, self.height_across(c, t, half_w)) \
@@ -456,7 +461,7 @@ class MeshElement:
         ``mass`` [kg] at most (vibrofeed.feeders.linear.jet_throw), across its block from the
         path's right wall."""
         planes = self.jet_planes(part)
-        half = self.width / 2 + 2 * part.widest
+        half = self.jet_half_across(part)
         height = float(planes[5][0][2] - planes[4][0][2])
         return jet_throw(self.jet, mass, self.jet.angle, half + self.width / 2, height,
                          half - self.width / 2, part.widest, g)
