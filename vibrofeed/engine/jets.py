@@ -15,9 +15,11 @@ positions and orientations:
   analyses read it; tangent the path's direction there, up the floor's normal) at the
   frame nearer the crossing;
 * a part sensed **not** in the state the jet keeps gets a **firing window** [t + delay,
-  t + delay + duration] (t its crossing). The frame interval limits when a crossing is
-  seen: a window that would start before the frame that sensed it starts at that frame
-  instead, lasts ``duration`` and is counted **late**;
+  t + delay + duration] (t its crossing); so does one in that state sensed less than the
+  jet's ``headway`` after the last part it let pass (a jet that spaces the stream: the
+  parts crossing between two frames are taken in the order they crossed). The frame
+  interval limits when a crossing is seen: a window that would start before the frame that
+  sensed it starts at that frame instead, lasts ``duration`` and is counted **late**;
 * the jet's ``fix addforce`` is in place only while a window is pending: the driver removes
   it (``unfix``) at the first frame and whenever every window is over, and gives the deck's
   own line again with the next window. Its variables are evaluated at every step while it
@@ -105,11 +107,11 @@ def atom_expression(targets) -> str:
 
 @dataclass
 class Station:
-    """One jet (section ``section``): where it senses (``x_sense``: along the coordinate ``along``
-    gives a point of the deck's frame, its x if None; an element's
-    vibrofeed.feeders.records.Camera), what it keeps, its delay, duration and mode, the floor's
-    ``up`` and the path's ``tangent``, and the part's lowest centre over the section
-    (``z_floor``: below it a part is falling)."""
+    """One jet (of element ``section``: its deck names ``s<k>_jet_*``): where it senses
+    (``x_sense``: along the coordinate ``along`` gives a point of the deck's frame, its x if
+    None; an element's vibrofeed.feeders.records.Camera), what it keeps, its delay, duration
+    and mode, the floor's ``up`` and the path's ``tangent``, and the part's lowest centre over
+    the section (``z_floor``: below it a part is falling)."""
 
     section: int
     x_sense: float
@@ -126,6 +128,9 @@ class Station:
     along: object = None  # (n, 3) points -> (n,) coordinates [m]; None: x
     fix: str = ""  # the deck's ``fix s<k>_jet ... addforce`` line ("": left as the deck has it)
     placed: bool = True  # whether the fix is in place (the deck places it)
+    headway: float = 0.0  # [s] a part sensed sooner after the last one passed is fired at too
+    path_section: int = 0  # the path section (1-based) it is on, as recorded (0: ``section``)
+    passed: float = -math.inf  # when the last part passed was sensed [s]
 
     def coordinate(self, points) -> np.ndarray:
         """Where ``points`` (n, 3) of the deck's frame are along what the camera senses [m]."""
@@ -144,7 +149,8 @@ class Station:
         ids = np.asarray(parts["id"], dtype=np.int64)
         q1 = np.asarray(parts["orientation"], dtype=float).reshape(-1, 4)
         firings = []
-        for i, t, first in zip(hit, when, nearer_first):
+        order = np.argsort(when, kind="stable")  # in the order they crossed: the headway's
+        for i, t, first in zip(hit[order], when[order], nearer_first[order]):
             pid = int(ids[i])
             if pid in self.sensed or x1[i, 2] < self.z_floor:
                 continue
@@ -154,7 +160,8 @@ class Station:
                 j = np.nonzero(prev["id"] == pid)[0]
                 q = prev["orientation"][j[0]] if len(j) else q
             states = turned_states(q[None, :], self.axes_q, self.tangent, self.up)
-            if self.keep.of(states)[0]:
+            if self.keep.of(states)[0] and t - self.passed >= self.headway:
+                self.passed = float(t)
                 continue
             start, late = t + self.delay, False
             if start < t1:
@@ -162,7 +169,8 @@ class Station:
             end = start + self.duration
             lo, hi = (atoms or {}).get(pid, (-1, -1))
             self.windows.append((start, end, pid, lo, hi))
-            firings.append((float(t), pid, self.section, int(states.state[0]), start, end, late))
+            firings.append((float(t), pid, self.path_section or self.section, int(states.state[0]),
+                            start, end, late))
         return firings
 
     def commands(self, now: float) -> list[str]:
@@ -230,6 +238,9 @@ class Jets:
 
     def __init__(self, feeder, template=None):
         self.stations = []
+        # the path section each element's jet is on (after a bowl's helix and chute, not its
+        # element's number): what the rejects are recorded by
+        on = {st.element: st.section for st in feeder.stations if st.kind == "jet"}
         for e in feeder.further_elements:
             j = getattr(e, "jet", None)
             if j is None:
@@ -238,7 +249,7 @@ class Jets:
             self.stations.append(Station(
                 section=e.number, x_sense=cam.at, keep=j.keep, delay=j.delay, duration=j.duration,
                 mode=j.mode, up=cam.up, tangent=cam.tangent, z_floor=cam.z_floor, along=cam.along,
-                fix=e.jet_fix()))
+                fix=e.jet_fix(), headway=j.headway, path_section=on[e.number]))
         self.ideal = any(s.mode == "ideal" for s in self.stations)
         self.use_template(template)
         self._prev = None  # (time, {"id", "position", "orientation"}) of the last frame, rank 0

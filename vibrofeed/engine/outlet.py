@@ -127,15 +127,20 @@ class LineOutlet(Outlet):
     counted on a section once its centre is past the section's start by its reach (a part
     tumbling off at a joint, its centre swung under the next section's edge, fell from the
     section before; where no frame saw it above the plane, where it crossed the plane).
+    A part below the plane past the edge but outside ``band`` (y from, to [m]:
+    vibrofeed.feeders.Feeder.exit_band, the walls at the edge and a part either way; None:
+    not judged) did not leave over the edge either: it was blown or fell off a side near the
+    end and flew on past it, a reject too.
 
     ``step(time, parts, inserted)`` returns (outlet events, reject events with their
     ``section`` (1-based), counts with ``rejected``): inserted = on_track + exited +
     rejected + lost.
     """
 
-    def __init__(self, outlet_x: float, catch_z: float, gravity, section_x):
+    def __init__(self, outlet_x: float, catch_z: float, gravity, section_x, band=None):
         super().__init__(outlet_x, catch_z, gravity)
         self.section_x = np.asarray(section_x, dtype=float)
+        self.band = None if band is None else (float(band[0]), float(band[1]))
         self.rejected = np.empty(0, dtype=np.int64)  # ids with a reject event, sorted
         self.reject_times = np.empty(0)  # their catch-plane crossings, for the returns
         # the parts present at the last frame (sorted ids) and where each was last seen above
@@ -165,6 +170,8 @@ class LineOutlet(Outlet):
         reported = np.isin(ids, np.union1d(self.exited, self.rejected))
         below = (x[:, 2] < self.catch_z) & ~reported
         over = self._over_the_edge(parts, x)
+        if self.band is not None:  # past the edge but across beyond the band: off a side
+            over &= (x[:, 1] >= self.band[0]) & (x[:, 1] <= self.band[1])
         out, fell = below & over, below & ~over
         events = self._events(time, parts, out)
         rejects = self._events(time, parts, fell, {"last": last})

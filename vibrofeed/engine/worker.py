@@ -260,7 +260,7 @@ class BulkFrames:
         feeder = self.feeder
         # parts fallen off a side, caught by the section they fell from (a line)
         self.rejects = feeder is not None and feeder.has_rejects
-        self.outlet = (LineOutlet(*where, feeder.catch_x) if self.rejects
+        self.outlet = (LineOutlet(*where, feeder.catch_x, feeder.exit_band) if self.rejects
                        else Outlet(*where))
         # recirculation (a line's rejects back to the inlet): the driver's, never by hand
         self.returns = None

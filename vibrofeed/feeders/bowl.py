@@ -96,6 +96,12 @@ class BowlElement:
         return self.bowl.outlet_x
 
     @property
+    def exit_band(self) -> tuple[float, float]:
+        """Across the chute's end, from wall to wall (y, the bowl's frame) [m]."""
+        b = self.bowl
+        return -b.r_mid - b.track_width / 2, -b.r_mid + b.track_width / 2
+
+    @property
     def exit_width(self) -> float:
         return self.bowl.track_width
 

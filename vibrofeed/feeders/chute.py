@@ -90,6 +90,11 @@ class Chute:
         return self.length * math.tan(math.radians(self.slope))
 
     @property
+    def exit_band(self) -> tuple[float, float]:
+        """Across its outlet edge, from wall to wall (y, its frame) [m]."""
+        return -self.width / 2, self.width / 2
+
+    @property
     def exit_width(self) -> float:
         return self.width
 

@@ -278,6 +278,19 @@ class Feeder:
         """The unit vector along which parts leave over the outlet edge (the last element's)."""
         return np.asarray(self.elements[-1].exit_direction, dtype=float)
 
+    @property
+    def exit_band(self) -> tuple[float, float] | None:
+        """Across the outlet edge in the deck's frame (y from, to) [m]: the last element's walls
+        widened by a part's widest either way, the band a part that left over the edge falls
+        through (one falling farther across was blown or fell off a side); None where the path
+        does not leave along x."""
+        e, d = self.elements[-1], self.exit_direction
+        if abs(d[1]) > 1e-3 * float(np.linalg.norm(d)):
+            return None
+        lo, hi = e.exit_band
+        shift = self.line_origin[1] if e is not self.elements[0] else 0.0
+        return lo + shift - self.part.widest, hi + shift + self.part.widest
+
     def element_at_x(self, x) -> np.ndarray:
         """Which element (0-based) holds the deck's ``x`` [m]: the last one starting at or before
         it (a bowl from -inf; beyond the outlet edge, the last element)."""

@@ -68,6 +68,7 @@ KEYS: dict[tuple[str, ...], tuple[str | None, str | None]] = {
     ("jet", "force"): (None, "jet_force"),
     ("jet", "angle"): (None, "jet_angle"),
     ("jet", "mode"): (None, "jet_mode"),
+    ("jet", "headway"): (None, "jet_headway"),
 }
 # Words, not numbers: the deck holds them as index words (no blank: "up,lengthwise").
 WORDS = (("jet", "keep"), ("jet", "mode"))
@@ -159,6 +160,11 @@ class LinearSection:
     def x1(self) -> float:
         """The section's end: its joint with the next, or the outlet edge."""
         return self.x0 + self.length
+
+    @property
+    def exit_band(self) -> tuple[float, float]:
+        """Across its outlet edge, from wall to wall (y, its frame) [m]."""
+        return -self.width / 2, self.width / 2
 
     @property
     def exit_width(self) -> float:
@@ -481,14 +487,16 @@ def check_jet(e, part: Part) -> None:
         raise ParameterError(f"{n(('jet', 'force'))}={j.force:g} N: a jet sorts parts by their "
                              "orientation, and spheres (shape 0) have none")
     k = j.keep
-    if set(k.states) == set(STATES) and not k.lengthwise and not k.lead:
+    if set(k.states) == set(STATES) and not k.lengthwise and not k.lead and not j.headway > 0:
         if j.keeps_correct:
             raise ParameterError(f"correct=\"{keep_word(str(k))}\" counts every state correct, and "
                                  f"the jet of section {e.number} keeps it: the jet would never "
                                  f"fire; give it a keep of its own ({n(('jet', 'keep'))}), e.g. \"up\"")
         raise ParameterError(f"{n(('jet', 'keep'))}=\"{keep_word(str(k))}\" keeps every state: "
-                             "the jet would never fire; name the state(s) to keep, e.g. \"up\"")
-    for key, value in (("delay", j.delay), ("offset", j.offset), ("length", j.length)):
+                             "the jet would never fire; name the state(s) to keep, e.g. \"up\", "
+                             f"or space the stream ({n(('jet', 'headway'))} > 0)")
+    for key, value in (("delay", j.delay), ("offset", j.offset), ("length", j.length),
+                       ("headway", j.headway)):
         if key != "offset" and value < 0:
             raise ParameterError(f"{n(('jet', key))}={value:g} must be >= 0")
     if not j.duration > 0:
@@ -568,7 +576,7 @@ def read_jet(values: Mapping, k: int, get, part: Part | None = None) -> Jet | No
     return Jet(force=force, keep=keep, at=get(("jet", "at"), 0.5), delay=get(("jet", "delay"), 0.0),
                duration=get(("jet", "duration"), 0.01), offset=get(("jet", "offset"), 0.0),
                length=get(("jet", "length"), 0.0), angle=get(("jet", "angle"), 60.0), mode=mode,
-               keeps_correct=inherits)
+               keeps_correct=inherits, headway=get(("jet", "headway"), 0.0))
 
 
 def keep_word(text: str, name: str = "jet.keep") -> str:

@@ -82,6 +82,7 @@ KEYS: dict[tuple[str, ...], tuple[str, str, str]] = {
     ("jet", "length"): ("jet_length", "m", "mesh: air jet's block along the path (0: one part size)"),
     ("jet", "angle"): ("jet_angle", "deg", "mesh: air jet's blow up, across to the path's left"),
     ("jet", "mode"): ("jet_mode", "-", "mesh: air jet: region (all in its block) or ideal (the sensed part)"),
+    ("jet", "headway"): ("jet_headway", "s", "mesh: air jet fires at a part this soon after the last passed"),
 }
 # The tools a mesh element does not build, and why (module docstring).
 NOT_HERE = {
@@ -210,6 +211,12 @@ class MeshElement:
     def bounds(self) -> list[tuple[float, float]]:
         """Along the path: from its joint's x on by the path's length."""
         return [(self.x0, self.x0 + self.path_length)]
+
+    @property
+    def exit_band(self) -> tuple[float, float]:
+        """Across its path's end, its track's width about it (y, the deck's frame) [m]."""
+        y = float(self.points[-1, 1])
+        return y - self.width / 2, y + self.width / 2
 
     @property
     def exit_width(self) -> float:

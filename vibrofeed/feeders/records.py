@@ -236,7 +236,9 @@ class Jet:
     ``offset`` downstream of the sensing point, across the track and up past its walls, with
     ``force`` [N] on a part wholly in it (shared by its spheres), ``angle`` degrees up from the
     floor towards the side away from the reference wall (+y). ``mode``: "region" blows
-    everything in the block (as a real jet), "ideal" only the part that was sensed."""
+    everything in the block (as a real jet), "ideal" only the part that was sensed.
+    ``headway`` [s] (0: none) spaces the stream as well: a part sensed less than ``headway``
+    after the last part the jet let pass is fired at too, whatever its state."""
 
     kind = "jet"
     force: float
@@ -249,6 +251,7 @@ class Jet:
     angle: float = 60.0
     mode: str = "region"
     keeps_correct: bool = False
+    headway: float = 0.0
 
 
 @dataclass(frozen=True)

@@ -99,8 +99,9 @@ BOX_PBC = tuple(b == "periodic" for b in BOX_BOUNDARY)
 # (its position tells which tooling: the side drop's stretch, or before the wiper).
 REJECT_ELEMENTS = {**OUTLET_ELEMENTS, "section": ("i4", 0, None)}
 # A line's air jets (orienting stations, vibrofeed.engine.jets): one row per firing, a part
-# sensed in a state the jet does not keep. Optional (a line with a jet has it; no new format
-# version): time sensed (its crossing of the sensing point), the body, the section, its state
+# sensed in a state the jet does not keep (or too soon after the last it passed: its
+# headway). Optional (a line with a jet has it; no new format version): time sensed (its
+# crossing of the sensing point), the body, the section, its state
 # (index into vibrofeed.orientation.STATES), the window the jet fired in, late (1: the window
 # would have started before the frame that sensed the part, and started at that frame).
 JET = "vibrofeed/jet"

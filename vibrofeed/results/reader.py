@@ -479,7 +479,8 @@ class Result:
 
     @cached_property
     def jet_firings(self) -> dict[str, np.ndarray]:
-        """A line's air jet firings, one row per part sensed in a state the jet does not keep:
+        """A line's air jet firings, one row per part sensed in a state the jet does not keep
+        (or too soon after the last it passed, its ``headway``):
         ``time`` (sensed), ``id``, ``section``, ``state`` (index into
         vibrofeed.orientation.STATES), ``start``, ``end`` (its window) [s], ``late`` (E,);
         empty arrays when the file has no jet table."""

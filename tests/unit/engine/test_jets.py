@@ -113,6 +113,30 @@ def test_the_ideal_jet_holds_the_sensed_bodys_atoms_only():
     assert s.commands(0.01) == ["variable s2_jet_on atom (id>=1)*(id<=3)*((time>=0.025)*(time<0.035))"]
 
 
+def test_a_headway_fires_at_a_kept_part_sensed_too_soon_after_the_last_one_passed():
+    # four face-up parts cross x = 1 at 1, 3, 6 and 9 ms (between frames at 0 and 10 ms, given
+    # out of order), headway 4 ms: the first passes, the second (2 ms after it) is fired at,
+    # the third (5 ms after the first passed) passes, the fourth (3 ms after it) is fired at
+    s = station(headway=0.004)
+    x0 = np.array([0.99, 0.97, 0.94, 0.91])  # ids 1 to 4
+    x1 = x0 + 0.1  # each moves 0.1 in the 10 ms: crosses when x0 + 10 t = 1
+    prev, now = frame([4, 3, 2, 1], x0[::-1], [UP] * 4), frame([4, 3, 2, 1], x1[::-1], [UP] * 4)
+    fired = s.sense(0.0, prev, 0.01, now)
+    assert [f[1] for f in fired] == [2, 4] and [f[3] for f in fired] == [0, 0]  # ids, state up
+    assert [f[0] for f in fired] == pytest.approx([0.003, 0.009], rel=0, abs=1e-12)
+    assert s.passed == pytest.approx(0.006, rel=0, abs=1e-12)
+    # a wrong part does not count as passed: a face-up one 12 ms after the last passed passes
+    later = s.sense(0.01, frame([5, 6], [0.95, 0.9], [DOWN, UP]), 0.02,
+                    frame([5, 6], [1.05, 1.02], [DOWN, UP]))
+    assert [f[1] for f in later] == [5] and s.passed == pytest.approx(0.01 + 0.01 * 0.1 / 0.12, abs=1e-12)
+
+
+def test_without_a_headway_parts_in_the_kept_state_pass_however_close():
+    s = station()
+    close = frame([1, 2], [1.01, 1.0], [UP, UP])  # 1 ms apart
+    assert s.sense(0.0, frame([1, 2], [0.99, 0.98], [UP, UP]), 0.01, close) == []
+
+
 class OneRank:
     size = 1
 
@@ -151,11 +175,20 @@ def jet(**kw):
     ({"offset": 3e-3}, "s2_jet_offset"),
     ({"at": 1.2}, "s2_jet_at"),
     ({"angle": 120}, "s2_jet_angle"),
+    ({"headway": -0.001}, "s2_jet_headway"),
 ])
 def test_bad_jets_are_refused_in_one_line_naming_the_key(change, names):
     with pytest.raises(ParameterError) as info:
         jet(**change).check()
     assert names in str(info.value) and "\n" not in str(info.value)
+
+
+def test_a_jet_that_keeps_every_state_is_one_that_spaces_the_stream():
+    f = jet(keep="up|down|side|end,any-direction", headway=0.005)
+    f.check()
+    assert f.elements[1].jet.headway == 0.005 and Jets(f).stations[0].headway == 0.005
+    with pytest.raises(ParameterError, match="s2_jet_headway"):  # without: the refusal says so
+        jet(keep="up|down|side|end,any-direction").check()
 
 
 def test_a_jet_on_spheres_is_refused():

@@ -232,3 +232,28 @@ def test_a_part_remembered_above_the_plane_keeps_where_it_was_until_it_falls():
     line.step(0.01, frame([5], [0.0065], [1e-4]), inserted=1)
     _, rej, _ = line.step(0.02, frame([5], [0.0059], [-1e-3]), inserted=1)
     assert rej["section"].tolist() == [2]
+
+
+def test_a_part_blown_off_the_side_that_flies_on_past_the_edge_is_a_reject_not_an_exit():
+    # the exit's walls at y = -0.5 and 0.5 mm, a 0.5 mm part: the band reaches 1 mm either way.
+    # Part 1 leaves over the edge (y = 0.2 mm); part 2 crosses the plane past the edge 3 mm
+    # across (a jet blew it over the wall 2 mm before the edge and it flew on); part 3 at the
+    # band's edge is still an exit, part 4 just beyond it is not
+    line = LineOutlet(outlet_x=0.02, catch_z=-3e-4, gravity=G, section_x=(0.0, 0.006),
+                      band=(-1e-3, 1e-3))
+    f = frame([1, 2, 3, 4], [0.0205, 0.021, 0.0203, 0.0203], [-4e-4] * 4)
+    f["position"][:, 1] = [2e-4, 3e-3, -1e-3, -1.001e-3]
+    ev, rej, c = line.step(0.5, f, inserted=4)
+    assert sorted(ev["id"].tolist()) == [1, 3]
+    assert sorted(rej["id"].tolist()) == [2, 4] and rej["section"].tolist() == [2, 2]
+    assert c == dict(inserted=4, on_track=0, exited=2, rejected=2, lost=0)
+
+
+def test_the_band_is_the_last_elements_walls_a_part_either_way_in_the_decks_frame():
+    from vibrofeed.feeders.feeder import Feeder
+
+    line = Feeder.from_values({"part_size": "5e-4", "shape": "1", "part_thickness": "2e-4",
+                               "track_length": "5e-3", "track_width": "1.2e-3", "sections": "2",
+                               "s2_length": "4e-3", "s2_width": "8e-4", "s2_step": "5e-5",
+                               "s2_freq": "100", "s2_amp_t": "6e-5", "s2_amp_n": "2e-5"})
+    assert line.exit_band == pytest.approx((-4e-4 - 5e-4, 4e-4 + 5e-4), rel=0, abs=1e-15)

@@ -57,6 +57,27 @@ def test_the_exit_line_starts_at_the_chutes_end_on_its_centre_line():
     assert list(f.element_at_x([-R, 0.5 * OUTLET_X, OUTLET_X + 1e-3, 1.0])) == [0, 0, 1, 1]
 
 
+def test_the_outlets_band_is_the_exit_sections_walls_about_the_chutes_centre_line_and_a_die():
+    # the exit section 1.5 mm wide on the chute's centre line y = -r_mid, widened by a die's edge
+    assert Feeder.from_values(BOWL_LINE).exit_band == pytest.approx(
+        (-R_MID - 0.75e-3 - 5e-4, -R_MID + 0.75e-3 + 5e-4), rel=0, abs=1e-15)
+    # a bowl alone: its chute's walls
+    alone = {k: v for k, v in BOWL_LINE.items() if not k.startswith("s2_") and k != "sections"}
+    assert Feeder.from_values(alone).exit_band == pytest.approx(
+        (-R_MID - W / 2 - 5e-4, -R_MID + W / 2 + 5e-4), rel=0, abs=1e-15)
+
+
+def test_a_jet_on_the_exit_line_records_its_firings_on_the_path_section_its_rejects_have():
+    # helix 1, chute 2, the exit section 3 (its element is 2, its deck names s2_jet_*)
+    from vibrofeed.engine.jets import Jets
+
+    f = Feeder.from_values({**BOWL_LINE, "s2_jet_force": 4e-6, "s2_jet_at": 0.6,
+                            "s2_jet_keep": "up,any-direction", "s2_jet_mode": "ideal"})
+    (st,) = Jets(f).stations
+    assert (st.section, st.path_section) == (2, 3)
+    assert [s.section for s in f.stations if s.kind == "jet"] == [3]
+
+
 def test_the_chutes_end_is_an_exit_with_its_tilt_stroke_and_sway():
     bowl = Feeder.from_values(BOWL_LINE).elements[0]
     tan = math.tan(math.radians(TILT))

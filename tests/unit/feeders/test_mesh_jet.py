@@ -45,7 +45,7 @@ def values(stl, **more):
 
 def test_its_keys_deck_names_and_station(stl):
     assert {key[1] for key in KEYS if key[0] == "jet"} == {
-        "force", "at", "keep", "delay", "duration", "offset", "length", "angle", "mode"}
+        "force", "at", "keep", "delay", "duration", "offset", "length", "angle", "mode", "headway"}
     assert deck_name(3, ("jet", "keep")) == "s3_jet_keep"
     f = Feeder.from_values(values(stl))
     f.check()
