@@ -214,7 +214,7 @@ def rule_for(name: str) -> Callable[[float], str | None] | None:
 
 # Parameters that name orientation states (vibrofeed.orientation.parse_correct's words): what
 # counts as correct, and each air jet's keep (which may also be "correct": the part's).
-STATE_WORDS = re.compile(r"^(?:correct|s\d+_jet_keep)$")
+STATE_WORDS = re.compile(r"^(?:correct|(?:s\d+_)?jet_keep)$")
 
 
 def state_word(name: str, value: str) -> str:
@@ -393,7 +393,7 @@ def _resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
     # a mesh element's STL and path, a jet's keep and mode, an stl part's STL, what is correct
     # are words its checks read beside the numbers
     words = {name: value for name, value in values.items()
-             if re.match(r"^(?:s\d+_(?:file|path|jet_keep|jet_mode)|part_file|correct)$", name)}
+             if re.match(r"^(?:s\d+_(?:file|path)|(?:s\d+_)?jet_(?:keep|mode)|part_file|correct)$", name)}
     # (the deck's own default is no choice: values resolved once resolve again, as a
     # validation case's runs do)
     chosen = "correct" in given and given["correct"] != getattr(tunables.get("correct"), "default", None)

@@ -241,11 +241,13 @@ class Jets:
         # the path section each element's jet is on (after a bowl's helix and chute, not its
         # element's number): what the rejects are recorded by
         on = {st.element: st.section for st in feeder.stations if st.kind == "jet"}
-        for e in feeder.further_elements:
+        for e in feeder.elements:
             j = getattr(e, "jet", None)
             if j is None:
                 continue
-            cam = e.camera(feeder.part, feeder.line_origin)
+            # (the first element's frame is the deck's; the further ones' are the line's)
+            origin = feeder.line_origin if e is not feeder.elements[0] else (0.0, 0.0, 0.0)
+            cam = e.camera(feeder.part, origin)
             self.stations.append(Station(
                 section=e.number, x_sense=cam.at, keep=j.keep, delay=j.delay, duration=j.duration,
                 mode=j.mode, up=cam.up, tangent=cam.tangent, z_floor=cam.z_floor, along=cam.along,

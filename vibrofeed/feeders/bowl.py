@@ -11,7 +11,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .records import Drive, number
+import numpy as np
+
+from .linear import jet_span, turned_jet_commands, turned_jet_fix
+from .records import Camera, Drive, Jet, Part, number
 
 # description key (table, key) -> the bowl deck's name
 KEYS: dict[tuple[str, ...], str] = {
@@ -33,6 +36,8 @@ KEYS: dict[tuple[str, ...], str] = {
     ("side_drop", "width"): "drop_width",
     ("wiper", "height"): "wiper_height",
     ("wiper", "at"): "wiper_at",
+    **{("jet", key): f"jet_{key}" for key in ("force", "at", "keep", "delay", "duration", "offset",
+                                              "length", "angle", "mode", "headway")},
 }
 # A description's bowl must state these (the rest have the deck's defaults).
 NEEDED = ("diameter", "width", "turns", "helix_angle")
@@ -82,8 +87,10 @@ class BowlElement:
     kind = "bowl"
     moves = True
     number = 1
+    x0 = 0.0  # (its helix starts the path)
     bowl: object
     drive: Drive = Drive(freq=0.0, amp_t=0.0, amp_n=0.0)
+    jet: Jet | None = None  # an air jet on the helix, blowing parts off its open inner edge
 
     @property
     def bounds(self) -> list[tuple[float, float]]:
@@ -136,3 +143,82 @@ class BowlElement:
     def name(self, key: tuple[str, ...]) -> str:
         """The deck name of ``key`` on the bowl (for messages)."""
         return KEYS.get(key, ".".join(key))
+
+    # ---------------------------------------------------------------- the air jet on the helix
+    # As a mesh element's (vibrofeed.feeders.mesh_element): its camera senses along the path
+    # coordinate (vibrofeed.bowl.path_coordinate), its block is turned with the helix where it
+    # stands, and it blows towards the path's left, the track's open inner edge: a part blown
+    # off falls back into the bowl, as a real bowl's jets return their parts.
+    @property
+    def length(self) -> float:
+        """The helix's length along its centre line [m]: a tool's ``at`` is a fraction of it."""
+        return self.bowl.length
+
+    @property
+    def sensing(self) -> float:
+        """Where the jet's camera senses the parts: its path coordinate [m]."""
+        return self.jet.at * self.length
+
+    def jet_span(self, size: float) -> tuple[float, float]:
+        """The jet's block along the path [m] (its length 0: one part ``size``)."""
+        return jet_span(self.jet, self.sensing, size)
+
+    def theta_at(self, s) -> np.ndarray:
+        """The polar angle [rad] of path coordinate ``s`` [m] on the helix."""
+        b = self.bowl
+        return b.theta_start + np.asarray(s, dtype=float) * math.cos(math.radians(b.helix_angle)) / b.r_mid
+
+    def jet_frame(self, size: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(the centre line's floor point at the block's centre (3,), the path's direction in
+        plan there (3,), its left, towards the axis (3,))."""
+        lo, hi = self.jet_span(size)
+        theta = float(self.theta_at((lo + hi) / 2))
+        c, s = math.cos(theta), math.sin(theta)
+        return (self.bowl.helix_point(theta), np.array([-s, c, 0.0]), np.array([-c, -s, 0.0]))
+
+    def jet_planes(self, part: Part) -> list[tuple[np.ndarray, np.ndarray]]:
+        """The jet's block as six half-spaces (a point on each plane, its normal into the block)
+        in the bowl's frame: along the path over :meth:`jet_span` (straight: the helix's bend
+        over a block of a few parts is a few um), across the track and two parts beyond each
+        edge, from below its floor there (its tilt across, the lift and a part) up to
+        9/10 of a pitch (the turn above, if any, lies a pitch up: its parts stay out)."""
+        from ..bowl import WIPER_REACH
+
+        b = self.bowl
+        lo, hi = self.jet_span(part.size)
+        c, t, n = self.jet_frame(part.size)
+        half_l, half_w = (hi - lo) / 2, b.track_width / 2 + 2 * part.widest
+        up = np.array([0.0, 0.0, 1.0])
+        bottom = c[2] - half_w * math.tan(math.radians(b.cross_tilt)) - self.drive.amp_n - part.widest
+        top = c[2] + WIPER_REACH * b.pitch
+        return [(c - half_l * t, t), (c + half_l * t, -t), (c - half_w * n, n), (c + half_w * n, -n),
+                (np.array([c[0], c[1], bottom]), up), (np.array([c[0], c[1], top]), -up)]
+
+    def camera(self, part: Part, origin=(0.0, 0.0, 0.0)) -> Camera:
+        """Where the driver senses parts for the jet: along the path (the bowl at rest; the
+        torsion turns it by amp_t / r_mid, a part's few percent), the path's direction in plan
+        at the camera, up; below the helix's floor there by a part: falling into the bowl.
+        (``origin``: an exit line's, not the bowl's: unused.)"""
+        from ..bowl import path_coordinate
+
+        b = self.bowl
+        theta = float(self.theta_at(self.sensing))
+        return Camera(at=self.sensing, tangent=(-math.sin(theta), math.cos(theta), 0.0), up=(0.0, 0.0, 1.0),
+                      z_floor=float(b.floor_z(theta, b.radius)) - part.size,
+                      along=lambda points: path_coordinate(b, points))
+
+    def jet_commands(self, part: Part, origin=(0.0, 0.0, 0.0)) -> list[str]:
+        """The jet's commands (none without one): its turned block (:meth:`jet_planes`), its force
+        ``jet_force`` blowing ``jet_angle`` up from the floor (tilted down outwards by
+        cross_tilt) towards the axis (vibrofeed.feeders.linear.turned_jet_commands, as
+        element 1: ``s1_jet``, ``s1_jet_on``). ``origin`` is unused (the bowl's frame is the
+        deck's)."""
+        if self.jet is None:
+            return []
+        _, _, left = self.jet_frame(part.size)
+        return turned_jet_commands(1, "the bowl", self.jet.mode, self.jet_planes(part), left,
+                                   "v_jet_force", "(v_jet_angle+v_cross_tilt)*PI/180")
+
+    def jet_fix(self) -> str:
+        """The jet's ``fix addforce`` (:meth:`jet_commands`)."""
+        return turned_jet_fix(1)

@@ -22,10 +22,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ParameterError
+from .bowl import KEYS as BOWL_KEYS
 from .bowl import BowlElement
 from .joints import Joint
 from .kinds import BY_CODE, later_kinds_text
-from .linear import MAX_SECTIONS, LinearSection
+from .linear import MAX_SECTIONS, LinearSection, check_jet, read_jet
 from .mesh_element import MeshElement
 from .records import Drive, Part, number
 
@@ -101,7 +102,9 @@ class Feeder:
             numbers = {k: number(values, k) for k in values if _is_number(values[k])}
             drive = Drive(freq=number(values, "freq", 0.0), amp_t=number(values, "amp_t", 0.0),
                           amp_n=number(values, "amp_n", 0.0), phase=number(values, "phase", 0.0))
-            first = BowlElement(bowl_from(numbers), drive)
+            jet = read_jet(values, 1, lambda key, default=None: number(values, BOWL_KEYS[key], default),
+                           part, name=BOWL_KEYS.get)
+            first = BowlElement(bowl_from(numbers), drive, jet)
         else:
             first = None
         n = number(values, "sections", 1.0)
@@ -375,6 +378,9 @@ class Feeder:
                     if span is not None:
                         out.append(Station(1, kind, *(float(b.arc_length(t)) for t in span),
                                            element=1, name=f"s1.{kind}", margin=margin))
+                if e.jet is not None:
+                    out.append(Station(1, "jet", *e.jet_span(self.part.size), element=1, name="s1.jet",
+                                       margin=margin))
                 continue
             k = int(self.section_at(e.x0 + shift)) + 1
             for attr in TOOLS:
@@ -454,6 +460,9 @@ class Feeder:
         p = self.values or {}
         if number(p, "return_delay", 0.0) < 0:
             raise ParameterError(f"return_delay={number(p, 'return_delay'):g} s must be >= 0")
+        first = self.elements[0]
+        if isinstance(first, BowlElement) and first.jet is not None:  # (a line's first has none)
+            check_jet(first, self.part)
         if not self.further_elements:
             if self.recirculate and self.linear_sections:
                 raise ParameterError("recirculate=1: a single track has no rejects to return; "

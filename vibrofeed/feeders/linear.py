@@ -538,6 +538,41 @@ def jet_throw(jet: Jet, mass: float, angle: float, across: float, height: float,
     return v, beyond + out * flight
 
 
+def turned_jet_commands(k: int, what: str, mode: str, planes, left, force: str, angle: str) -> list[str]:
+    """An air jet's commands whose block is turned with its path (a mesh element's, a bowl's
+    helix: LIGGGHTS 3.8's blocks are axis-aligned): the intersection of the half-spaces
+    ``planes`` (a point on each, its normal into the block, the deck's frame) named
+    ``s<k>_jet``, switched by ``s<k>_jet_on`` (0: the driver sets it, vibrofeed.engine.jets),
+    blowing ``force`` (the deck's variable) shared by a part's spheres, ``angle`` (an
+    expression, radians) up from the horizontal towards the unit vector ``left`` across the
+    path. ``what`` names the element in the comments."""
+    s = f"s{k}"
+    regions = []
+    for i, (point, normal) in enumerate(planes, 1):
+        numbers = " ".join(repr(float(v)) for v in (*point, *normal))
+        regions.append(f"region {s}_jet_{i} plane {numbers} units box")
+    style = "atom" if mode == "ideal" else "equal"
+    share = f"{force}/v_body_spheres"
+    return [
+        f"# {what}'s air jet ({mode}): fired by vibrofeed run only",
+        *regions,
+        f"region {s}_jet intersect {len(regions)} " + " ".join(r.split()[1] for r in regions),
+        f"variable {s}_jet_on {style} 0",
+        f"variable {s}_jet_fx {style} v_{s}_jet_on*$({share}*cos({angle})*{float(left[0])!r})",
+        f"variable {s}_jet_fy {style} v_{s}_jet_on*$({share}*cos({angle})*{float(left[1])!r})",
+        f"variable {s}_jet_fz {style} v_{s}_jet_on*$({share}*sin({angle}))",
+        turned_jet_fix(k),
+        f'if "${{driver}} == 0" then "print \'WARNING: the air jet of {what} is '
+        "inactive in a run by hand: only vibrofeed run senses the parts it fires at'\""]
+
+
+def turned_jet_fix(k: int) -> str:
+    """The ``fix addforce`` of :func:`turned_jet_commands` (the driver removes and places it
+    again, vibrofeed.engine.jets)."""
+    s = f"s{k}"
+    return f"fix {s}_jet all addforce v_{s}_jet_fx v_{s}_jet_fy v_{s}_jet_fz region {s}_jet"
+
+
 def jet_span(jet: Jet, sensing: float, size: float) -> tuple[float, float]:
     """A jet's block along the path [m]: ``length`` (0: one part ``size``) centred ``offset``
     past the sensing point ``sensing``."""
@@ -551,27 +586,25 @@ def thinnest(part: Part) -> float:
     return part.size * (1 - part.size_spread) if part.shape == 0 else part.thickness
 
 
-def read_jet(values: Mapping, k: int, get, part: Part | None = None) -> Jet | None:
-    """Element ``k``'s jet (a linear section's or a mesh element's) from the deck's parameters
-    (none where ``s<k>_jet_force`` is 0 or absent); its words read here (one-line ParameterError
-    naming the parameter). A keep of
+def read_jet(values: Mapping, k: int, get, part: Part | None = None, name=None) -> Jet | None:
+    """Element ``k``'s jet (a linear section's, a mesh element's or, with ``name`` (key -> its
+    deck name), a bowl's) from the deck's parameters (none where its force is 0 or absent); its
+    words read here (one-line ParameterError naming the parameter). A keep of
     :data:`KEEP_CORRECT` (the deck's default) is the part's correct state (``part.correct``,
     else the parameter ``correct`` read here); an explicit keep wins over it."""
     force = get(("jet", "force"), 0.0)
     if force == 0:
         return None
-    words = {}
-    for key in WORDS:
-        name = deck_name(k, key)
-        words[key[1]] = str(values.get(name, JET_DEFAULTS[key[1]])).strip()
+    name = name or (lambda key: deck_name(k, key))
+    words = {key[1]: str(values.get(name(key), JET_DEFAULTS[key[1]])).strip() for key in WORDS}
     inherits = words["keep"].lower() == KEEP_CORRECT
     if inherits:
         keep = part.correct if part is not None else run_correct(values)
     else:
-        keep = parse_correct(words["keep"], deck_name(k, ("jet", "keep")))
+        keep = parse_correct(words["keep"], name(("jet", "keep")))
     mode = words["mode"].lower()
     if mode not in JET_MODES:
-        raise ParameterError(f"{deck_name(k, ('jet', 'mode'))}={words['mode']} must be "
+        raise ParameterError(f"{name(('jet', 'mode'))}={words['mode']} must be "
                              f"{' or '.join(JET_MODES)}")
     return Jet(force=force, keep=keep, at=get(("jet", "at"), 0.5), delay=get(("jet", "delay"), 0.0),
                duration=get(("jet", "duration"), 0.01), offset=get(("jet", "offset"), 0.0),

@@ -53,7 +53,15 @@ import numpy as np
 from ..errors import ParameterError
 from ..line import WIPER_LENGTH
 from ..mesh import MeshBuilder
-from .linear import check_jet, jet_span, jet_throw, read_jet, sine_commands
+from .linear import (
+    check_jet,
+    jet_span,
+    jet_throw,
+    read_jet,
+    sine_commands,
+    turned_jet_commands,
+    turned_jet_fix,
+)
 from .records import Camera, Drive, Gate, Jet, Part, Wiper, number
 
 KIND_CODE = 2  # s<k>_kind: 0 a linear section, 1 a chute, 2 a mesh
@@ -504,32 +512,17 @@ class MeshElement:
         direction, across to the path's left at the camera."""
         if self.jet is None:
             return []
-        s, o = f"s{self.number}", np.asarray(origin, dtype=float)
-        planes = []
-        for i, (point, normal) in enumerate(self.jet_planes(part), 1):
-            numbers = " ".join(repr(float(v)) for v in (*(point + o), *normal))
-            planes.append(f"region {s}_jet_{i} plane {numbers} units box")
+        o = np.asarray(origin, dtype=float)
+        planes = [(point + o, normal) for point, normal in self.jet_planes(part)]
         _, _, left = self.jet_frame(part.size)
-        style = "atom" if self.jet.mode == "ideal" else "equal"
-        share = f"v_{s}_jet_force/v_body_spheres"
-        angle = f"v_{s}_jet_angle*PI/180"
-        return [
-            f"# element {self.number}'s air jet ({self.jet.mode}): fired by vibrofeed run only",
-            *planes,
-            f"region {s}_jet intersect 6 " + " ".join(f"{s}_jet_{i}" for i in range(1, 7)),
-            f"variable {s}_jet_on {style} 0",
-            f"variable {s}_jet_fx {style} v_{s}_jet_on*$({share}*cos({angle})*{float(left[0])!r})",
-            f"variable {s}_jet_fy {style} v_{s}_jet_on*$({share}*cos({angle})*{float(left[1])!r})",
-            f"variable {s}_jet_fz {style} v_{s}_jet_on*$({share}*sin({angle}))",
-            self.jet_fix(),
-            f'if "${{driver}} == 0" then "print \'WARNING: the air jet of element {self.number} is '
-            "inactive in a run by hand: only vibrofeed run senses the parts it fires at'\""]
+        s = f"s{self.number}"
+        return turned_jet_commands(self.number, f"element {self.number}", self.jet.mode, planes, left,
+                                   f"v_{s}_jet_force", f"v_{s}_jet_angle*PI/180")
 
     def jet_fix(self) -> str:
         """The jet's ``fix addforce`` (:meth:`jet_commands`; the driver removes and places it again,
         vibrofeed.engine.jets)."""
-        s = f"s{self.number}"
-        return f"fix {s}_jet all addforce v_{s}_jet_fx v_{s}_jet_fy v_{s}_jet_fz region {s}_jet"
+        return turned_jet_fix(self.number)
 
     # ---------------------------------------------------------------- the deck
     def name(self, key) -> str:
