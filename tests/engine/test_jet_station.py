@@ -6,7 +6,9 @@ two part sizes apart, conveyed sub-hopping (Gamma_n 0.8) in a channel 1.5 parts 
 jet: the face-down ones are sensed, fired at and blown over the wall (rejects of section 2,
 attributed to the jet by feedrate's tooling), the face-up ones pass and leave over the outlet
 edge; the mass balance is exact. Region mode (everything in the block) on one rank; the ideal
-mode (the sensed part only) on two ranks.
+mode (the sensed part only) on two ranks. A headway: of three chips face up, the one less than
+the headway behind the first is blown off, the one farther behind passes (with no headway the
+test fails: nothing is fired at).
 """
 
 import math
@@ -72,8 +74,8 @@ def chips(placed, params):
 PLACED = [(0.2e-3, False), (0.8e-3, True), (1.4e-3, False)]
 
 
-def run(path, params, ranks=1):
-    run_deck(Deck.find("bulk_feeder"), values(params), path, before_run=chips(PLACED, params),
+def run(path, params, ranks=1, placed=PLACED):
+    run_deck(Deck.find("bulk_feeder"), values(params), path, before_run=chips(placed, params),
              ranks=ranks)
     with Result(path) as r:
         return {"ids": r.read("id"), "x": r.read("position"), "time": r.time,
@@ -81,10 +83,10 @@ def run(path, params, ranks=1):
                 "balance": r.mass_balance, "parameters": r.parameters}
 
 
-def first_x(found):
+def first_x(found, n=3):
     """Each part's id by the order placed (its x at the first frame that has them all: they are
-    inserted in the first step)."""
-    k = int(np.argmax((found["ids"] >= 0).sum(axis=1) == len(PLACED)))
+    inserted in the first step): ``n`` of them."""
+    k = int(np.argmax((found["ids"] >= 0).sum(axis=1) == n))
     ids, x = found["ids"][k], found["x"][k, :, 0]
     present = ids >= 0
     return [int(i) for i in ids[present][np.argsort(x[present])]]
@@ -120,3 +122,25 @@ def test_the_jet_blows_the_face_down_chip_off_and_lets_the_face_up_ones_pass(tmp
 def test_the_ideal_jet_on_two_ranks(tmp_path, ranks):
     f, rj = check(run(tmp_path / "ideal.h5", {**LINE, "s2_jet_mode": "ideal"}, ranks))
     print("firings", {k: v.tolist() for k, v in f.items()})
+
+
+# three chips face up before a camera at 1.5 mm past the joint: the first 0.3 mm before it, the
+# second 0.35 mm behind the first (0.05 mm of clear gap), the third 1 mm behind the first;
+# conveyed at about 20 mm/s they cross the camera some 17 and 50 ms after the first
+CLOSE = [(0.2e-3, False), (0.85e-3, False), (1.2e-3, False)]
+
+
+def test_a_headway_blows_off_a_chip_too_close_behind_the_last_one_passed_whatever_its_state(tmp_path):
+    # every chip face up, in the state the jet keeps: only the headway (30 ms) fires, at the
+    # second; the third, more than 30 ms after the first, passes
+    params = {**LINE, "s2_jet_mode": "ideal", "s2_jet_headway": 0.03, "s2_jet_at": 0.5}
+    found = run(tmp_path / "headway.h5", params, placed=CLOSE)
+    third, second, first = first_x(found, len(CLOSE))  # (ascending x)
+    f, rj, out = found["firings"], found["rejects"], found["outlet"]
+    assert f["id"].tolist() == [second] and STATES[int(f["state"][0])] == "up"
+    assert rj["id"].tolist() == [second] and sorted(out["id"].tolist()) == sorted([first, third])
+    # the third left more than the headway after the first
+    leave = dict(zip(out["id"].tolist(), out["time"].tolist()))
+    assert leave[third] - leave[first] > 0.03
+    b = found["balance"]
+    assert b["lost"].max() == 0 and b["rejected"][-1] == 1 and b["exited"][-1] == 2

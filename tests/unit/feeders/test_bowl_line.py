@@ -218,7 +218,7 @@ def test_a_gate_on_a_bowls_exit_section_is_built(tmp_path):
     """The exit section's gate narrows its walls: the mesh's half-width past the taper is the
     gate's, before it the section's."""
     text = (REPO / "feeders" / "bowl_line.toml").read_text()
-    drop = "side_drop = { from = 0.4, to = 0.6, width = 6.5e-4 }"
+    drop = "side_drop = { from = 0.4, to = 0.9, width = 6.5e-4 }"
     assert drop in text
     path = tmp_path / "g.toml"
     path.write_text(text.replace(drop, "gate = { width = 6.5e-4, at = 0.2 }"))
@@ -238,7 +238,7 @@ def test_a_further_number_its_deck_does_not_declare_is_refused_not_dropped(tmp_p
     template = (decks_dir() / "bowl_feeder.liggghts").read_text()
     lacking = "\n".join(line for line in template.splitlines() if not line.startswith("variable s2_gate"))
     text = (REPO / "feeders" / "bowl_line.toml").read_text().replace(
-        "side_drop = { from = 0.4, to = 0.6, width = 6.5e-4 }", "gate = { width = 6.5e-4, at = 0.2 }")
+        "side_drop = { from = 0.4, to = 0.9, width = 6.5e-4 }", "gate = { width = 6.5e-4, at = 0.2 }")
     path = tmp_path / "g.toml"
     path.write_text(text)
     described = read(path)
