@@ -23,8 +23,9 @@ last frame of the steady feeding window and the plots into one folder. The cases
 ``bowl-line``
     That bowl (a shorter chute) handing its dies to a linear exit section of its own drive
     and tooling (feeders/bowl_line.toml, docs/bowl.md, "The exit line"): faster than the
-    chute's queue, its floor tilted towards a wall, a side drop and a wiper; the dies leave
-    one at a time.
+    chute's queue, its floor tilted towards a wall, a side drop, a wiper and a camera whose
+    air jet blows off a die too close behind the last one it passed; the dies leave one at a
+    time.
 ``orient``
     Chip components (1.0 x 0.5 x 0.35 mm boxes, their marked face +z) delivered lengthwise
     with the marked face up (feeders/orient_line.toml, docs/orientation.md, "The demo"): a
