@@ -413,6 +413,11 @@ def bowl_from(p: Mapping) -> Bowl:
                 wiper_at=get("wiper_at", 0.5), wiper_length=WIPER_LENGTH * get("part_size", 0.0))
 
 
+# The pre-fill's cubes along the track are this fraction of its width on a side (a cube of that
+# side fits in the track's width however it is turned round the helix, :func:`fill_boxes`).
+FILL_SIDE = 0.6
+
+
 def widest_part(p: Mapping) -> float:
     """A part's width lying flat (vibrofeed.feeders.records.Part.widest)."""
     return Part.from_values(p).widest
@@ -467,6 +472,15 @@ def check_bowl(p: Mapping[str, float]) -> None:
                              + ("a lower lip, " if lip else "") + "a steeper helix or a wider bowl")
     if b.wall_height <= tall:
         raise ParameterError(f"wall_height={b.wall_height:g} m is no higher than a part ({tall:g} m)")
+    reach = part_reach(p)
+    room = min(FILL_SIDE * b.track_width, fill_height(b, reach, tall))
+    if p.get("n_track", 0) > 0 and 2 * reach >= room:
+        # (LIGGGHTS inserts a part's bounding sphere wholly inside a cube: it would stop with
+        # "Unable to calculate region volume")
+        raise ParameterError(f"n_track={p['n_track']:g}: a part turned at random needs {2 * reach:.3g} m "
+                             f"(its clump's bounding sphere), more than the cubes along the track it is "
+                             f"placed in ({room:.3g} m: {FILL_SIDE} track_width); put the parts in the "
+                             f"pile (n_parts) or widen the track beyond {2 * reach / FILL_SIDE:.3g} m")
     if b.drop_from != 0 or b.drop_to != 0:  # a side drop asked for
         _check_drop(b, wide, tall)
     if b.wiper_height != 0:
@@ -581,6 +595,13 @@ def chute_mean_speed(p: Mapping[str, float]) -> tuple[float | None, str]:
 
 
 # ------------------------------------------------------------------ the prepare hook's part
+def fill_height(b: Bowl, reach: float, tall: float) -> float:
+    """How high the pre-fill's cubes along the track reach above its floor [m]: room for a part
+    however it is turned (LIGGGHTS inserts its bounding sphere, radius ``reach``) two and a half
+    times over, under the next turn (a pitch up, less a part ``tall`` and a half)."""
+    return min(2.5 * 2 * reach, b.pitch - 1.5 * tall)
+
+
 def fill_boxes(b: Bowl, size: float, height: float, start: float = 0.25) -> list[tuple]:
     """Cubes above the track's floor, one every cube side along its centre line, from
     ``start`` of a turn after the track's start, up the helix and along the chute to its
@@ -590,7 +611,7 @@ def fill_boxes(b: Bowl, size: float, height: float, start: float = 0.25) -> list
     width however it is turned), from the highest floor point under it plus a twentieth of a
     part to ``height`` above. The cubes are LIGGGHTS block regions, square to x and y: round
     the helix they stand turned against it (:func:`_highest_floor`)."""
-    side = 0.6 * b.track_width
+    side = FILL_SIDE * b.track_width
     half = side / 2
     dtheta = side / b.r_mid
     t0 = b.theta_start + 2 * math.pi * start + dtheta
@@ -658,7 +679,7 @@ def write_bowl(values: Mapping[str, str], folder: Path) -> list[str]:
     # room for a part however it is turned (LIGGGHTS inserts its bounding sphere), under
     # the next turn
     tall = tallest_part(p)
-    boxes = fill_boxes(b, number(p, "part_size"), min(2.5 * 2 * part_reach(p), b.pitch - 1.5 * tall))
+    boxes = fill_boxes(b, number(p, "part_size"), fill_height(b, part_reach(p), tall))
     lines = [f"variable bowl_{k} equal {float(v)!r}\n" for k, v in (
         ("r_mid", b.r_mid), ("pitch", b.pitch), ("top", b.top), ("end_z", b.end_z),
         ("outlet_x", b.outlet_x), ("length", b.length), ("theta_start", b.theta_start),

@@ -175,6 +175,22 @@ def test_the_refusals_name_the_parameter(change, words):
         check_bowl({**PARAMS, **change})
 
 
+def test_parts_too_big_for_the_cubes_along_the_track_are_refused_there_and_allowed_in_the_pile():
+    # a 1.0 x 0.5 x 0.35 mm box's clump (36 spheres) reaches 0.54 mm from its centre: 1.08 mm
+    # across, more than the 0.72 mm cubes (0.6 of a 1.2 mm track) LIGGGHTS would insert it in
+    box = {**PARAMS, "shape": 3, "part_size": 1e-3, "part_width": 5e-4, "part_thickness": 3.5e-4,
+           "clump_spacing": 1.0}
+    with pytest.raises(ParameterError) as info:
+        check_bowl(box)
+    said = str(info.value)
+    assert said.startswith("n_track=40: ") and "n_parts" in said and "\n" not in said
+    reach = float(said.split("needs ")[1].split(" m")[0]) / 2
+    assert reach == pytest.approx(0.54e-3, abs=0.01e-3)  # [m] the clump's, by hand to 10 um
+    check_bowl({**box, "n_track": 0})  # the pile takes them
+    # a die of the demo's (0.5 x 0.5 x 0.25 mm): its clump 0.60 mm across fits the 0.72 mm cubes
+    check_bowl({**PARAMS, "shape": 1, "part_size": 5e-4, "part_thickness": 2.5e-4})
+
+
 def test_the_shipped_bowl_is_accepted_and_a_deck_without_a_bowl_is_not_checked():
     check_bowl(PARAMS)
     check_bowl({"track_width": 1e-5})
@@ -510,7 +526,8 @@ def test_three_parts_must_fit_between_a_turn_and_the_lip_of_the_next_at_exactly_
     size = 0.3 * b.pitch  # a large sphere, so that a lip of 0.1 pitch leaves room for exactly three
     lip = b.pitch - 3 * size
     assert b.pitch - lip == 3 * size  # (exact: the boundary itself)
-    tall = {**PARAMS, "part_size": size, "wall_height": 2e-3}
+    # (none along the track: a sphere a third of a pitch wide does not fit the pre-fill's cubes)
+    tall = {**PARAMS, "part_size": size, "wall_height": 2e-3, "n_track": 0}
     check_bowl({**tall, "lip_height": lip})
     with pytest.raises(ParameterError, match="less than three parts"):
         check_bowl({**tall, "lip_height": lip * (1 + 1e-9)})
@@ -549,8 +566,8 @@ def test_the_refusals_at_their_boundaries(change, words):
 @pytest.mark.parametrize("change", [
     {"turns": 0.1},
     {"helix_angle": 44.9},
-    {"track_width": 3e-4},                                       # exactly a part wide
-    {"size_spread": 0.2, "track_width": 3.6e-4},                 # exactly the largest part wide
+    {"track_width": 3e-4, "n_track": 0},                         # exactly a part wide (the pre-fill's
+    {"size_spread": 0.2, "track_width": 3.6e-4, "n_track": 0},   # cubes hold none): the largest
     {"track_width": math.nextafter(5e-3, 0.0), "chute_length": 2e-2},  # just under a quarter
     {"wall_height": math.nextafter(3e-4, 1.0)},                  # just higher than a part
     {"shape": 1, "part_thickness": 1e-4, "wall_height": 1.5e-4},  # a chip: higher than it is thick
