@@ -15,7 +15,7 @@ from ..feeders.feeder import Feeder, element_count
 from ..limits import JET_THROW, MIN_SPEED_LIMIT, SPEED_FACTOR
 from ..models.constants import G
 from . import layout as L
-from .reader import DAMAGED, _reason, _text, damaged_object
+from .reader import DAMAGED, _text, damaged_object, not_hdf5
 
 
 @dataclass(frozen=True)
@@ -819,7 +819,7 @@ def check_file(path, allow_incomplete: bool = False) -> Report:
     except FileNotFoundError:
         return Report(str(path), [Problem("error", "", "no such file")])
     except OSError as exc:
-        return Report(str(path), [Problem("error", "", f"cannot open as HDF5: {_reason(exc)}")])
+        return Report(str(path), [Problem("error", "", not_hdf5(path, exc))])
     with f:
         c, parts, status = None, 0, ""
         try:

@@ -31,6 +31,7 @@ import os
 import re
 from dataclasses import dataclass, field
 from functools import cached_property
+from pathlib import Path
 
 import h5py
 import numpy as np
@@ -65,6 +66,18 @@ def _reason(exc: BaseException) -> str:
     while (m := re.fullmatch(r"[^(]*\((.*)\)", text.strip())) is not None:
         text = m.group(1)
     return text.strip() or type(exc).__name__
+
+
+# What a user may hand a command that reads results by mistake, by its suffix: the inputs of a run.
+INPUTS = {".toml": "a feeder description", ".liggghts": "a deck", ".in": "a LIGGGHTS input"}
+
+
+def not_hdf5(path, exc: BaseException) -> str:
+    """Why ``path`` is no result: HDF5's words, and for a run's input (a description, a deck) what
+    it is and what makes a result of it."""
+    what = INPUTS.get(Path(str(path)).suffix.lower())
+    hint = f": {what}, not a result (vibrofeed run makes one of it)" if what else ""
+    return f"cannot open as HDF5 ({_reason(exc)}){hint}"
 
 
 def unreadable(exc: BaseException, path: str) -> ResultError | None:
@@ -207,7 +220,7 @@ class Result:
         except FileNotFoundError as exc:
             raise ResultError(f"{self.path}: no such file") from exc
         except OSError as exc:
-            raise ResultError(f"{self.path}: cannot open as HDF5 ({_reason(exc)})") from exc
+            raise ResultError(f"{self.path}: {not_hdf5(self.path, exc)}") from exc
         try:
             for required in ("h5md", L.PARTS, L.SURFACE, L.RUN):
                 if required not in self.file:

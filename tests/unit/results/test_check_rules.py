@@ -479,6 +479,20 @@ def test_a_file_that_is_not_hdf5_has_no_frames_and_no_parts(tmp_path):
     report = check_file(tmp_path / "x.h5")
     assert not report.ok and (report.frames, report.parts, report.status) == (0, 0, "")
     assert "cannot open as HDF5" in report.problems[0].message
+    assert "feeder description" not in report.problems[0].message
+
+
+def test_a_feeder_description_or_a_deck_given_for_a_result_is_named_as_such(tmp_path):
+    from vibrofeed.errors import ResultError
+    from vibrofeed.results.reader import Result
+
+    for name, what in (("line.toml", "a feeder description"), ("mine.liggghts", "a deck")):
+        (tmp_path / name).write_text("[feeder]\n")
+        message = check_file(tmp_path / name).problems[0].message
+        assert message.startswith("cannot open as HDF5 (") and message.endswith(
+            f": {what}, not a result (vibrofeed run makes one of it)")
+        with pytest.raises(ResultError, match=f"{name}: cannot open as HDF5 .*: {what}, not a result"):
+            Result(tmp_path / name)
 
 
 def test_a_file_without_particles_has_no_frames_and_no_parts(bulk, tmp_path):
