@@ -100,7 +100,7 @@ def path_directions(feeder, s) -> tuple[np.ndarray, np.ndarray]:
     if b is not None:
         a = math.radians(b.helix_angle)
         helix = s < b.length
-        theta = b.theta_start + s[helix] * math.cos(a) / b.r_mid
+        theta = b.theta_at(s[helix])
         t[helix] = np.column_stack([-np.sin(theta) * math.cos(a), np.cos(theta) * math.cos(a),
                                     np.full(len(theta), math.sin(a))])
         chute = (s >= b.length) & (s <= b.length + b.chute_length)

@@ -157,6 +157,12 @@ class Bowl:
         """Path length along the centre line from the track's start to ``theta``."""
         return (np.asarray(theta) - self.theta_start) * self.r_mid / math.cos(math.radians(self.helix_angle))
 
+    def theta_at(self, s) -> np.ndarray:
+        """The polar angle [rad] at path length ``s`` [m] from the track's start along the
+        centre line: :meth:`arc_length`'s inverse."""
+        along = np.asarray(s, dtype=float) * math.cos(math.radians(self.helix_angle))
+        return self.theta_start + along / self.r_mid
+
     @property
     def length(self) -> float:
         """The helix's centre line length (start to the chute)."""

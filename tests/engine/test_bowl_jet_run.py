@@ -73,7 +73,7 @@ def run(folder, face_down: bool, ranks: int = 1):
     bowl = feeder.elements[0]
     b = bowl.bowl
     s0 = bowl.sensing - BEFORE
-    theta = float(bowl.theta_at(s0))
+    theta = float(b.theta_at(s0))
     heading = pose_matrix(0, 0)
     turn = np.array([[-math.sin(theta), -math.cos(theta), 0.0],  # body x along the path there
                      [math.cos(theta), -math.sin(theta), 0.0], [0.0, 0.0, 1.0]])
@@ -97,7 +97,7 @@ def run(folder, face_down: bool, ranks: int = 1):
     found["path"] = path_coordinate(b, found["x"])
     found["sensing"], found["bowl"] = bowl.sensing, b
     # the helix's floor under the camera at its wall, the lowest of its edges there
-    found["floor"] = float(b.floor_z(float(bowl.theta_at(bowl.sensing)), b.radius))
+    found["floor"] = float(b.floor_z(float(b.theta_at(bowl.sensing)), b.radius))
     return found
 
 

@@ -163,16 +163,11 @@ class BowlElement:
         """The jet's block along the path [m] (its length 0: one part ``size``)."""
         return jet_span(self.jet, self.sensing, size)
 
-    def theta_at(self, s) -> np.ndarray:
-        """The polar angle [rad] of path coordinate ``s`` [m] on the helix."""
-        b = self.bowl
-        return b.theta_start + np.asarray(s, dtype=float) * math.cos(math.radians(b.helix_angle)) / b.r_mid
-
     def jet_frame(self, size: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(the centre line's floor point at the block's centre (3,), the path's direction in
         plan there (3,), its left, towards the axis (3,))."""
         lo, hi = self.jet_span(size)
-        theta = float(self.theta_at((lo + hi) / 2))
+        theta = float(self.bowl.theta_at((lo + hi) / 2))
         c, s = math.cos(theta), math.sin(theta)
         return (self.bowl.helix_point(theta), np.array([-s, c, 0.0]), np.array([-c, -s, 0.0]))
 
@@ -202,7 +197,7 @@ class BowlElement:
         from ..bowl import path_coordinate
 
         b = self.bowl
-        theta = float(self.theta_at(self.sensing))
+        theta = float(b.theta_at(self.sensing))
         return Camera(at=self.sensing, tangent=(-math.sin(theta), math.cos(theta), 0.0), up=(0.0, 0.0, 1.0),
                       z_floor=float(b.floor_z(theta, b.radius)) - part.size,
                       along=lambda points: path_coordinate(b, points))

@@ -191,6 +191,13 @@ def test_parts_too_big_for_the_cubes_along_the_track_are_refused_there_and_allow
     check_bowl({**PARAMS, "shape": 1, "part_size": 5e-4, "part_thickness": 2.5e-4})
 
 
+def test_theta_at_is_the_inverse_of_arc_length_up_the_helix():
+    b = bowl_from(PARAMS)
+    theta = np.linspace(b.theta_start, b.theta_start + 2 * math.pi * b.turns, 7)
+    assert np.abs(b.theta_at(b.arc_length(theta)) - theta).max() <= 1e-12  # [rad]
+    assert float(b.theta_at(0.0)) == b.theta_start
+
+
 def test_the_shipped_bowl_is_accepted_and_a_deck_without_a_bowl_is_not_checked():
     check_bowl(PARAMS)
     check_bowl({"track_width": 1e-5})
