@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .linear import jet_span, turned_jet_commands, turned_jet_fix
+from .linear import block_planes, jet_span, turned_jet_commands, turned_jet_fix
 from .records import Camera, Drive, Jet, Part, number
 
 # description key (table, key) -> the bowl deck's name
@@ -182,12 +182,9 @@ class BowlElement:
         b = self.bowl
         lo, hi = self.jet_span(part.size)
         c, t, n = self.jet_frame(part.size)
-        half_l, half_w = (hi - lo) / 2, b.track_width / 2 + 2 * part.widest
-        up = np.array([0.0, 0.0, 1.0])
+        half_w = b.track_width / 2 + 2 * part.widest
         bottom = c[2] - half_w * math.tan(math.radians(b.cross_tilt)) - self.drive.amp_n - part.widest
-        top = c[2] + WIPER_REACH * b.pitch
-        return [(c - half_l * t, t), (c + half_l * t, -t), (c - half_w * n, n), (c + half_w * n, -n),
-                (np.array([c[0], c[1], bottom]), up), (np.array([c[0], c[1], top]), -up)]
+        return block_planes(c, t, n, (hi - lo) / 2, half_w, bottom, c[2] + WIPER_REACH * b.pitch)
 
     def camera(self, part: Part, origin=(0.0, 0.0, 0.0)) -> Camera:
         """Where the driver senses parts for the jet: along the path (the bowl at rest; the

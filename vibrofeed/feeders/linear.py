@@ -538,6 +538,18 @@ def jet_throw(jet: Jet, mass: float, angle: float, across: float, height: float,
     return v, beyond + out * flight
 
 
+def block_planes(centre, along, left, half_along: float, half_across: float, bottom: float,
+                 top: float) -> list[tuple[np.ndarray, np.ndarray]]:
+    """A block turned with a path as six half-spaces (a point on each plane, its unit normal into
+    the block): ``half_along`` either way of ``centre`` (3,) along the level unit vector
+    ``along``, ``half_across`` either way along ``left``, from height ``bottom`` to ``top`` [m]."""
+    c, t, n = (np.asarray(v, dtype=float) for v in (centre, along, left))
+    up = np.array([0.0, 0.0, 1.0])
+    return [(c - half_along * t, t), (c + half_along * t, -t), (c - half_across * n, n),
+            (c + half_across * n, -n), (np.array([c[0], c[1], bottom]), up),
+            (np.array([c[0], c[1], top]), -up)]
+
+
 def turned_jet_commands(k: int, what: str, mode: str, planes, left, force: str, angle: str) -> list[str]:
     """An air jet's commands whose block is turned with its path (a mesh element's, a bowl's
     helix: LIGGGHTS 3.8's blocks are axis-aligned): the intersection of the half-spaces

@@ -54,6 +54,7 @@ from ..errors import ParameterError
 from ..line import WIPER_LENGTH
 from ..mesh import MeshBuilder
 from .linear import (
+    block_planes,
     check_jet,
     jet_span,
     jet_throw,
@@ -463,13 +464,11 @@ class MeshElement:
         blocks are axis-aligned: this one is turned with the path)."""
         lo, hi = self.jet_span(part.size)
         c, t, n = self.jet_frame(part.size)
-        half_l, half_w = (hi - lo) / 2, self.jet_half_across(part)
-        up = np.array([0.0, 0.0, 1.0])
+        half_w = self.jet_half_across(part)
         bottom = c[2] - self.drive.amp_n - part.widest
         top = max(c[2] + TOOL_TOP * self.part_size, self.height_across(c, t, half_w)) \
             + self.drive.amp_n + part.widest
-        return [(c - half_l * t, t), (c + half_l * t, -t), (c - half_w * n, n), (c + half_w * n, -n),
-                (np.array([c[0], c[1], bottom]), up), (np.array([c[0], c[1], top]), -up)]
+        return block_planes(c, t, n, (hi - lo) / 2, half_w, bottom, top)
 
     def jet_throw(self, part: Part, mass: float, g: float = 9.81) -> tuple[float, float]:
         """How fast [m/s] and how far beyond the track's side [m] the jet can throw a part of
