@@ -245,9 +245,7 @@ class Jets:
             j = getattr(e, "jet", None)
             if j is None:
                 continue
-            # (the first element's frame is the deck's; the further ones' are the line's)
-            origin = feeder.line_origin if e is not feeder.elements[0] else (0.0, 0.0, 0.0)
-            cam = e.camera(feeder.part, origin)
+            cam = e.camera(feeder.part, feeder.origin_of(e))
             self.stations.append(Station(
                 section=e.number, x_sense=cam.at, keep=j.keep, delay=j.delay, duration=j.duration,
                 mode=j.mode, up=cam.up, tangent=cam.tangent, z_floor=cam.z_floor, along=cam.along,

@@ -72,13 +72,13 @@ def line_files(feeder: Feeder) -> dict[str, str]:
         f"a line of {n} section(s)"
     head = f"# written by vibrofeed.feeders.deck for one run: {what}\n"
     out = {name: head for name in FILES}
-    # the first element's own air jet (a bowl's on its helix: its frame is the deck's)
-    own = getattr(elements[0], "jet_commands", None)
-    own = own(feeder.part) if own is not None else []
+    # every element's air jet (a bowl's on its helix too), each in its own frame
+    jets = [line for e in elements if hasattr(e, "jet_commands")
+            for line in e.jet_commands(feeder.part, feeder.origin_of(e))]
     if n == 1:
         out["line_meshes.in"] += _WALLS % (1, first["mesh"])
-        if own:
-            out["line_motion.in"] += "\n".join(own) + "\n"
+        if jets:
+            out["line_motion.in"] += "\n".join(jets) + "\n"
         return out
     further = elements[1:]
     pieces = [e.deck_commands() for e in further]
@@ -111,9 +111,7 @@ def line_files(feeder: Feeder) -> dict[str, str]:
         f'     move {first["at"]} ${{catch_z}}" &\n'
         '  "fix rejects all massflow/mesh mesh reject_catch vec_side 0 0 -1 count once file '
         'rejects.txt writeTime"\n')
-    motion = [line for p in pieces for line in p["motion"]] + own
-    motion += [line for e in further if hasattr(e, "jet_commands")
-               for line in e.jet_commands(feeder.part, feeder.line_origin)]
+    motion = [line for p in pieces for line in p["motion"]] + jets
     out["line_motion.in"] += "\n".join(motion) + "\n"
     return out
 

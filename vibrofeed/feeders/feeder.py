@@ -135,6 +135,11 @@ class Feeder:
         first = self.elements[0]
         return first.line_origin if isinstance(first, BowlElement) else (0.0, 0.0, 0.0)
 
+    def origin_of(self, e) -> tuple[float, float, float]:
+        """Where element ``e``'s frame lies in the deck's [m]: the first element's is the deck's,
+        the further ones' :attr:`line_origin`."""
+        return (0.0, 0.0, 0.0) if e is self.elements[0] else self.line_origin
+
     @property
     def path_shift(self) -> float:
         """What the path coordinate adds to an x of the line's frame [m]: 0 for a line (its
@@ -291,7 +296,7 @@ class Feeder:
         if abs(d[1]) > 1e-3 * float(np.linalg.norm(d)):
             return None
         lo, hi = e.exit_band
-        shift = self.line_origin[1] if e is not self.elements[0] else 0.0
+        shift = self.origin_of(e)[1]
         return lo + shift - self.part.widest, hi + shift + self.part.widest
 
     def element_at_x(self, x) -> np.ndarray:
