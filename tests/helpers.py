@@ -283,6 +283,18 @@ def write_trial(path, n=300, sigma=5e-6, seed=0, placeholder=PLACEHOLDER, mutate
 
 # A detour from CAD, in millimetres: its floor's centre line with legs of 4, 5, 4, 5 and 4 mm, 22
 # mm of path for 20 along x, ending where it started across, heading +x.
+# A description's parts for a run by construction of one chip component: the 1.0 x 0.5 x 0.35 mm
+# box of 36 spheres, at the stiffness floor, restitution 0.3 (tests/engine/test_mesh_jet_run.py,
+# test_bowl_jet_run.py).
+BOX_PARTS = """[parts]
+shape = "box"
+size = 1e-3
+width = 5e-4
+thickness = 3.5e-4
+clump_spacing = 1.0
+youngs = 2e7
+restitution = 0.3
+"""
 DETOUR = np.array([(0, 0, 0), (4, 0, 0), (8, 3, 0), (12, 3, 0), (16, 0, 0), (20, 0, 0)], dtype=float)
 
 

@@ -23,7 +23,7 @@ import math
 import numpy as np
 import pytest
 
-from helpers import place_one_body
+from helpers import BOX_PARTS, place_one_body
 from vibrofeed.bowl import path_coordinate
 from vibrofeed.decks import Deck
 from vibrofeed.engine.runner import run_deck
@@ -34,16 +34,7 @@ from vibrofeed.parts import Box, box_template
 from vibrofeed.poses import matrix_quaternion, pose_matrix
 from vibrofeed.results.reader import Result
 
-BOWL = """
-[parts]
-shape = "box"
-size = 1e-3
-width = 5e-4
-thickness = 3.5e-4
-clump_spacing = 1.0
-youngs = 2e7
-restitution = 0.3
-[supply]
+BOWL = BOX_PARTS + """[supply]
 n_parts = 1
 n_track = 0
 [run]

@@ -25,7 +25,7 @@ import math
 import numpy as np
 import pytest
 
-from helpers import channel, one_body_balanced, place_one_body
+from helpers import BOX_PARTS, channel, one_body_balanced, place_one_body
 from vibrofeed.decks import Deck
 from vibrofeed.engine.runner import run_deck
 from vibrofeed.feeders import Feeder
@@ -39,15 +39,7 @@ from vibrofeed.results.reader import Result
 PLAN = [(0, 0, 0), (4, 0, 0), (8, -3, 0), (12, -3, 0)]  # mm: a bend to the right
 STEP, AMP_N, PHASE = 5e-5, 2e-5, -30.0
 LINE = f"""
-[parts]
-shape = "box"
-size = 1e-3
-width = 5e-4
-thickness = 3.5e-4
-clump_spacing = 1.0
-youngs = 2e7
-restitution = 0.3
-[supply]
+{BOX_PARTS}[supply]
 n_parts = 1
 fill_from = 0.05
 fill_to = 0.45
