@@ -378,6 +378,18 @@ class LinearSection:
                 raise ParameterError(f"{n(('side_drop', 'width'))}={d.width:g} m is less than half a "
                                      f"part ({part.abreast / 2:g} m across it in a file): every part "
                                      "would fall off the drop")
+            if part.shape == 3:
+                # A crosswise box falls when its centre of mass lies past the edge: on the floor
+                # tilted towards the wall it leans (T/2) tan(tilt) nearer the wall than its
+                # footprint's centre (docs/orientation.md, "A ledge instead of a gate").
+                held = part.widest / 2 - part.thickness / 2 * math.tan(math.radians(self.cross_tilt))
+                if d.width >= held:
+                    warnings.warn(
+                        f"{n(('side_drop', 'width'))}={d.width:g} m: a box lying crosswise against the "
+                        f"wall has its centre of mass {held:.3g} m out (half its length less "
+                        f"{part.thickness / 2:g} m x tan {self.cross_tilt:g} deg of cross tilt), over "
+                        "the floor: the side drop keeps crosswise boxes; narrow it below that",
+                        SideDropWarning, stacklevel=3)
         if self.slot is not None:
             self._check_slot(part)
         if self.jet is not None:
@@ -469,6 +481,10 @@ class LinearSection:
 
 class SlotWarning(UserWarning):
     """A slot that runs but cannot sort the parts (it rejects all of them, or none)."""
+
+
+class SideDropWarning(UserWarning):
+    """A side drop that runs but keeps the boxes it is there to drop (those lying crosswise)."""
 
 
 def warn(text: str) -> None:
