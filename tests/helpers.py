@@ -341,6 +341,11 @@ def channel(points, width, wall, holes=(), flipped=()):
     return v, t
 
 
+def deck_values(params) -> dict[str, str]:
+    """A test's deck parameters as the texts a deck takes: floats by repr (every digit kept)."""
+    return {k: repr(v) if isinstance(v, float) else str(v) for k, v in params.items()}
+
+
 def one_body_balanced(mb) -> None:
     """The mass balance of a run of :func:`place_one_body`: the one part inserted from the
     first step on (frame 0 is before it), none lost, and exact at every frame."""

@@ -33,7 +33,7 @@ import math
 import numpy as np
 import pytest
 
-from helpers import place_one_body
+from helpers import deck_values, place_one_body
 from vibrofeed.decks import Deck
 from vibrofeed.engine.runner import run_deck
 from vibrofeed.feeders.feeder import section_from
@@ -59,14 +59,10 @@ GAP = 2e-6  # between the placed box and the floor
 POSES = {"side": (1, 0), "flat": (0, 0)}  # (stand, facing) of vibrofeed.poses, lengthwise
 
 
-def values(params):
-    return {k: repr(v) if isinstance(v, float) else str(v) for k, v in params.items()}
-
-
 def placement(params, stand, facing):
     """(centre of mass, quaternion w x y z) of a box in the pose on section 2's floor where its
     sines put it at t = 0, a quarter of the way along, in the middle across."""
-    section = section_from(values(params))
+    section = section_from(deck_values(params))
     rows = box_template(Box.of(Part.from_values(params)))
     R = pose_matrix(stand, facing)
     placed, r = rows[:, :3] @ R.T, rows[:, 3]
@@ -79,7 +75,7 @@ def placement(params, stand, facing):
 def run(path, params, pose):
     at, q = placement(params, *POSES[pose])
     commands = place_one_body(at, q, PRIMES[0])
-    run_deck(Deck.find("bulk_feeder"), values(params), path, before_run=commands)
+    run_deck(Deck.find("bulk_feeder"), deck_values(params), path, before_run=commands)
     problems = [str(p) for p in check_file(path).problems if p.level == "error"]
     with Result(path) as r:
         ids, q = r.read("id"), r.read("orientation")
@@ -150,7 +146,7 @@ def test_section_one_moves_across_as_its_sine_and_check_holds_it_to_it(tmp_path)
     params = {"n_parts": 3, "inlet_rate": 0, "amp_c": amp, "phase_c": lead, "freq": freq,
               "t_end": 0.02, "output_dt": 1e-3}
     path = tmp_path / "c1.h5"
-    run_deck(Deck.find("bulk_feeder"), values(params), path)
+    run_deck(Deck.find("bulk_feeder"), deck_values(params), path)
     assert [p for p in check_file(path).problems if p.level == "error"] == []
     with Result(path) as r:
         pos = r.file["observables/surface/position/value"][()]

@@ -16,6 +16,7 @@ import math
 import numpy as np
 import pytest
 
+from helpers import deck_values
 from vibrofeed.decks import Deck
 from vibrofeed.engine.runner import run_deck
 from vibrofeed.feeders.feeder import Feeder
@@ -37,10 +38,6 @@ LINE = {"n_parts": 1, "track_length": 2e-3, "track_width": 2e-3, "gate_width": 4
         "s2_jet_keep": "up,any-direction"}
 PRIMES = (15485863, 32452843, 49979687, 67867967, 86028121, 104395301, 122949823, 141650939,
           160481183, 179424673, 198491317, 217645177)
-
-
-def values(params):
-    return {k: repr(v) if isinstance(v, float) else str(v) for k, v in params.items()}
 
 
 def chips(placed, params):
@@ -75,7 +72,7 @@ PLACED = [(0.2e-3, False), (0.8e-3, True), (1.4e-3, False)]
 
 
 def run(path, params, ranks=1, placed=PLACED):
-    run_deck(Deck.find("bulk_feeder"), values(params), path, before_run=chips(placed, params),
+    run_deck(Deck.find("bulk_feeder"), deck_values(params), path, before_run=chips(placed, params),
              ranks=ranks)
     with Result(path) as r:
         return {"ids": r.read("id"), "x": r.read("position"), "time": r.time,

@@ -17,7 +17,7 @@ balance is exact at every frame (inserted = on track + exited + rejected).
 import numpy as np
 import pytest
 
-from helpers import one_body_balanced, place_one_body
+from helpers import deck_values, one_body_balanced, place_one_body
 from vibrofeed.decks import Deck
 from vibrofeed.engine.runner import run_deck
 from vibrofeed.feeders.feeder import section_from
@@ -41,14 +41,10 @@ OVERLAP = 1e-5
 POSES = {"lengthwise": (0, 0), "crosswise": (0, 1)}  # vibrofeed.poses: flat, long or short along x
 
 
-def values(params):
-    return {k: repr(v) if isinstance(v, float) else str(v) for k, v in params.items()}
-
-
 def placement(facing):
     """(centre of mass, quaternion w x y z) of a flat box, centred across, GAP above the
     floor at t = 0, its front GAP short of the gate's taper."""
-    section = section_from(values(LINE))
+    section = section_from(deck_values(LINE))
     rows = box_template(Box.of(Part.from_values(LINE)))
     R = pose_matrix(0, facing)
     placed, r = rows[:, :3] @ R.T, rows[:, 3]
@@ -60,7 +56,7 @@ def placement(facing):
 
 def run(path, pose):
     at, q = placement(POSES[pose][1])
-    run_deck(Deck.find("bulk_feeder"), values(LINE), path, before_run=place_one_body(at, q, 15485863))
+    run_deck(Deck.find("bulk_feeder"), deck_values(LINE), path, before_run=place_one_body(at, q, 15485863))
     with Result(path) as r:
         mb, out, rejects = r.mass_balance, r.outlet["id"].tolist(), r.rejects["id"].tolist()
         ids, x, quat, template = r.read("id"), r.read("position"), r.read("orientation"), r.body_template
@@ -71,7 +67,7 @@ def run(path, pose):
     across = (ys + template[:, 3]).max(axis=1) - (ys - template[:, 3]).min(axis=1)
     centre = x[live, 0, 0] - shift[live, 0]  # along section 2, as it moves
     return {"mb": mb, "out": out, "rejects": rejects, "x": centre, "across": across,
-            "narrow": section_from(values(LINE)).gate_x[1], "end": section_from(values(LINE)).x1}
+            "narrow": section_from(deck_values(LINE)).gate_x[1], "end": section_from(deck_values(LINE)).x1}
 
 
 @pytest.fixture(scope="module")

@@ -24,7 +24,7 @@ import warnings
 import numpy as np
 import pytest
 
-from helpers import one_body_balanced, place_one_body
+from helpers import deck_values, one_body_balanced, place_one_body
 from vibrofeed.decks import Deck
 from vibrofeed.engine.runner import run_deck
 from vibrofeed.feeders.feeder import section_from
@@ -53,13 +53,9 @@ def turn(axis, degrees):
     return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1.0]])
 
 
-def values(params):
-    return {k: repr(v) if isinstance(v, float) else str(v) for k, v in params.items()}
-
-
 def run(path, ledge, crosswise):
     params = {**LINE, "s2_drop_width": ledge}
-    section = section_from(values(params))
+    section = section_from(deck_values(params))
     rows = box_template(Box.of(Part.from_values(params)))
     # lying flat (a quarter turn about z: crosswise), then tilted with the floor about x
     R = turn("x", TILT) @ turn("z", 90.0 if crosswise else 0.0) @ pose_matrix(0, 0)
@@ -71,7 +67,7 @@ def run(path, ledge, crosswise):
     at = np.array([LINE["track_length"] + 0.3 * LINE["s2_length"], y, z])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # (b) is the side drop warned of: it keeps crosswise boxes
-        run_deck(Deck.find("bulk_feeder"), values(params), path,
+        run_deck(Deck.find("bulk_feeder"), deck_values(params), path,
                  before_run=place_one_body(at, matrix_quaternion(R), SEED))
     with Result(path) as res:
         return res.mass_balance, res.outlet, res.rejects

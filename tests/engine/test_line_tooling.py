@@ -28,6 +28,7 @@ import math
 import numpy as np
 import pytest
 
+from helpers import deck_values
 from vibrofeed.decks import Deck
 from vibrofeed.engine.runner import run_deck
 from vibrofeed.feeders.feeder import section_from
@@ -50,12 +51,8 @@ GAP = 1e-5  # between a part and the wiper's face, and above the floor, when pla
 OVERLAP = 0.02 * THICK
 
 
-def values(params):
-    return {k: repr(v) if isinstance(v, float) else str(v) for k, v in params.items()}
-
-
 def wiper_face(params):
-    return section_from(values(params)).wiper_x[0]
+    return section_from(deck_values(params)).wiper_x[0]
 
 
 def floor_at_start(params):
@@ -64,7 +61,7 @@ def floor_at_start(params):
 
 
 def run(path, params, commands):
-    run_deck(Deck.find("bulk_feeder"), values(params), path, before_run=commands)
+    run_deck(Deck.find("bulk_feeder"), deck_values(params), path, before_run=commands)
     return path
 
 

@@ -23,7 +23,7 @@ import math
 import numpy as np
 import pytest
 
-from helpers import one_body_balanced, place_one_body
+from helpers import deck_values, one_body_balanced, place_one_body
 from vibrofeed.decks import Deck
 from vibrofeed.engine.runner import run_deck
 from vibrofeed.feeders.feeder import Feeder, section_from
@@ -50,15 +50,11 @@ GAP = 2e-6  # between the placed box and the wall, and the floor; and its front 
 POSES = {"flat": (0, 0), "crosswise": (0, 1), "side": (1, 0), "end": (2, 0)}
 
 
-def values(params):
-    return {k: repr(v) if isinstance(v, float) else str(v) for k, v in params.items()}
-
-
 def placement(stand, facing):
     """(centre of mass, quaternion w x y z) of a box in the pose, turned with the floor's cross
     tilt, GAP from the reference wall and above the floor at t = 0, its front GAP short of the
     slot."""
-    section = section_from(values(LINE))
+    section = section_from(deck_values(LINE))
     rows = box_template(Box.of(Part.from_values(LINE)))
     c, s = math.cos(math.radians(TILT)), math.sin(math.radians(TILT))
     R = np.array([[1, 0, 0], [0, c, -s], [0, s, c]]) @ pose_matrix(stand, facing)
@@ -77,13 +73,13 @@ def placement(stand, facing):
 def run(path, pose):
     at, q = placement(*POSES[pose])
     commands = place_one_body(at, q, PRIMES[0])
-    run_deck(Deck.find("bulk_feeder"), values(LINE), path, before_run=commands)
+    run_deck(Deck.find("bulk_feeder"), deck_values(LINE), path, before_run=commands)
     with Result(path) as r:
         mb, out, rej = r.mass_balance, r.outlet, r.rejects
         ids, x = r.read("id"), r.read("position")
-    section = section_from(values(LINE))
+    section = section_from(deck_values(LINE))
     x = np.where((ids >= 0)[..., None], x, np.nan)  # (frames, 1, 3): the one part
-    stations = Feeder.from_values(values(LINE)).stations
+    stations = Feeder.from_values(deck_values(LINE)).stations
     by = [TOOLING[k] for k in tooling(rej["position"][:, 0], rej["section"], stations, L_)]
     return {"mb": mb, "out": out["id"].tolist(), "rejects": rej["id"].tolist(), "by": by,
             "reject_x": rej["position"][:, 0].tolist(), "x": x[:, 0], "slot": section.slot_x,

@@ -26,7 +26,7 @@ import math
 import numpy as np
 import pytest
 
-from helpers import one_body_balanced, place_one_body
+from helpers import deck_values, one_body_balanced, place_one_body
 from vibrofeed.decks import Deck
 from vibrofeed.engine.runner import run_deck
 from vibrofeed.feeders.feeder import section_from
@@ -60,12 +60,8 @@ POSES = {"side, marked face to the wall": rx(90),  # its +z towards -y, the refe
          "flat, marked face up": np.eye(3)}
 
 
-def values(params):
-    return {k: repr(v) if isinstance(v, float) else str(v) for k, v in params.items()}
-
-
 def run(path, turn):
-    section = section_from(values(LINE))
+    section = section_from(deck_values(LINE))
     rows = box_template(Box.of(Part.from_values(LINE)))
     R = turn @ pose_matrix(0, 0)
     placed, r = rows[:, :3] @ R.T, rows[:, 3]
@@ -73,7 +69,7 @@ def run(path, turn):
     # 0.7 mm past the joint (its rear clear of section 1), its front 0.6 mm short of the rail
     at = np.array([LINE["track_length"] + 7e-4, -section.width / 2 + GAP - (placed[:, 1] - r).min(),
                    floor + GAP - (placed[:, 2] - r).min()])
-    run_deck(Deck.find("bulk_feeder"), values(LINE), path,
+    run_deck(Deck.find("bulk_feeder"), deck_values(LINE), path,
              before_run=place_one_body(at, matrix_quaternion(R), SEED))
     with Result(path) as res:
         ids, q, x = res.read("id"), res.read("orientation"), res.read("position")
