@@ -296,8 +296,8 @@ def resolve(deck: Deck, given: Mapping[str, str]) -> dict[str, str]:
     except ParameterError as exc:
         raise ParameterError(speak(str(exc))) from None
     for w in heard:
-        if issubclass(w.category, ParameterWarning):
-            warnings.warn(speak(str(w.message)), ParameterWarning, stacklevel=2)
+        if issubclass(w.category, ParameterWarning):  # (a tool's own kind kept: SlotWarning, ...)
+            warnings.warn(speak(str(w.message)), w.category, stacklevel=2)
         else:
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     return values

@@ -479,11 +479,11 @@ class LinearSection:
 
 
 
-class SlotWarning(UserWarning):
+class SlotWarning(ParameterWarning):
     """A slot that runs but cannot sort the parts (it rejects all of them, or none)."""
 
 
-class SideDropWarning(UserWarning):
+class SideDropWarning(ParameterWarning):
     """A side drop that runs but keeps the boxes it is there to drop (those lying crosswise)."""
 
 

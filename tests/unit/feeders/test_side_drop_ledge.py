@@ -44,8 +44,8 @@ def test_a_drop_narrower_than_the_leaning_centre_is_quiet_and_one_as_wide_is_war
     (warning,) = checked(bound, tilt)
     (wider,) = checked(bound + 1e-6, tilt)
     text = str(warning.message)
-    assert text.startswith(f"s2_drop_width={bound:g} m: a box lying crosswise against the wall has its "
-                           f"centre of mass {bound:.3g} m out")
+    assert text.startswith(f"element.2.side_drop.width={bound:g} m: a box lying crosswise against the wall "
+                           f"has its centre of mass {bound:.3g} m out")  # in the name the user gave
     assert "keeps crosswise boxes" in str(wider.message)
 
 
