@@ -30,11 +30,12 @@ from __future__ import annotations
 import importlib
 import os
 import re
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
-from .errors import DeckError
+from .errors import DeckError, ParameterWarning
 
 DECK_SUFFIX = ".liggghts"
 
@@ -330,7 +331,11 @@ class Deck:
         except (ImportError, AttributeError) as exc:
             raise DeckError(f"{_shown(self.path)}: its prepare hook {target} cannot be loaded: "
                             f"{exc}") from None
-        return hook(dict(values), Path(folder))
+        # The hook checks the feeder again (a refusal stops it), but its warnings were said
+        # when the values were resolved, in the names the user gave: not said twice.
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ParameterWarning)
+            return hook(dict(values), Path(folder))
 
     @property
     def title(self) -> str:

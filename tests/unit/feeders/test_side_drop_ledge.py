@@ -8,7 +8,7 @@ import warnings
 
 import pytest
 
-from helpers import REPO
+from helpers import REPO, vibrofeed
 from vibrofeed.decks import Deck
 from vibrofeed.feeders.linear import SideDropWarning
 from vibrofeed.parameters import resolve
@@ -55,3 +55,15 @@ def test_the_demos_drop_drops_crosswise_boxes_by_three_microns():
     assert checked(4.5e-4, 15.0) == []
     assert len(checked(4.6e-4, 15.0)) == 1
     assert 4.6e-4 < L / 2 and held(15) - 4.5e-4 == pytest.approx(3.1e-6, abs=1e-7)
+
+
+def test_prepare_says_the_warning_once_in_the_users_name(tmp_path):
+    """The check runs as the values are resolved and again as the deck is prepared; the user
+    hears it once, as the name they gave (it was said twice, the second time as s2_drop_width)."""
+    proc = vibrofeed("prepare", REPO / "feeders" / "orient_line.toml",
+                     "-p", "element.2.side_drop.width=4.6e-4", "-o", tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    said = [line for line in proc.stderr.splitlines() if line.startswith("vibrofeed: warning:")]
+    assert len(said) == 1, said
+    assert said[0].startswith("vibrofeed: warning: element.2.side_drop.width=0.00046 m: a box lying "
+                              "crosswise")
