@@ -28,12 +28,12 @@ last frame of the steady feeding window and the plots into one folder. The cases
     time.
 ``orient``
     Chip components (1.0 x 0.5 x 0.35 mm boxes, their marked face +z) delivered lengthwise
-    with the marked face up (feeders/orient_line.toml, docs/orientation.md, "The demo"): a
-    hopping bulk section shakes them onto a broad face and a gate files them lengthwise; a
-    faster section spaces them, a side drop takes those still crosswise and a camera with an
-    air jet blows off every part not up and lengthwise; the rejects return to the inlet. The
-    report adds the rate of correct single parts, each station's census and the
-    recirculation; the picture colours the parts by state.
+    with the marked face up (feeders/orient_ledge.toml, docs/orientation.md, "The demo"):
+    drawn from a store at 110 parts/s onto a hopping bulk section that lays many on a broad
+    face; a faster section narrows to a ledge along its wall that only lengthwise boxes stay
+    on, and a camera with an air jet blows off every part not up and lengthwise; the rejects
+    fall back into the store. The report adds the rate of correct single parts, each
+    station's census and the recirculation load; the picture colours the parts by state.
 """
 
 from __future__ import annotations
@@ -87,7 +87,7 @@ CASES = {"line": ("feeder_line", "bulk_feeder", {**SUPPLY, **LINE}),
          "track": ("bulk_feeder", "bulk_feeder", {**SUPPLY, **TRACK}),
          "bowl": ("bowl_feeder", "bowl_feeder", BOWL),
          "bowl-line": ("bowl_line", "bowl_line.toml", {}),
-         "orient": ("orient_line", "orient_line.toml", {})}
+         "orient": ("orient_ledge", "orient_ledge.toml", {})}
 
 
 def add_arguments(p) -> None:
@@ -97,8 +97,8 @@ def add_arguments(p) -> None:
                    help="line (default): the singulating feeder line; track: the uniform track it "
                         "replaces, with the same supply; bowl: a small vibratory bowl feeding dies; "
                         "bowl-line: that bowl with an exit line that singulates them; orient: chip "
-                        "components delivered lengthwise, marked face up (a gate, a side drop, a "
-                        "camera and an air jet)")
+                        "components delivered lengthwise, marked face up (a ledge, a camera and "
+                        "an air jet)")
     p.add_argument("-o", "--output", default="results", metavar="DIR",
                    help="folder for the result, the picture and the plots (default: results)")
     p.add_argument("-p", "--param", action="append", metavar="NAME=VALUE",

@@ -100,30 +100,66 @@ def test_the_bowl_line_case_speeds_the_dies_up_at_its_joint_as_its_description_s
     assert drive.amp_n * (2 * math.pi * drive.freq) ** 2 < 9.81
 
 
-def test_the_orient_case_files_boxes_lengthwise_and_blows_off_the_wrong_ones_as_its_comments_say():
-    """feeders/orient_line.toml: its rules as docs/orientation.md states them, each a closed form
-    of the part's dimensions: the gate passes a box only lengthwise (W <= width < L), the side
-    drop drops a crosswise box and keeps a lengthwise one (W/2 <= width < L/2), the jet keeps
-    the part's correct state and pushes a part across the tilted floor against friction
-    (its force along the floor beyond the weight's share down the tilt and the friction of
-    what it still presses on the floor), the bulk section hops (Gamma_n > 1), the second
-    slides (Gamma_n < 1); the feeder checks as a whole (joints)."""
+def jet_pushes_off(values, part, section) -> bool:
+    """Whether a section's jet pushes a part across the tilted floor against friction with a
+    margin: its force along the floor beyond 1.5 times the weight's share down the tilt and the
+    friction of what it still presses on the floor."""
+    L, W, T = part.size, part.width, part.thickness
+    weight = float(values["density"]) * L * W * T * 9.81
+    jet = section.jet
+    mu, tilt, angle = float(values["mu"]), math.radians(section.cross_tilt), math.radians(jet.angle)
+    along = jet.force * math.cos(angle)
+    resist = weight * math.sin(tilt) + mu * max(weight * math.cos(tilt) - jet.force * math.sin(angle), 0.0)
+    return along > 1.5 * resist
+
+
+def gamma_n(section) -> float:
+    """The normal stroke's peak acceleration over g (above 1 the parts hop)."""
+    return section.drive.amp_n * (2 * math.pi * section.drive.freq) ** 2 / 9.81
+
+
+def test_the_orient_case_drops_crosswise_boxes_off_a_ledge_and_blows_off_the_wrong_ones():
+    """feeders/orient_ledge.toml, the demo's: its rules as docs/orientation.md states them, each a
+    closed form of the part's dimensions: no gate; the ledge keeps a lengthwise box and drops a
+    crosswise one by its centre of mass, which leans (T/2) tan(tilt) towards the wall
+    (W/2 <= width < L/2 - (T/2) tan(tilt)); the jet keeps the part's correct state and pushes a
+    part off; the bulk section hops, the ledge's slides; the line is drawn from a store (its
+    rejects removed, its inlet fed) and checks as a whole (joints)."""
     from vibrofeed.orientation import parse_correct
 
-    _, values, feeder = described_case("orient", "orient_line", "orient_line.toml")
+    _, values, feeder = described_case("orient", "orient_ledge", "orient_ledge.toml")
     part = feeder.part
     L, W, T = part.size, part.width, part.thickness
     one, two = feeder.elements
+    assert one.gate is None and two.gate is None
+    lean = T / 2 * math.tan(math.radians(two.cross_tilt))
+    assert W / 2 <= two.side_drop.width < L / 2 - lean
+    assert two.width >= one.width  # (the ledge narrows the floor, not the joint)
+    assert two.jet.keeps_correct and two.jet.keep == part.correct == parse_correct("up, lengthwise")
+    assert two.side_drop.start < two.jet.at < two.side_drop.end  # the jet blows over the open side
+    assert jet_pushes_off(values, part, two)
+    assert gamma_n(one) > 1 > gamma_n(two)
+    assert float(values["recirculate"]) == 0 and float(values["inlet_rate"]) > 0  # a store
+
+
+def test_the_gated_orientation_line_files_boxes_lengthwise_as_its_comments_say():
+    """feeders/orient_line.toml (the line of the jet-delay sweep and the gate's optimiser study):
+    the gate passes a box only lengthwise (W <= width < L), the side drop drops a crosswise box
+    and keeps a lengthwise one (W/2 <= width < L/2), the jet keeps the part's correct state and
+    pushes a part off, the bulk section hops, the second slides; the rejects return to the
+    inlet, which is fed."""
+    from vibrofeed.decks import feeders_dir
+    from vibrofeed.orientation import parse_correct
+
+    values = resolve(Deck.find(feeders_dir() / "orient_line.toml"), {})
+    feeder = Feeder.from_values(values)
+    feeder.check()
+    part = feeder.part
+    L, W = part.size, part.width
+    one, two = feeder.elements
     assert W <= one.gate.width < L
     assert W / 2 <= two.side_drop.width < L / 2
-    jet = two.jet
-    assert jet.keeps_correct and jet.keep == part.correct == parse_correct("up, lengthwise")
-    mass = float(values["density"]) * L * W * T
-    weight = mass * 9.81
-    mu, tilt, angle = float(values["mu"]), math.radians(two.cross_tilt), math.radians(jet.angle)
-    along = jet.force * math.cos(angle)
-    resist = weight * math.sin(tilt) + mu * max(weight * math.cos(tilt) - jet.force * math.sin(angle), 0.0)
-    assert along > 1.5 * resist  # it pushes the part off within its window, with a margin
-    w1, w2 = (2 * math.pi * e.drive.freq for e in (one, two))
-    assert one.drive.amp_n * w1 ** 2 / 9.81 > 1 > two.drive.amp_n * w2 ** 2 / 9.81
+    assert two.jet.keeps_correct and two.jet.keep == part.correct == parse_correct("up, lengthwise")
+    assert jet_pushes_off(values, part, two)
+    assert gamma_n(one) > 1 > gamma_n(two)
     assert float(values["recirculate"]) == 1 and float(values["inlet_rate"]) > 0  # fed, not drained

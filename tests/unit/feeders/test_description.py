@@ -227,7 +227,7 @@ def test_prepared_in_holds_a_run_by_hand_to_the_values_it_was_checked_for(tmp_pa
     ("bulk_feeder", {}),
     ("bulk_feeder", {"sections": "2", "recirculate": "1", "s2_drop_from": "0.2", "s2_drop_to": "0.5",
                      "s2_drop_width": "1e-3"}),
-    ("bowl_feeder", {}), ("bowl_line.toml", {}), ("orient_line.toml", {})])
+    ("bowl_feeder", {}), ("bowl_line.toml", {}), ("orient_line.toml", {}), ("orient_ledge.toml", {})])
 def test_a_run_by_hand_is_held_to_every_number_vibrofeed_checked(tmp_path, name, given):
     """The rules live in Python only: the decks repeat none, and prepared.in refuses a run by
     hand with another value of any number (the part, the drives of a single track too, the
