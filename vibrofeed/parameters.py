@@ -956,11 +956,34 @@ SPHERE_STEP_SECONDS = 0.3e-6
 
 def parts_held(p: Mapping[str, float]) -> float:
     """The parts a run holds on average, for its cost: the pile and the track's, and half of
-    those fed over the run (a line fills as it runs); one for the single part."""
+    those fed over the run (a line fills as it runs), but no more fed ones than cover its
+    linear sections' floors once (:func:`floor_capacity`: what a line delivers or rejects
+    leaves it); one for the single part."""
     if "radius" in p:
         return 1.0
     fed = p.get("inlet_rate", 0.0) * p.get("t_end", 0.0) / 2
+    capacity = floor_capacity(p)
+    if capacity is not None:
+        fed = min(fed, capacity)
     return max(p.get("n_parts", 0.0) + p.get("n_track", 0.0) + fed, 1.0)
+
+
+def floor_capacity(p: Mapping[str, float]) -> float | None:
+    """How many parts lie on a feeder line's floors side by side, one layer: its linear
+    sections' length x width over a part's footprint (L x W for a box, L x L else); None for a
+    bowl, a line with another kind of element (a chute, a mesh), or without the part's or the
+    floors' sizes."""
+    if "part_size" not in p or starts_with_bowl(p):
+        return None
+    try:
+        elements = Feeder.from_values(p).elements
+    except (ParameterError, KeyError, ValueError):
+        return None
+    if not all(isinstance(e, LinearSection) and e.length > 0 and e.width > 0 for e in elements):
+        return None
+    size = p["part_size"]
+    footprint = size * (p.get("part_width", size) if int(p.get("shape", 0)) == 3 else size)
+    return sum(e.length * e.width for e in elements) / footprint
 
 
 def step_seconds(p: Mapping[str, float]) -> float:

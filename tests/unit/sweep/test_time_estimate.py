@@ -60,6 +60,21 @@ def test_the_parts_held_set_the_cost_of_a_step():
     assert seconds == pytest.approx(steps * (FEEDER + SPHERE * 21 * 36), rel=1e-12)
 
 
+def test_a_line_holds_no_more_fed_parts_than_cover_its_floors():
+    """The orientation demo's line draws 110 boxes a second from its store over 2 s, and was
+    estimated at 1 h 34 min holding 122 boxes (it held 17-20 and ran 10-13 minutes): what it
+    delivers or rejects leaves it. By hand: 12 pre-filled and no more fed ones than lie side
+    by side on its floors, (5 x 1.4 + 8 x 1.4) mm^2 over a box's 1.0 x 0.5 mm footprint."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        values = resolve(Deck.find(REPO / "feeders" / "orient_ledge.toml"), {})
+    held = 12 + (5 * 1.4 + 8 * 1.4) / (1.0 * 0.5)
+    seconds, steps, _dt = estimated_seconds(values)
+    assert seconds == pytest.approx(steps * (FEEDER + SPHERE * held * 36), rel=1e-12)
+    # a line fed less than its floors hold keeps its half of the fed ones (above: 21 boxes)
+    assert held < 12 + 110 * 2 / 2
+
+
 def test_a_bowls_mesh_costs_its_step():
     """The bowl sweep was estimated at 5.5 minutes and took about 15: a bowl's 602 triangles,
     turned and lifted at every step, cost five times a track's. By hand: the bowl-line demo
