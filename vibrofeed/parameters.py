@@ -126,6 +126,7 @@ RULES: dict[str, Callable[[float], str | None]] = {
     "dt": _non_negative,
     "seed": _integer(lo=1),
     # the bulk feeder (decks/bulk_feeder.liggghts)
+    "skin": _non_negative,  # (the bowl too)
     "shape": _integer(choices=(0, 1, 2, 3, 4)),
     "pair": _integer(choices=(0, 1)),
     "pull_speed": _positive,

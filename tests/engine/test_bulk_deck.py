@@ -40,6 +40,29 @@ def test_by_hand_after_prepare(tmp_path):
     assert step0[1] == "0" and int(step0[2]) == 30 * 9  # t = 0 at the start; 9 spheres a chip
     assert float(step0[-2]) == 30  # n_inserted
     assert (tmp_path / "outlet.txt").exists() and (tmp_path / "bulk_feeder.dump").exists()
+    # the neighbour skin, as LIGGGHTS took it: 0.4 of the chip's smallest sphere by default
+    smallest = min(float(row.split()[3]) for row in (tmp_path / "m" / "chip.multisphere").read_text()
+                   .splitlines() if not row.startswith("#"))
+    assert neighbour_skin(log) == pytest.approx(0.4 * smallest, rel=1e-12)
+
+
+def neighbour_skin(log: str) -> float:
+    """The skin of the log's `neighbor` command, as LIGGGHTS echoed it after substitution."""
+    (skin,) = re.findall(r"^neighbor\s+([-0-9.e+]+) bin$", log, re.M)
+    return float(skin)
+
+
+def test_a_given_neighbour_skin_is_the_one_run(tmp_path):
+    """skin [m] (0: derived) reaches LIGGGHTS as given: a run by hand after prepare."""
+    given = {**SHORT, "t_end": "0.005", "shape": "chip", "skin": "1.25e-4"}
+    proc = vibrofeed("prepare", "bulk_feeder", *params(given), "-o", tmp_path / "m", check=True)
+    line = proc.stdout.strip().splitlines()[-1]
+    assert "-var skin 1.25e-4" in line
+    subprocess.run(shlex.split(line) + ["-log", "log", "-nocite"], cwd=tmp_path, check=True,
+                   capture_output=True, timeout=600)
+    log = (tmp_path / "log").read_text()
+    assert "ERROR" not in log
+    assert neighbour_skin(log) == pytest.approx(1.25e-4, rel=1e-12)
 
 
 @pytest.mark.parametrize("given, says", [

@@ -54,7 +54,7 @@ TABLES: dict[str, dict[str, str]] = {
     "surface": {"youngs": "youngs_track", "poisson": "poisson_track"},
     "supply": {k: k for k in ("n_parts", "fill_from", "fill_to", "inlet_rate", "inlet_batch",
                               "recirculate", "return_delay", "n_track")},
-    "run": {k: k for k in ("t_end", "t_settle", "output_dt", "dt", "dt_unchecked", "seed")},
+    "run": {k: k for k in ("t_end", "t_settle", "output_dt", "dt", "dt_unchecked", "seed", "skin")},
 }
 TEXT_KEYS = {"feeder": ("name", "description")}  # words, not numbers
 _TUNABLES = "# ------------------------------------------------------------------ tunables"

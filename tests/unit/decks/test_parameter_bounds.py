@@ -55,6 +55,7 @@ BOUNDS = {
 # The bulk feeder's own parameters (decks/bulk_feeder.liggghts); their relations
 # (_check_bulk_feeder) bind at most edges, so these bounds are checked on the rule itself.
 BULK = {
+    "skin": (0, True, INF, False, None),
     "shape": (0, True, 4, True, (0, 1, 2, 3, 4)),
     "part_size": (0, False, 1, True, None),
     "part_thickness": (0, False, 1, True, None),
