@@ -971,20 +971,18 @@ def parts_held(p: Mapping[str, float]) -> float:
 
 def floor_capacity(p: Mapping[str, float]) -> float | None:
     """How many parts lie on a feeder line's floors side by side, one layer: its linear
-    sections' length x width over a part's footprint (L x W for a box, L x L else); None for a
-    bowl, a line with another kind of element (a chute, a mesh), or without the part's or the
-    floors' sizes."""
+    sections' length x width over the footprint of a part lying flat along the path (its
+    widest by what it takes abreast: L x W for a box); None for a bowl, a line with another
+    kind of element (a chute, a mesh), or without the part's or the floors' sizes."""
     if "part_size" not in p or starts_with_bowl(p):
         return None
     try:
-        elements = Feeder.from_values(p).elements
+        feeder = Feeder.from_values(p)
     except (ParameterError, KeyError, ValueError):
         return None
-    if not all(isinstance(e, LinearSection) and e.length > 0 and e.width > 0 for e in elements):
+    if not all(isinstance(e, LinearSection) and e.length > 0 and e.width > 0 for e in feeder.elements):
         return None
-    size = p["part_size"]
-    footprint = size * (p.get("part_width", size) if int(p.get("shape", 0)) == 3 else size)
-    return sum(e.length * e.width for e in elements) / footprint
+    return sum(e.length * e.width for e in feeder.elements) / (feeder.part.widest * feeder.part.abreast)
 
 
 def step_seconds(p: Mapping[str, float]) -> float:
