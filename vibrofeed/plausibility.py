@@ -103,6 +103,11 @@ def advice(p: Mapping[str, float], given: Collection[str] = ()) -> list[str]:
     for name in ("surface_energy", "surface_energy_pp"):
         if p.get(name, 0.0) > SURFACE_ENERGY_PLAUSIBLE_MAX:
             say(name, "J/m² exceeds the surface energies of solids (0.01 to 2 J/m²): in mJ/m²?")
+    # a skin reaching past a whole part holds every sphere that near in each list: slow, and
+    # almost always a length in mm (the decks' own is 0.4 of the smallest sphere's radius)
+    if p.get("skin", 0.0) > p.get("part_size", math.inf):
+        say("skin", f"m is wider than a part ({p['part_size']:g} m): every sphere within it is a "
+                    "neighbour and each step slows; a length in mm? (lengths are in metres)")
     out += _without_effect(p, given)
     return out
 

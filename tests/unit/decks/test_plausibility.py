@@ -49,6 +49,8 @@ def said(deck, given) -> list[str]:
     (SINGLE, {"roughness": "1e-8"}, "roughness has no effect"),
     (SINGLE, {"face_radius": "1e-4"}, "face_radius has no effect"),
     (SINGLE, {"dt_unchecked": "1"}, "dt_unchecked has no effect"),
+    # a neighbour skin typed in mm: wider than the part (the bulk deck's 0.3 mm default)
+    (BULK, {"skin": "0.1"}, "skin=0.1 m is wider than a part (0.0003 m): every sphere within it"),
     # a width or a wall typed in mm, which a track length would allow
     (BULK, {"track_width": "2"}, "track_width=2 m is 2 metres: a length in mm?"),
     (BULK, {"wall_height": "1"}, "wall_height=1 m is 1 metres: a length in mm?"),
@@ -127,6 +129,7 @@ def test_an_implausible_value_is_named_with_its_likely_slip(deck, given, words):
     (SINGLE, {"waveform": "2", "duty": "0.8", "amp_n": "0"}),  # a motion along the track, said so
     (BOWL, {"drop_from": "0.2", "drop_to": "0.5", "drop_width": "4e-4"}),
     (BOWL, {"wiper_height": "6e-4", "wiper_at": "0.3"}),
+    (BULK, {"skin": "3e-4"}), (BOWL, {"skin": "1.05e-4"}),  # as wide as the part; three times a default
 ])
 def test_plausible_values_and_options_in_effect_say_nothing(deck, given):
     assert said(deck, given) == []
