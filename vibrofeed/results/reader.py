@@ -456,8 +456,8 @@ class Result:
 
     def holds(self, name: str) -> bool:
         """Whether the file records field ``name``: an optional element such as a rotating
-        surface's ``surface_angle`` (format 1.6) or the bodies' ``orientation``. What kind of
-        feeder made it is the feeder's to say (vibrofeed.feeders), not the file's."""
+        surface's ``surface_angle`` (format 1.6) or the bodies' ``orientation``. Which feeder
+        made it is the feeder's to say (vibrofeed.feeders), not the file's."""
         return self._dataset(name)[0] is not None
 
     def recorded(self, name: str, frames=None) -> bool:
@@ -469,7 +469,7 @@ class Result:
             raise KeyError(f"{name!r} is not a per-part field")
         if ds is None:
             return False
-        if ds.dtype.kind != "f":
+        if not np.issubdtype(ds.dtype, np.floating):
             return True
         for f in self.iter_frames(frames, fields=(name,)):
             if len(f):
@@ -626,7 +626,7 @@ class Result:
     def __enter__(self):
         return self
 
-    def __exit__(self, kind, exc, tb):
+    def __exit__(self, exc_type, exc, tb):
         damage = unreadable(exc, self.path) if exc is not None else None  # (while the file is open)
         self.close()
         if damage is not None:  # an h5py error reading this file: one line naming it
