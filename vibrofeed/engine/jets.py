@@ -31,7 +31,11 @@ positions and orientations:
   ``(time>=t1)*(time<t2)+...``, so that the jet blows whatever is in its block then;
   ``ideal`` mode, an atom-style one whose term for each sensed body holds only its atoms
   (a body's atom ids are consecutive: ``(id>=a)*(id<=b)*(windows)``), so that only the
-  sensed part is blown, when it is in the block.
+  sensed part is blown, when it is in the block. The ideal jet's fix acts on the group
+  ``s<k>_jet_parts`` of those bodies' atoms, redefined with the variable (the fix removed
+  first: LIGGGHTS deletes no group a fix uses): LIGGGHTS evaluates an atom-style force at
+  every step for each atom of the fix's group, and over every atom that was a third of the
+  orientation demo's run.
 
 LIGGGHTS 3.8 re-creates a redefined variable at the end of its list (Variable::set removes
 the old one, shifting those after it), and ``fix addforce`` finds its variables by index at
@@ -185,6 +189,10 @@ class Station:
             for start, end, _, lo, hi in self.windows:
                 bodies.setdefault((lo, hi), []).append((start, end))
             out = [f"variable {name} atom {atom_expression((lo, hi, w) for (lo, hi), w in bodies.items())}"]
+            if self.fix:  # the fix's group: the atoms of the bodies with a window pending
+                group = f"s{self.section}_jet_parts"
+                ranges = " ".join(f"{lo}:{hi}" for lo, hi in bodies)
+                out = [*self.idle(force=True), f"group {group} delete", f"group {group} id {ranges}", *out]
         else:
             out = [f"variable {name} equal {window_expression((s, e) for s, e, *_ in self.windows)}"]
         if self.fix and not self.placed:
@@ -192,9 +200,10 @@ class Station:
             self.placed = True
         return out
 
-    def idle(self) -> list[str]:
-        """The jet's fix removed if it is in place and no window is pending (none otherwise)."""
-        if not self.fix or not self.placed or self.windows:
+    def idle(self, force: bool = False) -> list[str]:
+        """The jet's fix removed if it is in place and no window is pending (none otherwise;
+        ``force``: with windows pending too, for its group to be redefined)."""
+        if not self.fix or not self.placed or (self.windows and not force):
             return []
         self.placed = False
         return [f"unfix s{self.section}_jet"]

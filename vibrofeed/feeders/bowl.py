@@ -213,4 +213,4 @@ class BowlElement:
 
     def jet_fix(self) -> str:
         """The jet's ``fix addforce`` (:meth:`jet_commands`)."""
-        return turned_jet_fix(1)
+        return turned_jet_fix(1, self.jet.mode)

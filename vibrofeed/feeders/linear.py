@@ -313,6 +313,7 @@ class LinearSection:
             f"variable {s}_jet_on {style} 0",
             f"variable {s}_jet_fy {style} v_{s}_jet_on*$({share}*cos({angle}))",
             f"variable {s}_jet_fz {style} v_{s}_jet_on*$({share}*sin({angle}))",
+            *jet_group(self.number, self.jet.mode),
             self.jet_fix(),
             f'if "${{driver}} == 0" then "print \'WARNING: the air jet of section {self.number} is '
             "inactive in a run by hand: only vibrofeed run senses the parts it fires at'\""]
@@ -320,8 +321,8 @@ class LinearSection:
     def jet_fix(self) -> str:
         """The jet's ``fix addforce`` (:meth:`jet_commands`; the driver removes and places it again,
         vibrofeed.engine.jets)."""
-        s = f"s{self.number}"
-        return f"fix {s}_jet all addforce 0 v_{s}_jet_fy v_{s}_jet_fz region {s}_jet"
+        s, group = f"s{self.number}", jet_fix_group(self.number, self.jet.mode)
+        return f"fix {s}_jet {group} addforce 0 v_{s}_jet_fy v_{s}_jet_fz region {s}_jet"
 
     def name(self, key: tuple[str, ...]) -> str:
         """The deck name of ``key`` on this section (for messages)."""
@@ -589,16 +590,31 @@ def turned_jet_commands(k: int, what: str, mode: str, planes, left, force: str, 
         f"variable {s}_jet_fx {style} v_{s}_jet_on*$({share}*cos({angle})*{float(left[0])!r})",
         f"variable {s}_jet_fy {style} v_{s}_jet_on*$({share}*cos({angle})*{float(left[1])!r})",
         f"variable {s}_jet_fz {style} v_{s}_jet_on*$({share}*sin({angle}))",
-        turned_jet_fix(k),
+        *jet_group(k, mode),
+        turned_jet_fix(k, mode),
         f'if "${{driver}} == 0" then "print \'WARNING: the air jet of {what} is '
         "inactive in a run by hand: only vibrofeed run senses the parts it fires at'\""]
 
 
-def turned_jet_fix(k: int) -> str:
+def turned_jet_fix(k: int, mode: str) -> str:
     """The ``fix addforce`` of :func:`turned_jet_commands` (the driver removes and places it
     again, vibrofeed.engine.jets)."""
-    s = f"s{k}"
-    return f"fix {s}_jet all addforce v_{s}_jet_fx v_{s}_jet_fy v_{s}_jet_fz region {s}_jet"
+    s, group = f"s{k}", jet_fix_group(k, mode)
+    return f"fix {s}_jet {group} addforce v_{s}_jet_fx v_{s}_jet_fy v_{s}_jet_fz region {s}_jet"
+
+
+def jet_fix_group(k: int, mode: str) -> str:
+    """The group the jet's ``fix addforce`` of element ``k`` acts on: every atom for a
+    ``region`` jet; for an ``ideal`` one ``s<k>_jet_parts``, the atoms of the parts it fires at
+    (the driver fills it, vibrofeed.engine.jets). LIGGGHTS evaluates an atom-style force for
+    each atom of the fix's group at every step: over every atom, that was a third of the
+    orientation demo's run (BENCHMARKS.md, "The orientation demo")."""
+    return f"s{k}_jet_parts" if mode == "ideal" else "all"
+
+
+def jet_group(k: int, mode: str) -> list[str]:
+    """The deck's commands that create :func:`jet_fix_group` empty (none for a ``region`` jet)."""
+    return [f"group s{k}_jet_parts subtract all all"] if mode == "ideal" else []
 
 
 def jet_span(jet: Jet, sensing: float, size: float) -> tuple[float, float]:

@@ -521,7 +521,7 @@ class MeshElement:
     def jet_fix(self) -> str:
         """The jet's ``fix addforce`` (:meth:`jet_commands`; the driver removes and places it again,
         vibrofeed.engine.jets)."""
-        return turned_jet_fix(self.number)
+        return turned_jet_fix(self.number, self.jet.mode)
 
     # ---------------------------------------------------------------- the deck
     def name(self, key) -> str:

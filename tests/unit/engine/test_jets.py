@@ -113,6 +113,26 @@ def test_the_ideal_jet_holds_the_sensed_bodys_atoms_only():
     assert s.commands(0.01) == ["variable s2_jet_on atom (id>=1)*(id<=3)*((time>=0.025)*(time<0.035))"]
 
 
+def test_the_ideal_jets_fix_acts_on_the_pending_bodies_atoms_only():
+    # the fix's group holds the atoms of the bodies with a window pending, redefined (fix removed
+    # first: LIGGGHTS deletes no group a fix uses) with every new window; once all are over,
+    # the fix is removed and the group left as it was
+    fix = "fix s2_jet s2_jet_parts addforce 0 v_s2_jet_fy v_s2_jet_fz region s2_jet"
+    s = station(mode="ideal", fix=fix)
+    assert s.idle() == ["unfix s2_jet"] and not s.placed  # the deck's, at the first frame
+    ranges = {5: (1, 3), 6: (4, 6)}
+    s.sense(0.0, frame([5], [0.9], [DOWN]), 0.01, frame([5], [1.1], [DOWN]), ranges)
+    assert s.commands(0.01) == [
+        "group s2_jet_parts delete", "group s2_jet_parts id 1:3",
+        "variable s2_jet_on atom (id>=1)*(id<=3)*((time>=0.025)*(time<0.035))", fix]
+    s.sense(0.01, frame([6], [0.9], [DOWN]), 0.02, frame([6], [1.1], [DOWN]), ranges)
+    assert s.commands(0.02) == [
+        "unfix s2_jet", "group s2_jet_parts delete", "group s2_jet_parts id 1:3 4:6",
+        "variable s2_jet_on atom (id>=1)*(id<=3)*((time>=0.025)*(time<0.035))"
+        "+(id>=4)*(id<=6)*((time>=0.035)*(time<0.045))", fix]
+    assert s.commands(0.05) == ["unfix s2_jet"] and not s.placed
+
+
 def test_a_headway_fires_at_a_kept_part_sensed_too_soon_after_the_last_one_passed():
     # four face-up parts cross x = 1 at 1, 3, 6 and 9 ms (between frames at 0 and 10 ms, given
     # out of order), headway 4 ms: the first passes, the second (2 ms after it) is fired at,

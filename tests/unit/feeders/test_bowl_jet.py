@@ -87,7 +87,7 @@ def test_its_commands_go_into_the_line_files_of_a_bowl_alone_with_the_force_towa
     assert sum(" plane " in line for line in motion) == 6
     assert "region s1_jet intersect 6 s1_jet_1 s1_jet_2 s1_jet_3 s1_jet_4 s1_jet_5 s1_jet_6" in motion
     assert "variable s1_jet_on atom 0" in motion
-    assert "fix s1_jet all addforce v_s1_jet_fx v_s1_jet_fy v_s1_jet_fz region s1_jet" in motion
+    assert "fix s1_jet s1_jet_parts addforce v_s1_jet_fx v_s1_jet_fy v_s1_jet_fz region s1_jet" in motion
     theta = THETA_CAM + 5e-4 * COS / R_MID
     for axis, want in (("fx", -math.cos(theta)), ("fy", -math.sin(theta))):
         line = next(x for x in motion if x.startswith(f"variable s1_jet_{axis}"))
@@ -120,7 +120,9 @@ def test_the_driver_senses_a_chip_crossing_the_camera_along_the_helix():
     # both crossed; the face-down one is fired at, halfway between the frames
     assert table["id"].tolist() == [1] and table["section"].tolist() == [1]
     assert table["time"] == pytest.approx([0.005], rel=0, abs=1e-12)
-    assert commands[0].startswith("variable s1_jet_on atom") and commands[1].startswith("fix s1_jet ")
+    assert commands[0] == "group s1_jet_parts delete" and commands[1].startswith("group s1_jet_parts id ")
+    assert commands[2].startswith("variable s1_jet_on atom")
+    assert commands[3].startswith("fix s1_jet s1_jet_parts ")
     # a chip in the pile below the camera's polar angle is not on the helix: never sensed
     pile = {"id": np.array([3]), "position": np.array([[0.5 * R * math.cos(THETA_CAM),
                                                        0.5 * R * math.sin(THETA_CAM), 1e-4]]),

@@ -61,7 +61,9 @@ def test_a_jet_is_described_by_its_keys_and_the_deck_declares_its_words(tmp_path
     j = feeder.elements[1].jet
     assert (j.at, j.delay, j.duration, j.force, j.mode, j.keep.lead) == (0.4, 0.01, 0.02, 2e-6, "ideal", 1)
     motion = line_files(feeder)["line_motion.in"]
-    assert "variable s2_jet_on atom 0" in motion and "fix s2_jet all addforce 0 v_s2_jet_fy" in motion
+    assert "variable s2_jet_on atom 0" in motion
+    assert "fix s2_jet s2_jet_parts addforce 0 v_s2_jet_fy" in motion
+    assert "group s2_jet_parts subtract all all" in motion  # ideal: empty until it fires
     assert "inactive in a run by hand" in motion
 
 

@@ -101,7 +101,9 @@ def test_its_deck_commands_are_six_planes_their_intersection_and_the_turned_forc
     assert "variable s2_jet_on atom 0" in lines  # ideal: the sensed body's atoms only
     fx = next(line for line in lines if line.startswith("variable s2_jet_fx"))
     assert fx.endswith("*cos(v_s2_jet_angle*PI/180)*-0.6)") or "*-0.6" in fx  # its left, x
-    assert "fix s2_jet all addforce v_s2_jet_fx v_s2_jet_fy v_s2_jet_fz region s2_jet" in lines
+    assert "fix s2_jet s2_jet_parts addforce v_s2_jet_fx v_s2_jet_fy v_s2_jet_fz region s2_jet" in lines
+    assert lines.index("group s2_jet_parts subtract all all") < lines.index(  # created empty first
+        "fix s2_jet s2_jet_parts addforce v_s2_jet_fx v_s2_jet_fy v_s2_jet_fz region s2_jet")
     # shifted with the line's origin (after a bowl)
     moved = e.jet_commands(f.part, origin=(1.0, 2.0, 3.0))
     first, shifted = planes[0].split(), next(line for line in moved if " plane " in line).split()
@@ -128,8 +130,9 @@ def test_the_driver_senses_a_part_crossing_the_camera_along_the_path(stl):
     # long axis 37 degrees off x: judged along the path, not along x)
     commands, table = jets.step(None, 0.01, frame([1, 2], [2.7e-3, 2.8e-3], [DOWN, UP]))
     assert table["id"].tolist() == [1] and table["time"] == pytest.approx([0.005], abs=1e-12)
-    assert commands[0].startswith("variable s2_jet_on atom")
-    assert commands[1] == "fix s2_jet all addforce v_s2_jet_fx v_s2_jet_fy v_s2_jet_fz region s2_jet"
+    assert commands[:2] == ["group s2_jet_parts delete", "group s2_jet_parts id -1:-1"]  # (no atoms given)
+    assert commands[2].startswith("variable s2_jet_on atom")
+    assert commands[3] == "fix s2_jet s2_jet_parts addforce v_s2_jet_fx v_s2_jet_fy v_s2_jet_fz region s2_jet"
     # their x (10.0 -> 10.16 mm) never reaches the camera's path coordinate (10.6 mm): sensed
     # along x, as on a straight section, neither would have crossed
     assert start[0] + 2.8e-3 * 0.8 < s.x_sense
