@@ -1,14 +1,16 @@
 """Benchmark of feeder descriptions: their generated deck against today's deck, and
 `vibrofeed run` against plain `liggghts -in` of the generated deck, side by side.
 
-    .venv/bin/python benchmarks/bench_feeders.py [--feeder demo-line|bowl-line|orient-line]
-                                                 [--pairs 5] [--t-end 0.3] [--without-jet]
+    .venv/bin/python benchmarks/bench_feeders.py
+        [--feeder demo-line|bowl-line|orient-ledge|orient-line] [--pairs 5] [--t-end 0.3] [--without-jet]
 
 The feeder is the demo line (feeders/demo_line.toml, the parameters of `vibrofeed demo`),
-the bowl with its exit line (feeders/bowl_line.toml, `vibrofeed demo --case bowl-line`) or
-the orientation line (feeders/orient_line.toml, `vibrofeed demo --case orient`: by hand its
-jet never fires and its rejects are not returned, `-var recirculate 0`; --without-jet: both
-runs without its jet and its returns, `s2_jet_force=0` and `recirculate=0`, the same physics),
+the bowl with its exit line (feeders/bowl_line.toml, `vibrofeed demo --case bowl-line`), the
+orientation demo's line (feeders/orient_ledge.toml, `vibrofeed demo --case orient`) or the gated
+orientation line (feeders/orient_line.toml). By hand an orientation line's jet never fires and
+its rejects are not returned (`-var recirculate 0`); --without-jet: both runs with the jet's
+force 0 and no returns, `s2_jet_force=0` and `recirculate=0`, the same physics (the driver
+still senses every part and places and removes the jet's fix as it would fire),
 run for --t-end seconds of vibration on one rank. Each comparison runs its two commands in
 turn, A B A B ..., after one warm-up pair, as whole processes; it prints each command's
 median wall time and the median of the pairs' ratios A/B (a ratio pair by pair holds when
@@ -74,7 +76,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--pairs", type=int, default=5)
     ap.add_argument("--t-end", type=float, default=0.3)
-    ap.add_argument("--feeder", choices=("demo-line", "bowl-line", "orient-line"), default="demo-line")
+    ap.add_argument("--feeder", choices=("demo-line", "bowl-line", "orient-ledge", "orient-line"),
+                    default="demo-line")
     ap.add_argument("--without-jet", action="store_true",
                     help="the orientation line without its jet and returns in both runs: the same physics")
     args = ap.parse_args()
@@ -105,7 +108,7 @@ def main() -> None:
         generated = shlex.split(line)[2]
         hand = shlex.split(line) + ["-log", "none", "-nocite", "-var", "dump_file",
                                     str(tmp / "d.dump")]
-        if args.feeder == "orient-line":  # (the deck refuses recirculate=1 by hand)
+        if args.feeder.startswith("orient"):  # (the deck refuses recirculate=1 by hand)
             hand += ["-var", "recirculate", "0"]
         driver = VIBROFEED + ["run", generated, "-q", "-o", "c.h5", "-p", t_end, *same]
         rows.append(("`vibrofeed run` / `liggghts -in` of the generated deck",
