@@ -137,6 +137,8 @@ def test_the_orient_case_drops_crosswise_boxes_off_a_ledge_and_blows_off_the_wro
     assert two.width >= one.width  # (the ledge narrows the floor, not the joint)
     assert two.jet.keeps_correct and two.jet.keep == part.correct == parse_correct("up, lengthwise")
     assert two.side_drop.start < two.jet.at < two.side_drop.end  # the jet blows over the open side
+    lo, hi = two.jet_span(part.size)  # its whole block, so that what it blows falls off
+    assert two.x0 + two.side_drop.start * two.length <= lo < hi <= two.x0 + two.side_drop.end * two.length
     assert jet_pushes_off(values, part, two)
     assert gamma_n(one) > 1 > gamma_n(two)
     assert float(values["recirculate"]) == 0 and float(values["inlet_rate"]) > 0  # a store
