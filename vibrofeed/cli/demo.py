@@ -2,7 +2,8 @@
 
 Runs a named case of the ``bulk_feeder`` deck, then prints its feed rate (per section
 for a line), its singulation and its rejects, and writes the result, a picture of the
-last frame of the steady feeding window and the plots into one folder. The cases:
+last frame of the steady feeding window (parts with an orientation: its last frame with the
+most correctly oriented parts) and the plots into one folder. The cases:
 
 ``line`` (the default)
     A feeder line fed continuously by a bulk supply that drops micro-parts in clumps of
@@ -183,6 +184,15 @@ def report(path, folder: Path | None = None) -> tuple[str, str | None]:
             figures += figures_written(feedrate_figures(fr, plots) + singulation_figures(sg, plots))
             picture = folder / f"{Path(path).stem}.png"
             frame = picture_frame(result.time, summary["steady_to"])
+            if oriented:  # the window's frame with the most correct parts, if one has any
+                import numpy as np
+
+                from ..pictures.render import most_correct_frame
+
+                t = result.time
+                window = np.nonzero((t >= summary["steady_from"]) & (t <= summary["steady_to"]))[0]
+                best = most_correct_frame(result, window)
+                frame = frame if best is None else best
             figures.append(written(render(result, picture, frame=frame,
                                           color="state" if oriented else "speed").path))
     lines += [f"figure: {f}" for f in figures]

@@ -224,6 +224,19 @@ class PartStates:
         return np.where(correct, 0, 1 + states.state).astype(float)
 
 
+def most_correct_frame(result, frames, correct=None) -> int | None:
+    """Of the frame indices ``frames``, the last at which the most parts are correctly oriented
+    (:class:`PartStates`; ``correct`` as there), None when none has one: a picture of a line
+    with the parts it delivers in it, not only the rejects in the making (``vibrofeed demo``)."""
+    states = PartStates(result, correct)
+    pick, most = None, 0
+    for i in frames:
+        n = int(np.count_nonzero(states.of(read_frame(result, int(i)))[1]))
+        if n and n >= most:
+            pick, most = int(i), n
+    return pick
+
+
 def _swatch(pv, color: str):
     """A unit square coloured ``color`` by its cell's RGB: a legend entry's symbol."""
     square = pv.PolyData(np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], dtype=float),

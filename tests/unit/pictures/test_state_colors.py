@@ -201,6 +201,25 @@ def test_along_a_bowls_helix_the_state_is_read_against_the_helix(tmp_path):
     assert states.angle == pytest.approx([0.0, 90.0], abs=1e-6)   # degrees
 
 
+def test_the_demos_picture_is_the_last_frame_with_the_most_correct_parts(tmp_path):
+    """Two boxes up and lengthwise; the first turns face down at x = 1.45 mm, which it passes
+    between frames 1 and 2: 2, 2 and 1 correct parts, so frame 1 (the last of the most), not
+    the last frame; with both face down, none."""
+    from vibrofeed.pictures.render import most_correct_frame
+
+    x_last = 0.0015 + 1.4e-3 * np.arange(2)
+    exits = FRAMES[-1] + (LENGTH - x_last) / 0.01
+    for name, q, turned, want in (("turns.h5", [UP, UP], [DOWN, UP], 1),
+                                  ("down.h5", [DOWN, DOWN], [DOWN, DOWN], None)):
+        path = feeder(tmp_path / name, FRAMES, exits, speed=0.01, orientations=np.array(q),
+                      body_template=BOX, variables=BOX_VARIABLES, track=track(), clumps=True,
+                      outlet_x=LENGTH, turn=(1.45e-3, np.array(turned)))
+        with Result(path) as r:
+            assert most_correct_frame(r, [0, 1, 2]) == want
+            if want is not None:
+                assert most_correct_frame(r, [0, 2]) == 0 and most_correct_frame(r, [2]) == 2
+
+
 def test_spheres_are_refused_in_one_line(tmp_path, capsys):
     from vibrofeed.cli import main
     from vibrofeed.pictures.render import render_frame
