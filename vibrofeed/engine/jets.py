@@ -56,6 +56,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..feeders.linear import jet_fix_group
 from ..orientation import axes_quaternion, turned_states
 
 
@@ -190,7 +191,7 @@ class Station:
                 bodies.setdefault((lo, hi), []).append((start, end))
             out = [f"variable {name} atom {atom_expression((lo, hi, w) for (lo, hi), w in bodies.items())}"]
             if self.fix:  # the fix's group: the atoms of the bodies with a window pending
-                group = f"s{self.section}_jet_parts"
+                group = jet_fix_group(self.section, self.mode)
                 ranges = " ".join(f"{lo}:{hi}" for lo, hi in bodies)
                 out = [*self.idle(force=True), f"group {group} delete", f"group {group} id {ranges}", *out]
         else:

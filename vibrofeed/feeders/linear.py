@@ -614,7 +614,7 @@ def jet_fix_group(k: int, mode: str) -> str:
 
 def jet_group(k: int, mode: str) -> list[str]:
     """The deck's commands that create :func:`jet_fix_group` empty (none for a ``region`` jet)."""
-    return [f"group s{k}_jet_parts subtract all all"] if mode == "ideal" else []
+    return [f"group {jet_fix_group(k, mode)} subtract all all"] if mode == "ideal" else []
 
 
 def jet_span(jet: Jet, sensing: float, size: float) -> tuple[float, float]:
