@@ -120,9 +120,10 @@ def _stl(values: Mapping):
 @dataclass(frozen=True)
 class Drive:
     """An element's vibration: ``freq`` [Hz], displacement amplitudes along (``amp_t``) and
-    normal to (``amp_n``) its floor [m], the normal motion's lead ``phase`` [deg], and the
-    waveform (0 sine; 1-4 as include/surface_motion.liggghts, with ``duty``). A further
-    linear section may also move across its track: ``amp_c`` [m] along +y, leading the
+    normal to (``amp_n``, vertical: a floor tilted across is also moved up its tilt, by
+    amp_n sin(cross_tilt)) its floor [m], the normal motion's lead ``phase`` [deg], and the
+    waveform (0 sine; 1-4 as include/surface_motion.liggghts, with ``duty``). A linear
+    section may also move across its track: ``amp_c`` [m] along +y, leading the
     tangential motion by ``phase_c`` [deg] (a cross stroke: it rocks a part on its side over
     onto a broad face, docs/orientation.md)."""
 

@@ -123,8 +123,9 @@ def test_the_orient_case_drops_crosswise_boxes_off_a_ledge_and_blows_off_the_wro
     closed form of the part's dimensions: no gate; the ledge keeps a lengthwise box and drops a
     crosswise one by its centre of mass, which leans (T/2) tan(tilt) towards the wall
     (W/2 <= width < L/2 - (T/2) tan(tilt)); the jet keeps the part's correct state and pushes a
-    part off; the bulk section hops, the ledge's slides; the line is drawn from a store (its
-    rejects removed, its inlet fed) and checks as a whole (joints)."""
+    part off; the bulk section hops, the ledge's slides; the bulk floor's stroke runs down its
+    tilt; the line is drawn from a store (its rejects removed, its inlet fed) and checks as a
+    whole (joints, with the cross stroke's sway)."""
     from vibrofeed.orientation import parse_correct
 
     _, values, feeder = described_case("orient", "orient_ledge", "orient_ledge.toml")
@@ -141,6 +142,12 @@ def test_the_orient_case_drops_crosswise_boxes_off_a_ledge_and_blows_off_the_wro
     assert two.x0 + two.side_drop.start * two.length <= lo < hi <= two.x0 + two.side_drop.end * two.length
     assert jet_pushes_off(values, part, two)
     assert gamma_n(one) > 1 > gamma_n(two)
+    # the bulk floor moves down its tilt, towards the wall, as it rises: the cross stroke runs
+    # against the normal one (phase_c = phase + 180) and outweighs the vertical stroke's share up
+    # the tilt, amp_n sin(tilt) against amp_c cos(tilt)
+    drive, tilt = one.drive, math.radians(one.cross_tilt)
+    assert math.cos(math.radians(drive.phase_c - drive.phase)) == pytest.approx(-1, abs=1e-12)
+    assert drive.amp_c * math.cos(tilt) > drive.amp_n * math.sin(tilt)
     assert float(values["recirculate"]) == 0 and float(values["inlet_rate"]) > 0  # a store
 
 

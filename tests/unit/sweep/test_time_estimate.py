@@ -64,11 +64,11 @@ def test_a_line_holds_no_more_fed_parts_than_cover_its_floors():
     """The orientation demo's line draws 110 boxes a second from its store over 2 s, and was
     estimated at 1 h 34 min holding 122 boxes (it held 17-20 and ran 10-13 minutes): what it
     delivers or rejects leaves it. By hand: 12 pre-filled and no more fed ones than lie side
-    by side on its floors, (5 x 1.4 + 8 x 1.4) mm^2 over a box's 1.0 x 0.5 mm footprint."""
+    by side on its floors, (5 x 1.4 + 8 x 1.5) mm^2 over a box's 1.0 x 0.5 mm footprint."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         values = resolve(Deck.find(REPO / "feeders" / "orient_ledge.toml"), {})
-    held = 12 + (5 * 1.4 + 8 * 1.4) / (1.0 * 0.5)
+    held = 12 + (5 * 1.4 + 8 * 1.5) / (1.0 * 0.5)
     seconds, steps, _dt = estimated_seconds(values)
     assert seconds == pytest.approx(steps * (FEEDER + SPHERE * held * 36), rel=1e-12)
     # a line fed less than its floors hold keeps its half of the fed ones (above: 21 boxes)
